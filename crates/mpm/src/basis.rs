@@ -1,0 +1,237 @@
+//! Background grid and its shape functions.
+//!
+//! The grid is an unbounded lattice of square cells; a node is named by its
+//! integer coordinates `(i, j)` and sits at `origin + h (i, j)`. Nothing is
+//! allocated per cell: the nodes a step uses are the ones the material's
+//! shape functions touch (see `assembly`).
+//!
+//! Shape functions are tensor products of 1D functions:
+//! - `Linear`: the bilinear finite-element hat `max(0, 1 - |d|/h)`.
+//! - `Gimp`: the hat convolved with the point's characteristic function of
+//!   half-width `lp` (generalised interpolation MPM). The convolution is
+//!   written with the hat's antiderivative `H`, `S(d) = (H(d+lp) - H(d-lp)) /
+//!   2lp`, which is valid for any `lp` (not only `lp <= h/2`).
+
+use crate::case::BasisKind;
+
+/// A lattice node packed into one integer; ordering is by `i`, then `j`.
+pub type NodeKey = u64;
+
+const BIAS: i64 = 1 << 31;
+
+pub fn node_key(i: i64, j: i64) -> NodeKey {
+    (((i + BIAS) as u64) << 32) | ((j + BIAS) as u64 & 0xffff_ffff)
+}
+
+pub fn node_indices(key: NodeKey) -> (i64, i64) {
+    ((key >> 32) as i64 - BIAS, (key & 0xffff_ffff) as i64 - BIAS)
+}
+
+/// Cell size and the position of node (0, 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grid {
+    pub h: f64,
+    pub origin: [f64; 2],
+}
+
+impl Grid {
+    pub fn node_position(&self, key: NodeKey) -> [f64; 2] {
+        let (i, j) = node_indices(key);
+        [
+            self.origin[0] + self.h * i as f64,
+            self.origin[1] + self.h * j as f64,
+        ]
+    }
+}
+
+/// One node's contribution at a point: `N` and its gradient.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeWeight {
+    pub node: NodeKey,
+    pub n: f64,
+    pub grad: [f64; 2],
+}
+
+/// Up to four 1D weights per direction (GIMP with `lp <= h`).
+type Weights1d = smallvec1d::Small;
+
+/// The shape functions of a case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Basis {
+    Linear,
+    Gimp,
+}
+
+impl From<BasisKind> for Basis {
+    fn from(k: BasisKind) -> Self {
+        match k {
+            BasisKind::Linear => Basis::Linear,
+            BasisKind::Gimp => Basis::Gimp,
+        }
+    }
+}
+
+impl Basis {
+    /// Appends to `out` every node whose shape function or gradient is
+    /// non-zero at `x`; `half_width` is the point's domain (ignored by the
+    /// linear basis).
+    pub fn eval(&self, grid: &Grid, x: [f64; 2], half_width: [f64; 2], out: &mut Vec<NodeWeight>) {
+        let wx = self.eval_1d(grid.h, x[0] - grid.origin[0], half_width[0]);
+        let wy = self.eval_1d(grid.h, x[1] - grid.origin[1], half_width[1]);
+        for &(j, sy, dsy) in wy.as_slice() {
+            for &(i, sx, dsx) in wx.as_slice() {
+                let w = NodeWeight {
+                    node: node_key(i, j),
+                    n: sx * sy,
+                    grad: [dsx * sy, sx * dsy],
+                };
+                if w.n != 0.0 || w.grad != [0.0, 0.0] {
+                    out.push(w);
+                }
+            }
+        }
+    }
+
+    /// 1D weights `(node index, S, dS/dx)` at coordinate `x` measured from
+    /// the origin.
+    fn eval_1d(&self, h: f64, x: f64, lp: f64) -> Weights1d {
+        let mut w = Weights1d::default();
+        match self {
+            Basis::Linear => {
+                let c = (x / h).floor();
+                let xi = x / h - c;
+                let c = c as i64;
+                w.push((c, 1.0 - xi, -1.0 / h));
+                w.push((c + 1, xi, 1.0 / h));
+            }
+            Basis::Gimp => {
+                let lp = lp.min(h); // a wider domain would need more than four nodes
+                let first = ((x - lp - h) / h).ceil() as i64;
+                let last = ((x + lp + h) / h).floor() as i64;
+                for i in first..=last {
+                    let d = x - h * i as f64;
+                    let s = (hat_integral(d + lp, h) - hat_integral(d - lp, h)) / (2.0 * lp);
+                    let ds = (hat(d + lp, h) - hat(d - lp, h)) / (2.0 * lp);
+                    if s > 0.0 || ds != 0.0 {
+                        w.push((i, s.max(0.0), ds));
+                    }
+                }
+            }
+        }
+        w
+    }
+}
+
+fn hat(s: f64, h: f64) -> f64 {
+    (1.0 - s.abs() / h).max(0.0)
+}
+
+/// `H(s) = integral of hat from 0 to s`.
+fn hat_integral(s: f64, h: f64) -> f64 {
+    let a = s.abs().min(h);
+    s.signum() * (a - a * a / (2.0 * h))
+}
+
+/// A fixed-capacity list, so shape-function evaluation never allocates.
+mod smallvec1d {
+    #[derive(Default)]
+    pub struct Small {
+        items: [(i64, f64, f64); 5],
+        len: usize,
+    }
+    impl Small {
+        pub fn push(&mut self, item: (i64, f64, f64)) {
+            self.items[self.len] = item;
+            self.len += 1;
+        }
+        pub fn as_slice(&self) -> &[(i64, f64, f64)] {
+            &self.items[..self.len]
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    const GRID: Grid = Grid {
+        h: 0.7,
+        origin: [-0.3, 1.1],
+    };
+
+    fn sums(basis: Basis, x: [f64; 2], lp: [f64; 2]) -> (f64, [f64; 2]) {
+        let mut w = Vec::new();
+        basis.eval(&GRID, x, lp, &mut w);
+        let n: f64 = w.iter().map(|w| w.n).sum();
+        let g = w
+            .iter()
+            .fold([0.0, 0.0], |a, w| [a[0] + w.grad[0], a[1] + w.grad[1]]);
+        (n, g)
+    }
+
+    proptest! {
+        // Partition of unity (sum N = 1) and its derivative (sum grad N = 0)
+        // hold exactly on an unbounded lattice, so only rounding is allowed.
+        #[test]
+        fn linear_is_a_partition_of_unity(x in -5.0..5.0f64, y in -5.0..5.0f64) {
+            let (n, g) = sums(Basis::Linear, [x, y], [0.0, 0.0]);
+            prop_assert!((n - 1.0).abs() < 1e-12);
+            prop_assert!(g[0].abs() < 1e-12 && g[1].abs() < 1e-12);
+        }
+
+        #[test]
+        fn gimp_is_a_partition_of_unity(x in -5.0..5.0f64, y in -5.0..5.0f64,
+                                        lx in 0.01..0.7f64, ly in 0.01..0.7f64) {
+            let (n, g) = sums(Basis::Gimp, [x, y], [lx, ly]);
+            prop_assert!((n - 1.0).abs() < 1e-12);
+            prop_assert!(g[0].abs() < 1e-11 && g[1].abs() < 1e-11);
+        }
+
+        // The gradient is the derivative of the value: compare with central
+        // differences (the functions are C1 for GIMP, piecewise linear for
+        // the hat; step and tolerance chosen for that).
+        #[test]
+        fn gimp_gradient_matches_finite_difference(x in -5.0..5.0f64, y in -5.0..5.0f64,
+                                                   lx in 0.05..0.35f64) {
+            let eps = 1e-6;
+            let value = |p: [f64; 2], key: NodeKey| {
+                let mut w = Vec::new();
+                Basis::Gimp.eval(&GRID, p, [lx, lx], &mut w);
+                w.iter().find(|w| w.node == key).map_or(0.0, |w| w.n)
+            };
+            let mut w = Vec::new();
+            Basis::Gimp.eval(&GRID, [x, y], [lx, lx], &mut w);
+            for nw in w {
+                let fd = (value([x + eps, y], nw.node) - value([x - eps, y], nw.node)) / (2.0 * eps);
+                prop_assert!((fd - nw.grad[0]).abs() < 1e-5, "{} vs {}", fd, nw.grad[0]);
+            }
+        }
+    }
+
+    #[test]
+    fn gimp_reduces_to_the_hat_far_from_kinks() {
+        // With the point domain inside one cell and away from nodes, GIMP is
+        // the hat function (Bardenhagen & Kober 2004, eq. for lp <= |d| <= h - lp).
+        let mut w = Vec::new();
+        Basis::Gimp.eval(
+            &GRID,
+            [GRID.origin[0] + 0.35, GRID.origin[1] + 0.35],
+            [0.1, 0.1],
+            &mut w,
+        );
+        assert_eq!(w.len(), 4);
+        for nw in w {
+            assert!((nw.n - 0.25).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn node_keys_round_trip_and_sort_by_i_then_j() {
+        for (i, j) in [(0, 0), (-3, 7), (12345, -678), (-1, -1)] {
+            assert_eq!(node_indices(node_key(i, j)), (i, j));
+        }
+        assert!(node_key(-1, 5) < node_key(0, -5));
+        assert!(node_key(0, -5) < node_key(0, 4));
+    }
+}

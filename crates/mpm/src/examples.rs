@@ -1,0 +1,13 @@
+//! Built-in example cases, shipped in `crates/mpm/cases/` and compiled in.
+
+/// Names accepted by [`get`].
+pub const NAMES: [&str; 2] = ["column", "cantilever-grid"];
+
+/// The JSON text of a built-in case.
+pub fn get(name: &str) -> Option<&'static str> {
+    match name {
+        "column" => Some(include_str!("../cases/column.json")),
+        "cantilever-grid" => Some(include_str!("../cases/cantilever-grid.json")),
+        _ => None,
+    }
+}

@@ -1,0 +1,309 @@
+//! Constitutive models, written for the updated-Lagrangian step.
+//!
+//! Each load step starts from the configuration at its beginning. A model is
+//! given the incremental deformation gradient `dF = I + grad(du)` (gradient in
+//! that configuration) and its history from the start of the step, and
+//! returns the stress measure `P` that pairs with `dF` per unit reference
+//! volume, so that the internal force of node `a` is `V0 P g_a` with `g_a`
+//! the shape-function gradient in the step's start configuration, and the
+//! consistent tangent `dP/d(dF)`.
+//!
+//! In 2D plane strain all tensors are the in-plane 2x2 blocks; the
+//! out-of-plane stretch is one. A 2x2 matrix `M` flattens row-major,
+//! `M[(i, j)] -> 2 i + j`, so the tangent is a 4x4 matrix
+//! `A[(2i + I, 2j + J)] = dP_iI / d(dF)_jJ`.
+
+use nalgebra::{Matrix2, Matrix4};
+
+/// Stress of a material point in the current configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CauchyStress {
+    /// In-plane components `[xx, yy, xy]`.
+    pub plane: [f64; 3],
+    /// Out-of-plane normal stress `zz` (non-zero in plane strain).
+    pub zz: f64,
+}
+
+/// What a model returns for a trial `dF`.
+#[derive(Debug, Clone, Copy)]
+pub struct Response {
+    /// Stress paired with `dF` per unit reference volume (for Hencky:
+    /// Kirchhoff stress times `dF^-T`).
+    pub p: Matrix2<f64>,
+    /// `dP / d(dF)`, flattened as described in the module docs.
+    pub tangent: Matrix4<f64>,
+    /// History to keep if the step converges (Hencky: elastic left
+    /// Cauchy-Green tensor `b`; linear: small strain).
+    pub history: Matrix2<f64>,
+    pub cauchy: CauchyStress,
+}
+
+/// The constitutive models of the case format.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Material {
+    Hencky(Elastic),
+    LinearElastic(Elastic),
+}
+
+/// Isotropic elastic constants.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Elastic {
+    /// Lame's first parameter.
+    pub lambda: f64,
+    /// Shear modulus.
+    pub mu: f64,
+}
+
+impl Elastic {
+    pub fn from_young_poisson(e: f64, nu: f64) -> Self {
+        Self {
+            lambda: e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+            mu: e / (2.0 * (1.0 + nu)),
+        }
+    }
+
+    /// Plane-strain stress of an in-plane strain (the out-of-plane strain is
+    /// zero): `s = lambda tr(e) I + 2 mu e`, `s_zz = lambda tr(e)`.
+    fn stress(&self, e: &Matrix2<f64>) -> (Matrix2<f64>, f64) {
+        let tr = e.trace();
+        (
+            Matrix2::identity() * (self.lambda * tr) + e * (2.0 * self.mu),
+            self.lambda * tr,
+        )
+    }
+}
+
+impl Material {
+    /// History of an undeformed, unstressed point.
+    pub fn initial_history(&self) -> Matrix2<f64> {
+        match self {
+            Material::Hencky(_) => Matrix2::identity(),
+            Material::LinearElastic(_) => Matrix2::zeros(),
+        }
+    }
+
+    /// Trial response to `df` from `history`; `j_start` is the volume ratio
+    /// at the start of the step (for the Cauchy stress).
+    pub fn respond(&self, history: &Matrix2<f64>, df: &Matrix2<f64>, j_start: f64) -> Response {
+        match self {
+            Material::Hencky(c) => hencky(c, history, df, j_start),
+            Material::LinearElastic(c) => small_strain(c, history, df),
+        }
+    }
+}
+
+/// Geometrically linear elasticity: `eps = eps_n + sym(dF - I)`, `P = sigma`.
+fn small_strain(c: &Elastic, eps_n: &Matrix2<f64>, df: &Matrix2<f64>) -> Response {
+    let h = df - Matrix2::identity();
+    let eps = eps_n + (h + h.transpose()) * 0.5;
+    let (sigma, zz) = c.stress(&eps);
+    let mut tangent = Matrix4::zeros();
+    let delta = |a: usize, b: usize| if a == b { 1.0 } else { 0.0 };
+    for i in 0..2 {
+        for ii in 0..2 {
+            for j in 0..2 {
+                for jj in 0..2 {
+                    tangent[(2 * i + ii, 2 * j + jj)] = c.lambda * delta(i, ii) * delta(j, jj)
+                        + c.mu * (delta(i, j) * delta(ii, jj) + delta(i, jj) * delta(ii, j));
+                }
+            }
+        }
+    }
+    Response {
+        p: sigma,
+        tangent,
+        history: eps,
+        cauchy: CauchyStress {
+            plane: [sigma[(0, 0)], sigma[(1, 1)], sigma[(0, 1)]],
+            zz,
+        },
+    }
+}
+
+/// Hencky elasticity on the elastic left Cauchy-Green tensor:
+/// `b = dF b_n dF^T`, `e = ln(b) / 2`, `tau = lambda tr(e) I + 2 mu e`,
+/// `P = tau dF^-T`. The tangent is differentiated exactly: for each unit
+/// direction `E` of `dF`,
+/// `db = E b_n dF^T + dF b_n E^T`, `de = L[db] / 2` with `L` the derivative
+/// of the matrix logarithm, `dtau = lambda tr(de) I + 2 mu de`,
+/// `dP = dtau dF^-T - tau dF^-T E^T dF^-T`.
+fn hencky(c: &Elastic, b_n: &Matrix2<f64>, df: &Matrix2<f64>, j_start: f64) -> Response {
+    let b = df * b_n * df.transpose();
+    let eig = SymEigen2::new(&b);
+    let e = eig.map(|l| 0.5 * l.ln());
+    let (tau, tau_zz) = c.stress(&e);
+    let df_inv_t = df
+        .try_inverse()
+        .map(|m| m.transpose())
+        .unwrap_or_else(|| Matrix2::from_element(f64::NAN));
+    let p = tau * df_inv_t;
+    let mut tangent = Matrix4::zeros();
+    for j in 0..2 {
+        for jj in 0..2 {
+            let mut dir = Matrix2::zeros();
+            dir[(j, jj)] = 1.0;
+            let db = dir * b_n * df.transpose() + df * b_n * dir.transpose();
+            let de = eig.log_derivative(&db) * 0.5;
+            let (dtau, _) = c.stress(&de);
+            let dp = dtau * df_inv_t - tau * df_inv_t * dir.transpose() * df_inv_t;
+            for i in 0..2 {
+                for ii in 0..2 {
+                    tangent[(2 * i + ii, 2 * j + jj)] = dp[(i, ii)];
+                }
+            }
+        }
+    }
+    let j = j_start * df.determinant();
+    Response {
+        p,
+        tangent,
+        history: b,
+        cauchy: CauchyStress {
+            plane: [tau[(0, 0)] / j, tau[(1, 1)] / j, tau[(0, 1)] / j],
+            zz: tau_zz / j,
+        },
+    }
+}
+
+/// Eigen-decomposition of a symmetric 2x2 matrix, `b = sum_a l_a n_a n_a^T`.
+struct SymEigen2 {
+    values: [f64; 2],
+    vectors: [nalgebra::Vector2<f64>; 2],
+}
+
+impl SymEigen2 {
+    fn new(b: &Matrix2<f64>) -> Self {
+        let (a, d, c) = (b[(0, 0)], b[(1, 1)], 0.5 * (b[(0, 1)] + b[(1, 0)]));
+        let mean = 0.5 * (a + d);
+        let radius = (0.25 * (a - d) * (a - d) + c * c).sqrt();
+        let theta = 0.5 * (2.0 * c).atan2(a - d);
+        let (s, co) = theta.sin_cos();
+        Self {
+            values: [mean + radius, mean - radius],
+            vectors: [
+                nalgebra::Vector2::new(co, s),
+                nalgebra::Vector2::new(-s, co),
+            ],
+        }
+    }
+
+    /// `sum_a f(l_a) n_a n_a^T`.
+    fn map(&self, f: impl Fn(f64) -> f64) -> Matrix2<f64> {
+        (0..2)
+            .map(|k| self.vectors[k] * self.vectors[k].transpose() * f(self.values[k]))
+            .sum()
+    }
+
+    /// Directional derivative of `ln(b)` along a symmetric `db`:
+    /// `sum_ab f_ab (n_a . db n_b) n_a n_b^T` with `f_aa = 1/l_a` and
+    /// `f_ab = (ln l_a - ln l_b)/(l_a - l_b)` (its limit `1/l_a` when the
+    /// eigenvalues coincide).
+    fn log_derivative(&self, db: &Matrix2<f64>) -> Matrix2<f64> {
+        let [l0, l1] = self.values;
+        let gap = l0 - l1;
+        let f01 = if gap.abs() > 1e-8 * l0.abs() {
+            (l0.ln() - l1.ln()) / gap
+        } else {
+            // Series of (ln l0 - ln l1)/(l0 - l1) about the mean m:
+            // 1/m + gap^2 / (12 m^3) + ...
+            let m = 0.5 * (l0 + l1);
+            1.0 / m + gap * gap / (12.0 * m * m * m)
+        };
+        let f = [[1.0 / l0, f01], [f01, 1.0 / l1]];
+        let mut out = Matrix2::zeros();
+        for a in 0..2 {
+            for b in 0..2 {
+                let na = &self.vectors[a];
+                let nb = &self.vectors[b];
+                out += na * nb.transpose() * (f[a][b] * na.dot(&(db * nb)));
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn materials() -> [Material; 2] {
+        let c = Elastic::from_young_poisson(1.0e6, 0.3);
+        [Material::Hencky(c), Material::LinearElastic(c)]
+    }
+
+    /// A stretched, sheared, rotated history and increment: nothing special.
+    fn general_state(m: &Material) -> (Matrix2<f64>, Matrix2<f64>) {
+        let f_n = Matrix2::new(1.1, 0.2, -0.05, 0.9);
+        let history = match m {
+            Material::Hencky(_) => f_n * f_n.transpose(),
+            Material::LinearElastic(_) => Matrix2::new(0.01, 0.003, 0.003, -0.02),
+        };
+        (history, Matrix2::new(0.97, 0.11, -0.08, 1.04))
+    }
+
+    #[test]
+    fn tangent_equals_finite_difference_of_stress() {
+        // Central differences have O(eps^2) truncation error; with eps = 1e-6
+        // and stresses of order 1e5 Pa the round-off is ~1e5 * 1e-16 / 1e-6 =
+        // 1e-5, so 1e-6 relative to the tangent's norm (~1e6) is a real check.
+        for m in materials() {
+            let (history, df) = general_state(&m);
+            let r = m.respond(&history, &df, 1.0);
+            let eps = 1e-6;
+            for j in 0..2 {
+                for jj in 0..2 {
+                    let mut d = Matrix2::zeros();
+                    d[(j, jj)] = eps;
+                    let plus = m.respond(&history, &(df + d), 1.0).p;
+                    let minus = m.respond(&history, &(df - d), 1.0).p;
+                    let fd = (plus - minus) / (2.0 * eps);
+                    for i in 0..2 {
+                        for ii in 0..2 {
+                            let a = r.tangent[(2 * i + ii, 2 * j + jj)];
+                            assert!(
+                                (a - fd[(i, ii)]).abs() < 1e-6 * r.tangent.norm(),
+                                "{m:?}: dP{i}{ii}/dF{j}{jj} = {a}, finite difference {}",
+                                fd[(i, ii)]
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn tangent_is_exact_when_eigenvalues_coincide() {
+        // b = I (unstressed) is the degenerate case of the log derivative.
+        let m = materials()[0];
+        let r = m.respond(&Matrix2::identity(), &Matrix2::identity(), 1.0);
+        // At the reference state the Hencky tangent is the linear elastic one.
+        let lin = materials()[1].respond(&Matrix2::zeros(), &Matrix2::identity(), 1.0);
+        assert!((r.tangent - lin.tangent).norm() < 1e-9 * lin.tangent.norm());
+    }
+
+    #[test]
+    fn pure_rotation_gives_zero_stress() {
+        // Hencky is objective: b = R R^T = I, so e = 0 and tau = 0 whatever the
+        // angle (here 60 degrees, far from small rotations).
+        let m = materials()[0];
+        let (s, c) = (60f64).to_radians().sin_cos();
+        let r = Matrix2::new(c, -s, s, c);
+        let resp = m.respond(&Matrix2::identity(), &r, 1.0);
+        assert!(resp.p.norm() < 1e-9, "{}", resp.p);
+        assert!(resp.cauchy.plane.iter().all(|s| s.abs() < 1e-9));
+    }
+
+    #[test]
+    fn uniaxial_stretch_matches_hencky_closed_form() {
+        // Plane strain, nu = 0 (lambda = 0, mu = E/2): stretch l in y gives
+        // tau_yy = E ln(l) and Cauchy sigma_yy = E ln(l) / l.
+        let e = 1.0e4;
+        let m = Material::Hencky(Elastic::from_young_poisson(e, 0.0));
+        let l = 0.6;
+        let resp = m.respond(&Matrix2::identity(), &Matrix2::new(1.0, 0.0, 0.0, l), 1.0);
+        let expected = e * l.ln() / l;
+        assert!((resp.cauchy.plane[1] - expected).abs() < 1e-10 * expected.abs());
+        assert!(resp.cauchy.plane[0].abs() < 1e-10 && resp.cauchy.zz.abs() < 1e-10);
+    }
+}

@@ -1,0 +1,249 @@
+//! Newton-Raphson for the equilibrium of one load step.
+//!
+//! The unknowns are the incremental nodal displacements `u` of the step. An
+//! iteration evaluates the out-of-balance force `r(u) = f_ext - f_int(u)`
+//! (zero on constrained DOFs), stops when `|r| / scale <= tolerance`, and
+//! otherwise solves `K du = r` with the consistent tangent `K = df_int/du`.
+
+use serde::Serialize;
+
+use crate::linsolve::Factorisation;
+use crate::observer::Observer;
+
+/// Newton controls; the defaults are the case format's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NewtonSettings {
+    /// Relative out-of-balance force at which a step has converged (1e-9).
+    pub tolerance: f64,
+    /// Linear solves allowed per load step (30).
+    pub max_iterations: usize,
+    /// A relative residual above this (or not finite) is divergence (1e8).
+    pub divergence_limit: f64,
+}
+
+impl Default for NewtonSettings {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-9,
+            max_iterations: 30,
+            divergence_limit: 1e8,
+        }
+    }
+}
+
+/// How a load step's Newton solve went.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct NewtonInfo {
+    /// Linear solves performed.
+    pub iterations: usize,
+    /// Relative out-of-balance force before each solve and at convergence.
+    pub residuals: Vec<f64>,
+    /// Factorisation of the last solve (`None` if no solve was needed).
+    pub factorisation: Option<Factorisation>,
+}
+
+/// A point whose trial state is not admissible.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InvertedPoint {
+    pub point: usize,
+    pub jacobian: f64,
+}
+
+/// Why a solve stopped without an answer. Every variant says where.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    #[error(
+        "Newton did not converge in load step {step}: relative residual {residual:.3e} after {iteration} iterations (the limit)"
+    )]
+    NotConverged {
+        step: usize,
+        iteration: usize,
+        residual: f64,
+    },
+    #[error(
+        "Newton diverged in load step {step} at iteration {iteration}: relative residual {residual:.3e}"
+    )]
+    Diverged {
+        step: usize,
+        iteration: usize,
+        residual: f64,
+    },
+    #[error(
+        "material point {point} inverted (J = {jacobian:.3e}) in load step {step} at iteration {iteration}"
+    )]
+    Inverted {
+        step: usize,
+        iteration: usize,
+        point: usize,
+        jacobian: f64,
+    },
+    #[error("linear solve failed in load step {step} at iteration {iteration}: {message}")]
+    LinearSolve {
+        step: usize,
+        iteration: usize,
+        message: String,
+    },
+    #[error(
+        "material point {point} left the grid extent at ({x:.4}, {y:.4}) after load step {step}"
+    )]
+    LeftGrid {
+        step: usize,
+        point: usize,
+        x: f64,
+        y: f64,
+    },
+    #[error("cancelled in load step {step} at iteration {iteration}")]
+    Cancelled { step: usize, iteration: usize },
+}
+
+impl SolveError {
+    /// `(step, iteration, residual)` where known, for reports.
+    pub fn location(&self) -> (usize, Option<usize>, Option<f64>) {
+        match *self {
+            SolveError::NotConverged {
+                step,
+                iteration,
+                residual,
+            }
+            | SolveError::Diverged {
+                step,
+                iteration,
+                residual,
+            } => (step, Some(iteration), Some(residual)),
+            SolveError::Inverted {
+                step, iteration, ..
+            }
+            | SolveError::LinearSolve {
+                step, iteration, ..
+            }
+            | SolveError::Cancelled { step, iteration } => (step, Some(iteration), None),
+            SolveError::LeftGrid { step, .. } => (step, None, None),
+        }
+    }
+}
+
+/// The discrete equilibrium equations of one load step.
+pub trait Equilibrium {
+    fn n_dofs(&self) -> usize;
+    /// Updates the trial state for increment `u` and returns the
+    /// out-of-balance force (zero on constrained DOFs) and the force scale it
+    /// is measured against.
+    fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint>;
+    /// Solves `K du = r` with the tangent at the last trial state.
+    fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String>;
+}
+
+/// Solves one load step from `u = 0`; returns the converged increment.
+pub fn solve(
+    eq: &mut impl Equilibrium,
+    settings: &NewtonSettings,
+    step: usize,
+    observer: &mut dyn Observer,
+) -> Result<(Vec<f64>, NewtonInfo), SolveError> {
+    let mut u = vec![0.0; eq.n_dofs()];
+    let mut info = NewtonInfo {
+        iterations: 0,
+        residuals: Vec::new(),
+        factorisation: None,
+    };
+    for iteration in 0.. {
+        let (r, scale) = eq.out_of_balance(&u).map_err(|p| SolveError::Inverted {
+            step,
+            iteration,
+            point: p.point,
+            jacobian: p.jacobian,
+        })?;
+        let norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let residual = if norm == 0.0 { 0.0 } else { norm / scale };
+        info.residuals.push(residual);
+        observer.newton_iteration(step, iteration, residual);
+        if !residual.is_finite() || residual > settings.divergence_limit {
+            return Err(SolveError::Diverged {
+                step,
+                iteration,
+                residual,
+            });
+        }
+        if residual <= settings.tolerance {
+            info.iterations = iteration;
+            return Ok((u, info));
+        }
+        if iteration >= settings.max_iterations {
+            return Err(SolveError::NotConverged {
+                step,
+                iteration,
+                residual,
+            });
+        }
+        if observer.should_cancel() {
+            return Err(SolveError::Cancelled { step, iteration });
+        }
+        let (du, kind) = eq
+            .correction(&r)
+            .map_err(|message| SolveError::LinearSolve {
+                step,
+                iteration,
+                message,
+            })?;
+        info.factorisation = Some(kind);
+        for (ui, dui) in u.iter_mut().zip(&du) {
+            *ui += dui;
+        }
+    }
+    unreachable!("the loop returns")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::observer::NoObserver;
+
+    /// Scalar equation `x^3 = 8` with its exact derivative: Newton must
+    /// converge to 2 quadratically.
+    struct Cubic {
+        x0: f64,
+        x: f64,
+    }
+
+    impl Equilibrium for Cubic {
+        fn n_dofs(&self) -> usize {
+            1
+        }
+        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
+            self.x = self.x0 + u[0];
+            Ok((vec![8.0 - self.x.powi(3)], 8.0))
+        }
+        fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
+            Ok((vec![r[0] / (3.0 * self.x * self.x)], Factorisation::Lu))
+        }
+    }
+
+    #[test]
+    fn converges_quadratically_on_a_smooth_equation() {
+        let mut eq = Cubic { x0: 3.0, x: 3.0 };
+        let (u, info) = solve(&mut eq, &NewtonSettings::default(), 1, &mut NoObserver).unwrap();
+        assert!((3.0 + u[0] - 2.0).abs() < 1e-9);
+        // Once in the basin, e_{k+1} ~ C e_k^2: the exponent log(e3)/log(e2) -> 2.
+        let r = &info.residuals;
+        let n = r.len();
+        let order = (r[n - 2].ln() - r[n - 3].ln()) / (r[n - 3].ln() - r[n - 4].ln());
+        assert!(order > 1.8, "{r:?}");
+    }
+
+    #[test]
+    fn iteration_cap_is_an_error_that_says_where() {
+        let mut eq = Cubic { x0: 3.0, x: 3.0 };
+        let settings = NewtonSettings {
+            max_iterations: 2,
+            ..Default::default()
+        };
+        match solve(&mut eq, &settings, 7, &mut NoObserver) {
+            Err(SolveError::NotConverged {
+                step: 7,
+                iteration: 2,
+                residual,
+            }) => assert!(residual > 1e-9),
+            other => panic!("{other:?}"),
+        }
+    }
+}

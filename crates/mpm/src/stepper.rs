@@ -1,0 +1,409 @@
+//! The load-step loop of implicit quasi-static MPM.
+//!
+//! For each load step `k` of `n` (load factor `k/n`):
+//! 1. reset the grid: shape functions at the points' current positions, the
+//!    active nodes and the stiffness pattern ([`Connectivity`], [`Pattern`]);
+//! 2. external forces and constrained DOFs on the active nodes;
+//! 3. Newton-Raphson for the incremental nodal displacements ([`newton`]);
+//! 4. move the points and probes with the converged grid displacement and
+//!    commit their deformation, history and stress.
+
+use std::time::Instant;
+
+use nalgebra::Matrix2;
+use rayon::prelude::*;
+
+use crate::assembly::{self, Connectivity, Pattern};
+use crate::basis::{Basis, Grid};
+use crate::case::{Case, Support};
+use crate::fill::bounding_box;
+use crate::linsolve::{Factorisation, SparseSolver};
+use crate::material::Response;
+use crate::newton::{self, Equilibrium, InvertedPoint, NewtonSettings, SolveError};
+use crate::observer::Observer;
+use crate::output::{ProbeReport, RunReport, StepReport, StepTimings};
+use crate::points::MaterialPoints;
+
+/// Named reference points that move with the grid displacement.
+#[derive(Debug, Clone, Default)]
+pub struct Probes {
+    pub names: Vec<String>,
+    pub reference: Vec<[f64; 2]>,
+    pub position: Vec<[f64; 2]>,
+}
+
+/// A case made ready to run: points, grid, loads and supports.
+pub struct Simulation {
+    pub grid: Grid,
+    pub basis: Basis,
+    /// Region the material must stay inside: `(min, max)`.
+    pub extent: ([f64; 2], [f64; 2]),
+    pub points: MaterialPoints,
+    pub probes: Probes,
+    gravity: [f64; 2],
+    /// `(point, force)`: each point load rides on its nearest material point.
+    point_loads: Vec<(usize, [f64; 2])>,
+    supports: Vec<Support>,
+    pub settings: NewtonSettings,
+    pub load_steps: usize,
+}
+
+impl Simulation {
+    /// Builds the initial state of a validated case.
+    pub fn new(case: &Case) -> Self {
+        let grid = Grid {
+            h: case.grid.cell_size,
+            origin: case.grid.origin,
+        };
+        let points = MaterialPoints::from_case(case);
+        let extent = match &case.grid.extent {
+            Some(b) => (b.min, b.max),
+            None => {
+                let margin = case.grid.margin_cells as f64 * grid.h;
+                let mut lo = [f64::INFINITY; 2];
+                let mut hi = [f64::NEG_INFINITY; 2];
+                for body in &case.bodies {
+                    let (a, b) = bounding_box(&body.geometry);
+                    for d in 0..2 {
+                        lo[d] = lo[d].min(a[d] - margin);
+                        hi[d] = hi[d].max(b[d] + margin);
+                    }
+                }
+                (lo, hi)
+            }
+        };
+        let point_loads = case
+            .loads
+            .point_loads
+            .iter()
+            .map(|l| (nearest_point(&points, l.at), l.force))
+            .collect();
+        Self {
+            grid,
+            basis: case.basis.into(),
+            extent,
+            probes: Probes {
+                names: case.probes.iter().map(|p| p.name.clone()).collect(),
+                reference: case.probes.iter().map(|p| p.at).collect(),
+                position: case.probes.iter().map(|p| p.at).collect(),
+            },
+            points,
+            gravity: case.loads.gravity.unwrap_or([0.0, 0.0]),
+            point_loads,
+            supports: case.supports.clone(),
+            settings: NewtonSettings {
+                tolerance: case.analysis.newton.tolerance,
+                max_iterations: case.analysis.newton.max_iterations as usize,
+                ..Default::default()
+            },
+            load_steps: case.analysis.load_steps as usize,
+        }
+    }
+
+    /// Runs every load step, reporting each to `observer`.
+    pub fn run(&mut self, observer: &mut dyn Observer) -> Result<RunReport, SolveError> {
+        let start = Instant::now();
+        let mut steps = Vec::with_capacity(self.load_steps);
+        for step in 1..=self.load_steps {
+            observer.step_started(step, self.load_steps);
+            let report = self.load_step(step, observer)?;
+            observer.step_finished(&report, &self.points);
+            steps.push(report);
+        }
+        Ok(RunReport {
+            points: self.points.len(),
+            load_steps: self.load_steps,
+            wall_seconds: start.elapsed().as_secs_f64(),
+            steps,
+        })
+    }
+
+    /// One load step, as in the module docs.
+    pub fn load_step(
+        &mut self,
+        step: usize,
+        observer: &mut dyn Observer,
+    ) -> Result<StepReport, SolveError> {
+        let started = Instant::now();
+        self.check_inside_extent(step - 1)?;
+        let load_factor = step as f64 / self.load_steps as f64;
+
+        let conn = Connectivity::build(&self.grid, self.basis, &self.points);
+        let pattern = Pattern::build(&conn);
+        let fixed = self.constrained_dofs(&conn);
+        let f_ext = self.external_force(&conn, load_factor);
+        let grid_seconds = started.elapsed().as_secs_f64();
+
+        let mut eq = StepEquilibrium::new(&conn, &pattern, &self.points, &fixed, f_ext);
+        let (u, newton) = newton::solve(&mut eq, &self.settings, step, observer)?;
+
+        let update_start = Instant::now();
+        let reactions = self.reactions(&conn, &eq.f_int, &eq.f_ext);
+        let mut timings = eq.timings;
+        timings.grid = grid_seconds;
+        let responses = std::mem::take(&mut eq.responses);
+        self.update_points(&conn, &u, &responses);
+        self.advect_probes(&conn, &u);
+        timings.update = update_start.elapsed().as_secs_f64();
+        timings.total = started.elapsed().as_secs_f64();
+
+        Ok(StepReport {
+            step,
+            load_factor,
+            newton,
+            timings,
+            active_nodes: conn.n_nodes(),
+            active_dofs: conn.n_dofs() - fixed.iter().filter(|f| **f).count(),
+            probes: self.probe_reports(),
+            reactions,
+        })
+    }
+
+    fn check_inside_extent(&self, step: usize) -> Result<(), SolveError> {
+        let (lo, hi) = self.extent;
+        match self
+            .points
+            .position
+            .iter()
+            .position(|x| !(x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1]))
+        {
+            Some(point) => {
+                let [x, y] = self.points.position[point];
+                Err(SolveError::LeftGrid { step, point, x, y })
+            }
+            None => Ok(()),
+        }
+    }
+
+    /// DOF mask of the grid-node supports: a node is on a support when the
+    /// support's selector contains the node's position (tolerance 1e-9 h).
+    fn constrained_dofs(&self, conn: &Connectivity) -> Vec<bool> {
+        let tol = 1e-9 * self.grid.h;
+        let mut fixed = vec![false; conn.n_dofs()];
+        for (a, &key) in conn.nodes.iter().enumerate() {
+            let x = self.grid.node_position(key);
+            for s in self.supports.iter().filter(|s| s.on.contains(x, tol)) {
+                for c in 0..2 {
+                    fixed[2 * a + c] |= s.fix.holds(c);
+                }
+            }
+        }
+        fixed
+    }
+
+    /// Body force and point loads, scaled by the load factor.
+    fn external_force(&self, conn: &Connectivity, load_factor: f64) -> Vec<f64> {
+        let g = self.gravity.map(|g| g * load_factor);
+        let mut f = if g == [0.0, 0.0] {
+            vec![0.0; conn.n_dofs()]
+        } else {
+            assembly::body_force(conn, &self.points, g)
+        };
+        for &(p, force) in &self.point_loads {
+            for l in conn.point_links(p) {
+                for c in 0..2 {
+                    f[2 * l.node as usize + c] += load_factor * l.n * force[c];
+                }
+            }
+        }
+        f
+    }
+
+    /// Per support: the force the support exerts on the body, summed over its
+    /// constrained DOFs, `f_int - f_ext`.
+    fn reactions(&self, conn: &Connectivity, f_int: &[f64], f_ext: &[f64]) -> Vec<[f64; 2]> {
+        let tol = 1e-9 * self.grid.h;
+        self.supports
+            .iter()
+            .map(|s| {
+                let mut r = [0.0; 2];
+                for (a, &key) in conn.nodes.iter().enumerate() {
+                    if s.on.contains(self.grid.node_position(key), tol) {
+                        for (c, rc) in r.iter_mut().enumerate() {
+                            if s.fix.holds(c) {
+                                *rc += f_int[2 * a + c] - f_ext[2 * a + c];
+                            }
+                        }
+                    }
+                }
+                r
+            })
+            .collect()
+    }
+
+    /// Moves each point with the grid displacement and commits its state.
+    fn update_points(&mut self, conn: &Connectivity, u: &[f64], responses: &[Response]) {
+        let mp = &mut self.points;
+        (
+            &mut mp.position,
+            &mut mp.deformation,
+            &mut mp.history,
+            &mut mp.stress,
+        )
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(p, (x, f, history, stress))| {
+                let (dx, df) = increment(conn.point_links(p), u);
+                x[0] += dx[0];
+                x[1] += dx[1];
+                *f = df * *f;
+                *history = responses[p].history;
+                *stress = responses[p].cauchy;
+            });
+    }
+
+    /// Moves each probe with the bilinear interpolation of the grid
+    /// displacement over the active nodes of its cell (renormalised if some
+    /// are inactive; a probe away from all material stays where it is).
+    fn advect_probes(&mut self, conn: &Connectivity, u: &[f64]) {
+        let mut weights = Vec::new();
+        for x in &mut self.probes.position {
+            weights.clear();
+            Basis::Linear.eval(&self.grid, *x, [0.0, 0.0], &mut weights);
+            let mut sum = 0.0;
+            let mut d = [0.0; 2];
+            for w in &weights {
+                if let Ok(a) = conn.nodes.binary_search(&w.node) {
+                    sum += w.n;
+                    d[0] += w.n * u[2 * a];
+                    d[1] += w.n * u[2 * a + 1];
+                }
+            }
+            if sum > 0.0 {
+                x[0] += d[0] / sum;
+                x[1] += d[1] / sum;
+            }
+        }
+    }
+
+    fn probe_reports(&self) -> Vec<ProbeReport> {
+        let p = &self.probes;
+        (0..p.names.len())
+            .map(|i| ProbeReport {
+                name: p.names[i].clone(),
+                position: p.position[i],
+                displacement: [
+                    p.position[i][0] - p.reference[i][0],
+                    p.position[i][1] - p.reference[i][1],
+                ],
+            })
+            .collect()
+    }
+}
+
+/// Index of the point nearest to `x`.
+fn nearest_point(points: &MaterialPoints, x: [f64; 2]) -> usize {
+    let d2 = |p: &[f64; 2]| (p[0] - x[0]).powi(2) + (p[1] - x[1]).powi(2);
+    (0..points.len())
+        .min_by(|&a, &b| d2(&points.position[a]).total_cmp(&d2(&points.position[b])))
+        .unwrap_or(0)
+}
+
+/// Displacement `sum_a N_a u_a` and incremental deformation gradient
+/// `dF = I + sum_a u_a (x) g_a` of a point.
+fn increment(links: &[assembly::Link], u: &[f64]) -> ([f64; 2], Matrix2<f64>) {
+    let mut dx = [0.0; 2];
+    let mut df = Matrix2::identity();
+    for l in links {
+        let ua = [u[2 * l.node as usize], u[2 * l.node as usize + 1]];
+        for i in 0..2 {
+            dx[i] += l.n * ua[i];
+            for j in 0..2 {
+                df[(i, j)] += ua[i] * l.grad[j];
+            }
+        }
+    }
+    (dx, df)
+}
+
+/// The equilibrium equations of one load step, as Newton sees them.
+struct StepEquilibrium<'a> {
+    conn: &'a Connectivity,
+    pattern: &'a Pattern,
+    points: &'a MaterialPoints,
+    fixed: &'a [bool],
+    f_ext: Vec<f64>,
+    f_int: Vec<f64>,
+    responses: Vec<Response>,
+    solver: SparseSolver,
+    timings: StepTimings,
+}
+
+impl<'a> StepEquilibrium<'a> {
+    fn new(
+        conn: &'a Connectivity,
+        pattern: &'a Pattern,
+        points: &'a MaterialPoints,
+        fixed: &'a [bool],
+        f_ext: Vec<f64>,
+    ) -> Self {
+        Self {
+            conn,
+            pattern,
+            points,
+            fixed,
+            f_ext,
+            f_int: Vec::new(),
+            responses: Vec::new(),
+            solver: SparseSolver::new(conn.n_dofs()),
+            timings: StepTimings::default(),
+        }
+    }
+}
+
+impl Equilibrium for StepEquilibrium<'_> {
+    fn n_dofs(&self) -> usize {
+        self.conn.n_dofs()
+    }
+
+    /// The point loop: trial stress and tangent of every point, in parallel,
+    /// then the internal force.
+    fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
+        let t = Instant::now();
+        let (conn, mp) = (self.conn, self.points);
+        self.responses = (0..mp.len())
+            .into_par_iter()
+            .map(|p| {
+                let (_, df) = increment(conn.point_links(p), u);
+                let j_start = mp.deformation[p].determinant();
+                let jacobian = j_start * df.determinant();
+                if !(jacobian > 0.0) {
+                    return Err(InvertedPoint { point: p, jacobian });
+                }
+                let material = &mp.materials[mp.material[p] as usize];
+                Ok(material.respond(&mp.history[p], &df, j_start))
+            })
+            .collect::<Result<_, _>>()?;
+        self.f_int = assembly::internal_force(conn, mp, &self.responses);
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let scale = norm(&self.f_ext)
+            .max(norm(&self.f_int))
+            .max(f64::MIN_POSITIVE);
+        let r = (0..u.len())
+            .map(|i| {
+                if self.fixed[i] {
+                    0.0
+                } else {
+                    self.f_ext[i] - self.f_int[i]
+                }
+            })
+            .collect();
+        self.timings.point_loop += t.elapsed().as_secs_f64();
+        Ok((r, scale))
+    }
+
+    fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
+        let t = Instant::now();
+        let mut k = assembly::stiffness(self.conn, self.pattern, self.points, &self.responses);
+        assembly::constrain(self.pattern, &mut k, self.fixed);
+        self.timings.assembly += t.elapsed().as_secs_f64();
+        // Hyperelastic materials under dead loads have a symmetric tangent.
+        let (du, kind, timing) = self.solver.solve(self.pattern, &k, r, true)?;
+        self.timings.factorisation += timing.factorise;
+        self.timings.solve += timing.solve;
+        if du.iter().any(|v| !v.is_finite()) {
+            return Err("the solution has non-finite entries (singular tangent)".into());
+        }
+        Ok((du, kind))
+    }
+}
