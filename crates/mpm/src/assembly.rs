@@ -43,7 +43,14 @@ pub struct Connectivity {
 const CHUNK: usize = 4096;
 
 impl Connectivity {
-    pub fn build(grid: &Grid, basis: Basis, points: &MaterialPoints) -> Self {
+    /// Evaluates every point's shape functions, keeping the nodes for which
+    /// `in_grid` holds: the grid ends there, as a finite mesh would.
+    pub fn build(
+        grid: &Grid,
+        basis: Basis,
+        points: &MaterialPoints,
+        in_grid: impl Fn(NodeKey) -> bool + Sync,
+    ) -> Self {
         let n = points.len();
         let chunks: Vec<(Vec<usize>, Vec<NodeWeight>)> = (0..n)
             .into_par_iter()
@@ -54,6 +61,14 @@ impl Connectivity {
                 for p in idx {
                     let before = weights.len();
                     basis.eval(grid, points.position[p], points.half_width(p), &mut weights);
+                    let mut k = before;
+                    for i in before..weights.len() {
+                        if in_grid(weights[i].node) {
+                            weights[k] = weights[i];
+                            k += 1;
+                        }
+                    }
+                    weights.truncate(k);
                     counts.push(weights.len() - before);
                 }
                 (counts, weights)

@@ -36,7 +36,8 @@ pub struct Probes {
 pub struct Simulation {
     pub grid: Grid,
     pub basis: Basis,
-    /// Region the material must stay inside: `(min, max)`.
+    /// The grid's extent `(min, max)`: nodes outside it do not exist, and
+    /// material must stay inside it.
     pub extent: ([f64; 2], [f64; 2]),
     pub points: MaterialPoints,
     pub probes: Probes,
@@ -128,7 +129,9 @@ impl Simulation {
         self.check_inside_extent(step - 1)?;
         let load_factor = step as f64 / self.load_steps as f64;
 
-        let conn = Connectivity::build(&self.grid, self.basis, &self.points);
+        let conn = Connectivity::build(&self.grid, self.basis, &self.points, |node| {
+            self.node_in_grid(node)
+        });
         let pattern = Pattern::build(&conn);
         let fixed = self.constrained_dofs(&conn);
         let f_ext = self.external_force(&conn, load_factor);
@@ -157,6 +160,14 @@ impl Simulation {
             probes: self.probe_reports(),
             reactions,
         })
+    }
+
+    /// Whether a node lies in the grid's extent (with a tolerance of 1e-9 h).
+    fn node_in_grid(&self, node: crate::basis::NodeKey) -> bool {
+        let x = self.grid.node_position(node);
+        let (lo, hi) = self.extent;
+        let tol = 1e-9 * self.grid.h;
+        (0..2).all(|d| x[d] >= lo[d] - tol && x[d] <= hi[d] + tol)
     }
 
     fn check_inside_extent(&self, step: usize) -> Result<(), SolveError> {
