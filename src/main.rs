@@ -1,1 +1,140 @@
-fn main() {}
+//! `mpm`: run material point method cases from the command line.
+//!
+//! - `mpm run [CASE.json] [--out DIR]` solves a case (the built-in default
+//!   example when no file is given) and writes per-step JSON and VTU files.
+//! - `mpm example [NAME]` prints a built-in case (lists them without a name).
+//! - `mpm bench` measures cost against problem size and writes a report.
+
+mod bench;
+mod run;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// The built-in case `mpm run` solves when given no file.
+pub const DEFAULT_EXAMPLE: &str = "cantilever-grid";
+
+#[derive(Parser)]
+#[command(
+    name = "mpm",
+    version,
+    about = "Implicit material point method with B-spline boundaries"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Solve a case and write its results.
+    Run {
+        /// Case file (JSON). Without one, runs the built-in example given by
+        /// --example (default: cantilever-grid).
+        case: Option<PathBuf>,
+        /// Run this built-in example instead of a file.
+        #[arg(long, conflicts_with = "case")]
+        example: Option<String>,
+        /// Output directory: summary.json, steps/step_NNNN.{json,vtu}, points.pvd.
+        #[arg(long, default_value = "out")]
+        out: PathBuf,
+        /// Write only summary.json (no per-step point files).
+        #[arg(long)]
+        summary_only: bool,
+    },
+    /// Print a built-in example case (list them when no name is given).
+    Example { name: Option<String> },
+    /// Measure wall time, its split and memory against the number of points.
+    Bench {
+        /// Largest point count to run (sizes go 1e3, 1e4, ... up to it).
+        #[arg(long, default_value_t = 1_000_000)]
+        max_points: usize,
+        /// Markdown report to write.
+        #[arg(long, default_value = "BENCHMARKS.md")]
+        out: PathBuf,
+        /// Repetitions of the small end-to-end case (median reported).
+        #[arg(long, default_value_t = 21)]
+        repeats: usize,
+    },
+    /// One row of `mpm bench`, printed as JSON (used by `mpm bench`).
+    #[command(hide = true)]
+    BenchRow { scene: usize, points: usize },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run {
+            case,
+            example,
+            out,
+            summary_only,
+        } => run::run(case, example, &out, !summary_only),
+        Command::Example { name } => example(name),
+        Command::Bench {
+            max_points,
+            out,
+            repeats,
+        } => bench::bench(max_points, &out, repeats),
+        Command::BenchRow { scene, points } => bench::bench_row(scene, points),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {}", e.message);
+            ExitCode::from(e.code)
+        }
+    }
+}
+
+/// A failure with the process exit code it maps to: 2 for bad input, 1 for
+/// a solve or I/O failure.
+#[derive(Debug)]
+pub struct CliError {
+    pub code: u8,
+    pub message: String,
+}
+
+impl CliError {
+    pub fn input(message: impl Into<String>) -> Self {
+        Self {
+            code: 2,
+            message: message.into(),
+        }
+    }
+    pub fn failed(message: impl Into<String>) -> Self {
+        Self {
+            code: 1,
+            message: message.into(),
+        }
+    }
+}
+
+impl From<std::io::Error> for CliError {
+    fn from(e: std::io::Error) -> Self {
+        CliError::failed(e.to_string())
+    }
+}
+
+fn example(name: Option<String>) -> Result<(), CliError> {
+    match name {
+        None => {
+            for n in mpm::examples::NAMES {
+                println!("{n}");
+            }
+            Ok(())
+        }
+        Some(n) => {
+            let text = mpm::examples::get(&n).ok_or_else(|| {
+                CliError::input(format!(
+                    "no built-in example {n:?}; available: {}",
+                    mpm::examples::NAMES.join(", ")
+                ))
+            })?;
+            print!("{text}");
+            Ok(())
+        }
+    }
+}

@@ -90,24 +90,20 @@ impl Default for NewtonSpec {
 }
 
 /// The background grid: square cells of side `cell_size` with a node at
-/// `origin`. Only cells touched by material enter the system, so `extent`
-/// only bounds where material may go.
+/// `origin`. The lattice is unbounded unless `extent` is given; either way
+/// only the nodes that the material touches enter the system, so a large
+/// extent costs nothing.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct GridSpec {
     pub cell_size: f64,
     #[serde(default)]
     pub origin: [f64; 2],
-    /// Region the material must stay in. Default: the material's bounding box
-    /// grown by `margin_cells` cells on every side.
+    /// Where the mesh ends, as a finite mesh would: nodes outside do not
+    /// exist (shape functions are cut there) and material leaving it stops
+    /// the run. Default: unbounded.
     #[serde(default)]
     pub extent: Option<BoxSpec>,
-    #[serde(default = "default_margin_cells")]
-    pub margin_cells: u32,
-}
-
-fn default_margin_cells() -> u32 {
-    4
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
@@ -425,7 +421,9 @@ impl Body {
             } => {
                 finite_pair(&format!("{g}.annulus.center"), *center)?;
                 positive(&format!("{g}.annulus.inner_radius"), *inner_radius)?;
-                if !(outer_radius > inner_radius) || !outer_radius.is_finite() {
+                if outer_radius.partial_cmp(inner_radius) != Some(std::cmp::Ordering::Greater)
+                    || !outer_radius.is_finite()
+                {
                     return Err(CaseError::new(
                         format!("{g}.annulus.outer_radius"),
                         format!(

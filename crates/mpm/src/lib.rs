@@ -6,6 +6,10 @@
 //! reports each step to an [`Observer`]. The crate does no I/O of its own
 //! beyond the writers in [`output`].
 
+// Index loops mirror the tensor notation of the formulas (i, j, a, b), which
+// reads better in numerical code than iterator chains.
+#![allow(clippy::needless_range_loop)]
+
 pub mod assembly;
 pub mod basis;
 pub mod case;

@@ -9,7 +9,7 @@ use crate::newton::NewtonInfo;
 use crate::points::MaterialPoints;
 
 /// Wall-clock seconds spent in each stage of a load step.
-#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, Serialize, serde::Deserialize, PartialEq)]
 pub struct StepTimings {
     /// Grid reset: shape functions, active nodes, stiffness pattern, loads.
     pub grid: f64,

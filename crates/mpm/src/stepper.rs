@@ -16,7 +16,6 @@ use rayon::prelude::*;
 use crate::assembly::{self, Connectivity, Pattern};
 use crate::basis::{Basis, Grid};
 use crate::case::{Case, Support};
-use crate::fill::bounding_box;
 use crate::linsolve::{Factorisation, SparseSolver};
 use crate::material::Response;
 use crate::newton::{self, Equilibrium, InvertedPoint, NewtonSettings, SolveError};
@@ -36,9 +35,9 @@ pub struct Probes {
 pub struct Simulation {
     pub grid: Grid,
     pub basis: Basis,
-    /// The grid's extent `(min, max)`: nodes outside it do not exist, and
-    /// material must stay inside it.
-    pub extent: ([f64; 2], [f64; 2]),
+    /// The grid's extent `(min, max)`, if bounded: nodes outside it do not
+    /// exist, and material must stay inside it.
+    pub extent: Option<([f64; 2], [f64; 2])>,
     pub points: MaterialPoints,
     pub probes: Probes,
     gravity: [f64; 2],
@@ -57,22 +56,7 @@ impl Simulation {
             origin: case.grid.origin,
         };
         let points = MaterialPoints::from_case(case);
-        let extent = match &case.grid.extent {
-            Some(b) => (b.min, b.max),
-            None => {
-                let margin = case.grid.margin_cells as f64 * grid.h;
-                let mut lo = [f64::INFINITY; 2];
-                let mut hi = [f64::NEG_INFINITY; 2];
-                for body in &case.bodies {
-                    let (a, b) = bounding_box(&body.geometry);
-                    for d in 0..2 {
-                        lo[d] = lo[d].min(a[d] - margin);
-                        hi[d] = hi[d].max(b[d] + margin);
-                    }
-                }
-                (lo, hi)
-            }
-        };
+        let extent = case.grid.extent.map(|b| (b.min, b.max));
         let point_loads = case
             .loads
             .point_loads
@@ -164,14 +148,22 @@ impl Simulation {
 
     /// Whether a node lies in the grid's extent (with a tolerance of 1e-9 h).
     fn node_in_grid(&self, node: crate::basis::NodeKey) -> bool {
+        let Some((lo, hi)) = self.extent else {
+            return true;
+        };
         let x = self.grid.node_position(node);
-        let (lo, hi) = self.extent;
         let tol = 1e-9 * self.grid.h;
         (0..2).all(|d| x[d] >= lo[d] - tol && x[d] <= hi[d] + tol)
     }
 
+    /// Material must stay inside the extent, or, on an unbounded grid, within
+    /// the range of node indices (2^30 cells from the origin).
     fn check_inside_extent(&self, step: usize) -> Result<(), SolveError> {
-        let (lo, hi) = self.extent;
+        let reach = self.grid.h * (1u64 << 30) as f64;
+        let o = self.grid.origin;
+        let (lo, hi) = self
+            .extent
+            .unwrap_or(([o[0] - reach, o[1] - reach], [o[0] + reach, o[1] + reach]));
         match self
             .points
             .position
@@ -378,7 +370,7 @@ impl Equilibrium for StepEquilibrium<'_> {
                 let (_, df) = increment(conn.point_links(p), u);
                 let j_start = mp.deformation[p].determinant();
                 let jacobian = j_start * df.determinant();
-                if !(jacobian > 0.0) {
+                if jacobian.is_nan() || jacobian <= 0.0 {
                     return Err(InvertedPoint { point: p, jacobian });
                 }
                 let material = &mp.materials[mp.material[p] as usize];

@@ -1,0 +1,106 @@
+//! The `mpm` binary as a user runs it.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn mpm() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mpm"))
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mpm-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn run_writes_summary_step_files_and_a_series() {
+    let out = temp_dir("run");
+    let status = mpm()
+        .args(["run", "--example", "cantilever-grid", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let steps = summary["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 5);
+    // The tip goes down under self-weight, and by about the 2.7 m that a
+    // 1500 N/m load gives this beam (see the cantilever example's title).
+    let tip = steps[4]["probes"]["tip"]["displacement"][1]
+        .as_f64()
+        .unwrap();
+    assert!(tip < -2.0 && tip > -3.5, "{tip}");
+    for k in 1..=5 {
+        let step: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join(format!("steps/step_{k:04}.json"))).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(
+            step["points"]["position"].as_array().unwrap().len(),
+            summary["points"].as_u64().unwrap() as usize
+        );
+        assert!(out.join(format!("steps/step_{k:04}.vtu")).exists());
+    }
+    let pvd = std::fs::read_to_string(out.join("points.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 5);
+}
+
+#[test]
+fn invalid_case_exits_2_and_names_the_field() {
+    let dir = temp_dir("invalid");
+    let mut case: serde_json::Value =
+        serde_json::from_slice(&mpm().args(["example", "column"]).output().unwrap().stdout)
+            .unwrap();
+    case["bodies"][0]["material"]["poisson_ratio"] = 0.5.into();
+    let path = dir.join("case.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let out = mpm()
+        .arg("run")
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("bodies[0].material.poisson_ratio"), "{err}");
+}
+
+#[test]
+fn failed_solve_exits_1_and_says_where() {
+    let dir = temp_dir("diverge");
+    let mut case: serde_json::Value = serde_json::from_slice(
+        &mpm()
+            .args(["example", "cantilever-grid"])
+            .output()
+            .unwrap()
+            .stdout,
+    )
+    .unwrap();
+    // The whole self-weight of a very soft beam in one step: Newton cannot
+    // follow it in two iterations.
+    case["analysis"]["load_steps"] = 1.into();
+    case["analysis"]["newton"] = serde_json::json!({"max_iterations": 2});
+    let path = dir.join("case.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let out = mpm()
+        .arg("run")
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("load step 1") && err.contains("residual"),
+        "{err}"
+    );
+}
