@@ -52,22 +52,29 @@ fn run_writes_summary_step_files_and_a_series() {
     assert_eq!(pvd.matches("<DataSet").count(), 5);
 }
 
-#[test]
-fn invalid_case_exits_2_and_names_the_field() {
-    let dir = temp_dir("invalid");
-    let mut case: serde_json::Value =
-        serde_json::from_slice(&mpm().args(["example", "column"]).output().unwrap().stdout)
-            .unwrap();
-    case["bodies"][0]["material"]["poisson_ratio"] = 0.5.into();
+/// Writes `case` to a fresh directory and runs it there.
+fn run_case(name: &str, case: &serde_json::Value) -> std::process::Output {
+    let dir = temp_dir(name);
     let path = dir.join("case.json");
     std::fs::write(&path, case.to_string()).unwrap();
-    let out = mpm()
+    mpm()
         .arg("run")
         .arg(&path)
         .arg("--out")
         .arg(dir.join("out"))
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+fn example(name: &str) -> serde_json::Value {
+    serde_json::from_slice(&mpm().args(["example", name]).output().unwrap().stdout).unwrap()
+}
+
+#[test]
+fn invalid_case_exits_2_and_names_the_field() {
+    let mut case = example("column");
+    case["bodies"][0]["material"]["poisson_ratio"] = 0.5.into();
+    let out = run_case("invalid", &case);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bodies[0].material.poisson_ratio"), "{err}");
@@ -75,28 +82,12 @@ fn invalid_case_exits_2_and_names_the_field() {
 
 #[test]
 fn failed_solve_exits_1_and_says_where() {
-    let dir = temp_dir("diverge");
-    let mut case: serde_json::Value = serde_json::from_slice(
-        &mpm()
-            .args(["example", "cantilever-grid"])
-            .output()
-            .unwrap()
-            .stdout,
-    )
-    .unwrap();
+    let mut case = example("cantilever-grid");
     // The whole self-weight of a very soft beam in one step: Newton cannot
     // follow it in two iterations.
     case["analysis"]["load_steps"] = 1.into();
     case["analysis"]["newton"] = serde_json::json!({"max_iterations": 2});
-    let path = dir.join("case.json");
-    std::fs::write(&path, case.to_string()).unwrap();
-    let out = mpm()
-        .arg("run")
-        .arg(&path)
-        .arg("--out")
-        .arg(dir.join("out"))
-        .output()
-        .unwrap();
+    let out = run_case("diverge", &case);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(

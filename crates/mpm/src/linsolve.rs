@@ -77,14 +77,8 @@ impl SparseSolver {
             }
             let symbolic = self.llt.clone().expect("just built");
             if let Ok(llt) = Llt::try_new_with_symbolic(symbolic, matrix, Side::Upper) {
-                let factorise = t0.elapsed().as_secs_f64();
-                let t1 = std::time::Instant::now();
-                let x = llt.solve(&b);
-                let timing = Timing {
-                    factorise,
-                    solve: t1.elapsed().as_secs_f64(),
-                };
-                return Ok((column(&x), Factorisation::Cholesky, timing));
+                let (x, timing) = timed_solve(&llt, &b, t0);
+                return Ok((x, Factorisation::Cholesky, timing));
             }
         }
         if self.lu.is_none() {
@@ -95,15 +89,26 @@ impl SparseSolver {
         let symbolic = self.lu.clone().expect("just built");
         let lu = Lu::try_new_with_symbolic(symbolic, matrix)
             .map_err(|e| format!("LU factorisation failed: {e:?}"))?;
-        let factorise = t0.elapsed().as_secs_f64();
-        let t1 = std::time::Instant::now();
-        let x = lu.solve(&b);
-        let timing = Timing {
-            factorise,
-            solve: t1.elapsed().as_secs_f64(),
-        };
-        Ok((column(&x), Factorisation::Lu, timing))
+        let (x, timing) = timed_solve(&lu, &b, t0);
+        Ok((x, Factorisation::Lu, timing))
     }
+}
+
+/// Solves with a finished factorisation; the factorisation's time is the
+/// time since `started`.
+fn timed_solve(
+    factors: &impl Solve<f64>,
+    b: &Mat<f64>,
+    started: std::time::Instant,
+) -> (Vec<f64>, Timing) {
+    let factorise = started.elapsed().as_secs_f64();
+    let t = std::time::Instant::now();
+    let x = factors.solve(b);
+    let timing = Timing {
+        factorise,
+        solve: t.elapsed().as_secs_f64(),
+    };
+    (column(&x), timing)
 }
 
 /// Wall-clock seconds of one solve.
