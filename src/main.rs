@@ -4,9 +4,11 @@
 //!   example when no file is given) and writes per-step JSON and VTU files.
 //! - `mpm example [NAME]` prints a built-in case (lists them without a name).
 //! - `mpm bench` measures cost against problem size and writes a report.
+//! - `mpm serve` runs the HTTP job service (see the README and openapi.yaml).
 
 mod bench;
 mod run;
+mod serve;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -58,6 +60,8 @@ enum Command {
         #[arg(long, default_value_t = 21)]
         repeats: usize,
     },
+    /// Run the HTTP job service (every flag also reads an environment variable).
+    Serve(serve::ServeArgs),
     /// One row of `mpm bench`, printed as JSON (used by `mpm bench`).
     #[command(hide = true)]
     BenchRow { scene: usize, points: usize },
@@ -79,6 +83,7 @@ fn main() -> ExitCode {
             repeats,
         } => bench::bench(max_points, &out, repeats),
         Command::BenchRow { scene, points } => bench::bench_row(scene, points),
+        Command::Serve(args) => serve::serve(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

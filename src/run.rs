@@ -145,12 +145,12 @@ impl<'a> Summary<'a> {
     }
 }
 
-/// One step's file: its report and the material points.
+/// One step's file: its report and the material points (the same shape as
+/// the service's `GET /jobs/{id}/steps/{k}`).
 #[derive(Serialize)]
 struct StepFile<'a> {
-    #[serde(flatten)]
     report: &'a StepReport,
-    points: PointColumns,
+    points: &'a PointColumns,
 }
 
 struct ResultWriter {
@@ -166,15 +166,16 @@ impl ResultWriter {
     fn write_step(&mut self, report: &StepReport, points: &MaterialPoints) -> std::io::Result<()> {
         let stem = format!("step_{:04}", report.step);
         let json = File::create(self.steps_dir.join(format!("{stem}.json")))?;
+        let columns = PointColumns::new(points);
         let file = StepFile {
             report,
-            points: PointColumns::new(points),
+            points: &columns,
         };
         let mut w = BufWriter::new(json);
         serde_json::to_writer(&mut w, &file)?;
         w.flush()?;
         let mut vtu = BufWriter::new(File::create(self.steps_dir.join(format!("{stem}.vtu")))?);
-        write_vtu(&mut vtu, points)?;
+        write_vtu(&mut vtu, &columns)?;
         vtu.flush()?;
         self.step_files
             .push((report.load_factor, format!("steps/{stem}.vtu")));

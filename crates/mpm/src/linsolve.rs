@@ -17,7 +17,7 @@ use faer::{Mat, Side};
 use crate::assembly::Pattern;
 
 /// Which factorisation produced a solution.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Factorisation {
     Cholesky,

@@ -32,7 +32,7 @@ impl Default for NewtonSettings {
 }
 
 /// How a load step's Newton solve went.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
 pub struct NewtonInfo {
     /// Linear solves performed.
     pub iterations: usize,

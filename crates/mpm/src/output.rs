@@ -26,7 +26,7 @@ pub struct StepTimings {
     pub total: f64,
 }
 
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
 pub struct ProbeReport {
     pub name: String,
     pub position: [f64; 2],
@@ -34,7 +34,7 @@ pub struct ProbeReport {
 }
 
 /// Summary of one converged load step.
-#[derive(Debug, Clone, Serialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
 pub struct StepReport {
     /// Counts from 1.
     pub step: usize,
@@ -60,7 +60,7 @@ pub struct RunReport {
 }
 
 /// The material-point state as columns, for JSON.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
 pub struct PointColumns {
     pub position: Vec<[f64; 2]>,
     pub displacement: Vec<[f64; 2]>,
@@ -94,9 +94,8 @@ impl PointColumns {
 
 /// Writes the points as a VTK XML unstructured grid of vertex cells, with
 /// raw appended binary data (little-endian, 64-bit block headers).
-pub fn write_vtu(mut out: impl Write, mp: &MaterialPoints) -> io::Result<()> {
-    let n = mp.len();
-    let cols = PointColumns::new(mp);
+pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
+    let n = cols.position.len();
     let positions: Vec<f64> = cols
         .position
         .iter()
@@ -182,7 +181,7 @@ mod tests {
         let case = crate::Case::from_json(crate::examples::get("column").unwrap()).unwrap();
         let mp = MaterialPoints::from_case(&case);
         let mut buf = Vec::new();
-        write_vtu(&mut buf, &mp).unwrap();
+        write_vtu(&mut buf, &PointColumns::new(&mp)).unwrap();
         let start = buf.windows(3).position(|w| w == b"  _").unwrap() + 3;
         let text = String::from_utf8_lossy(&buf[..start]);
         // The positions block: header says 3 * n * 8 bytes, and the first

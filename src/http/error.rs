@@ -1,0 +1,91 @@
+//! The service's one error type: it is the HTTP response. The body is always
+//! `{"error": {"code", "message", "details"}}`; internal errors are logged
+//! with their cause and answered without it.
+
+use axum::Json;
+use axum::http::StatusCode;
+use axum::response::{IntoResponse, Response};
+use serde_json::{Value, json};
+
+#[derive(Debug, thiserror::Error)]
+pub enum ApiError {
+    /// The body is not JSON at all.
+    #[error("the request body is not valid JSON: {0}")]
+    MalformedJson(String),
+    /// JSON, but not a valid case; `path` names the field.
+    #[error("{path}: {message}")]
+    InvalidCase { path: String, message: String },
+    /// A valid case that exceeds a configured limit.
+    #[error("{path}: {message}")]
+    LimitExceeded { path: String, message: String },
+    #[error("the request body exceeds the limit of {limit} bytes")]
+    PayloadTooLarge { limit: usize },
+    #[error("invalid query parameter {name}: {message}")]
+    BadQuery { name: &'static str, message: String },
+    #[error("{0} not found")]
+    NotFound(String),
+    #[error("{0}")]
+    Conflict(String),
+    #[error("missing or wrong bearer token")]
+    Unauthorized,
+    #[error("internal error")]
+    Internal(String),
+}
+
+impl From<sqlx::Error> for ApiError {
+    fn from(e: sqlx::Error) -> Self {
+        ApiError::Internal(format!("database: {e}"))
+    }
+}
+
+impl ApiError {
+    fn status_code_details(&self) -> (StatusCode, &'static str, Value) {
+        match self {
+            ApiError::MalformedJson(_) => (StatusCode::BAD_REQUEST, "malformed_json", Value::Null),
+            ApiError::InvalidCase { path, .. } => (
+                StatusCode::UNPROCESSABLE_ENTITY,
+                "invalid_case",
+                json!({ "path": path }),
+            ),
+            ApiError::LimitExceeded { path, .. } => (
+                StatusCode::UNPROCESSABLE_ENTITY,
+                "limit_exceeded",
+                json!({ "path": path }),
+            ),
+            ApiError::PayloadTooLarge { limit } => (
+                StatusCode::PAYLOAD_TOO_LARGE,
+                "payload_too_large",
+                json!({ "limit_bytes": limit }),
+            ),
+            ApiError::BadQuery { name, .. } => (
+                StatusCode::BAD_REQUEST,
+                "bad_query",
+                json!({ "parameter": name }),
+            ),
+            ApiError::NotFound(_) => (StatusCode::NOT_FOUND, "not_found", Value::Null),
+            ApiError::Conflict(_) => (StatusCode::CONFLICT, "conflict", Value::Null),
+            ApiError::Unauthorized => (StatusCode::UNAUTHORIZED, "unauthorized", Value::Null),
+            ApiError::Internal(_) => (StatusCode::INTERNAL_SERVER_ERROR, "internal", Value::Null),
+        }
+    }
+}
+
+impl IntoResponse for ApiError {
+    fn into_response(self) -> Response {
+        let (status, code, details) = self.status_code_details();
+        if let ApiError::Internal(cause) = &self {
+            tracing::error!(%cause, "internal error");
+        }
+        let body = Json(
+            json!({ "error": { "code": code, "message": self.to_string(), "details": details } }),
+        );
+        let mut response = (status, body).into_response();
+        if status == StatusCode::UNAUTHORIZED {
+            response.headers_mut().insert(
+                axum::http::header::WWW_AUTHENTICATE,
+                axum::http::HeaderValue::from_static("Bearer"),
+            );
+        }
+        response
+    }
+}

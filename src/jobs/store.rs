@@ -1,0 +1,380 @@
+//! Jobs and their results in SQLite: every statement the service runs.
+//!
+//! Claiming is one compare-and-set `UPDATE ... RETURNING`, never a SELECT
+//! followed by an UPDATE: in SQLite a deferred transaction doing both gives
+//! `database is locked` under competing workers, which busy_timeout does not
+//! cure. A claimed job carries a lease (owner, expiry) that its worker renews
+//! while it runs; a job whose lease expired is claimable again, up to the
+//! attempt limit.
+//!
+//! The few statements assembled with `format!` insert only constants of this
+//! module (column lists, status names from [`JobStatus`]); every value from a
+//! request is a bind parameter.
+
+use std::path::Path;
+use std::str::FromStr;
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+
+use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
+use sqlx::{AssertSqlSafe, FromRow, SqlitePool};
+
+use super::JobStatus;
+
+/// Unix time in seconds.
+pub fn now() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .unwrap_or_default()
+        .as_secs_f64()
+}
+
+/// A row of `jobs`, without the case text.
+#[derive(Debug, Clone, FromRow)]
+pub struct JobRow {
+    pub id: i64,
+    pub status: JobStatus,
+    pub title: Option<String>,
+    pub points: i64,
+    pub load_steps: i64,
+    pub steps_done: i64,
+    pub newton_iterations: i64,
+    pub attempts: i64,
+    pub cancel_requested: bool,
+    pub created_at: f64,
+    pub started_at: Option<f64>,
+    pub finished_at: Option<f64>,
+    pub solve_seconds: Option<f64>,
+    pub error: Option<String>,
+}
+
+const QUEUED: &str = JobStatus::Queued.as_str();
+const RUNNING: &str = JobStatus::Running.as_str();
+const CANCELLED: &str = JobStatus::Cancelled.as_str();
+
+const JOB_COLUMNS: &str = "id, status, title, points, load_steps, steps_done, newton_iterations, attempts, \
+     cancel_requested, created_at, started_at, finished_at, solve_seconds, error";
+
+/// A job a worker has just claimed.
+#[derive(Debug, Clone, FromRow)]
+pub struct Claimed {
+    pub id: i64,
+    pub case_json: String,
+    pub attempts: i64,
+}
+
+/// What `POST /jobs/{id}/cancel` did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CancelOutcome {
+    /// It was queued and is now cancelled.
+    Cancelled,
+    /// It is running and will stop at its next Newton iteration.
+    Requested,
+    /// It had already finished with this status.
+    AlreadyFinal(JobStatus),
+    NotFound,
+}
+
+#[derive(Clone)]
+pub struct Store {
+    pool: SqlitePool,
+}
+
+impl Store {
+    /// Opens (creating if needed) the database at `path` in WAL mode with a
+    /// busy timeout, and applies the embedded migrations.
+    pub async fn open(path: &Path) -> Result<Store, sqlx::Error> {
+        let options = SqliteConnectOptions::from_str("sqlite:")?
+            .filename(path)
+            .create_if_missing(true)
+            .journal_mode(SqliteJournalMode::Wal)
+            .synchronous(SqliteSynchronous::Normal)
+            .busy_timeout(Duration::from_secs(10))
+            .foreign_keys(true);
+        let pool = SqlitePoolOptions::new()
+            .max_connections(8)
+            .connect_with(options)
+            .await?;
+        sqlx::migrate!("./migrations").run(&pool).await?;
+        Ok(Store { pool })
+    }
+
+    pub async fn ping(&self) -> Result<(), sqlx::Error> {
+        sqlx::query("SELECT 1")
+            .execute(&self.pool)
+            .await
+            .map(|_| ())
+    }
+
+    pub async fn insert(
+        &self,
+        case_json: &str,
+        title: Option<&str>,
+        points: i64,
+        load_steps: i64,
+    ) -> Result<i64, sqlx::Error> {
+        let id: i64 = sqlx::query_scalar(
+            "INSERT INTO jobs (status, case_json, title, points, load_steps, created_at) \
+             VALUES (?, ?, ?, ?, ?, ?) RETURNING id",
+        )
+        .bind(JobStatus::Queued)
+        .bind(case_json)
+        .bind(title)
+        .bind(points)
+        .bind(load_steps)
+        .bind(now())
+        .fetch_one(&self.pool)
+        .await?;
+        Ok(id)
+    }
+
+    pub async fn get(&self, id: i64) -> Result<Option<JobRow>, sqlx::Error> {
+        sqlx::query_as(AssertSqlSafe(format!(
+            "SELECT {JOB_COLUMNS} FROM jobs WHERE id = ?"
+        )))
+        .bind(id)
+        .fetch_optional(&self.pool)
+        .await
+    }
+
+    pub async fn case_json(&self, id: i64) -> Result<Option<String>, sqlx::Error> {
+        sqlx::query_scalar("SELECT case_json FROM jobs WHERE id = ?")
+            .bind(id)
+            .fetch_optional(&self.pool)
+            .await
+    }
+
+    /// Jobs newest first, optionally of one status; and how many there are.
+    pub async fn list(
+        &self,
+        status: Option<JobStatus>,
+        limit: i64,
+        offset: i64,
+    ) -> Result<(Vec<JobRow>, i64), sqlx::Error> {
+        let filter = if status.is_some() {
+            "WHERE status = ?"
+        } else {
+            ""
+        };
+        let mut rows = sqlx::query_as(AssertSqlSafe(format!(
+            "SELECT {JOB_COLUMNS} FROM jobs {filter} ORDER BY id DESC LIMIT ? OFFSET ?"
+        )));
+        let mut count =
+            sqlx::query_scalar(AssertSqlSafe(format!("SELECT COUNT(*) FROM jobs {filter}")));
+        if let Some(s) = status {
+            rows = rows.bind(s);
+            count = count.bind(s);
+        }
+        let rows = rows.bind(limit).bind(offset).fetch_all(&self.pool).await?;
+        let total = count.fetch_one(&self.pool).await?;
+        Ok((rows, total))
+    }
+
+    /// Fails running jobs whose lease has expired and that have used all
+    /// their attempts. Returns how many.
+    pub async fn fail_exhausted(&self, max_attempts: i64) -> Result<u64, sqlx::Error> {
+        let error = serde_json::json!({
+            "kind": "attempts_exhausted",
+            "message": format!("the worker running this job stopped (crashed or was killed) {max_attempts} times"),
+        })
+        .to_string();
+        let t = now();
+        let done = sqlx::query(
+            "UPDATE jobs SET status = ?, error = ?, finished_at = ?, lease_owner = NULL, lease_expires_at = NULL \
+             WHERE status = ? AND lease_expires_at < ? AND attempts >= ?",
+        )
+        .bind(JobStatus::Failed)
+        .bind(error)
+        .bind(t)
+        .bind(JobStatus::Running)
+        .bind(t)
+        .bind(max_attempts)
+        .execute(&self.pool)
+        .await?;
+        Ok(done.rows_affected())
+    }
+
+    /// Claims the oldest queued job, or a running one whose lease expired,
+    /// for `owner` until `now + lease`. A reclaimed job restarts from its
+    /// first step, so its old step rows are removed.
+    pub async fn claim(
+        &self,
+        owner: &str,
+        lease: Duration,
+    ) -> Result<Option<Claimed>, sqlx::Error> {
+        let t = now();
+        let claimable =
+            format!("(status = '{QUEUED}' OR (status = '{RUNNING}' AND lease_expires_at < ?))");
+        let claimed: Option<Claimed> = sqlx::query_as(AssertSqlSafe(format!(
+            "UPDATE jobs SET status = '{RUNNING}', attempts = attempts + 1, lease_owner = ?, lease_expires_at = ?, \
+                 started_at = ?, steps_done = 0, newton_iterations = 0 \
+             WHERE id = (SELECT id FROM jobs WHERE {claimable} ORDER BY id LIMIT 1) AND {claimable} \
+             RETURNING id, case_json, attempts"
+        )))
+        .bind(owner)
+        .bind(t + lease.as_secs_f64())
+        .bind(t)
+        .bind(t)
+        .bind(t)
+        .fetch_optional(&self.pool)
+        .await?;
+        if let Some(c) = &claimed {
+            sqlx::query("DELETE FROM steps WHERE job_id = ?")
+                .bind(c.id)
+                .execute(&self.pool)
+                .await?;
+        }
+        Ok(claimed)
+    }
+
+    /// Extends `owner`'s lease. `None` if the lease was lost (another worker
+    /// took the job over); otherwise whether a cancel was requested.
+    pub async fn renew(
+        &self,
+        id: i64,
+        owner: &str,
+        lease: Duration,
+    ) -> Result<Option<bool>, sqlx::Error> {
+        sqlx::query_scalar(AssertSqlSafe(format!(
+            "UPDATE jobs SET lease_expires_at = ? WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}' \
+             RETURNING cancel_requested"
+        )))
+        .bind(now() + lease.as_secs_f64())
+        .bind(id)
+        .bind(owner)
+        .fetch_optional(&self.pool)
+        .await
+    }
+
+    /// Stores a finished step and advances the job's progress, in one
+    /// transaction. Returns false if `owner` no longer holds the job.
+    pub async fn save_step(
+        &self,
+        id: i64,
+        owner: &str,
+        step: i64,
+        iterations: i64,
+        report: &str,
+        points: &str,
+    ) -> Result<bool, sqlx::Error> {
+        let mut tx = self.pool.begin().await?;
+        let held = sqlx::query(AssertSqlSafe(format!(
+            "UPDATE jobs SET steps_done = ?, newton_iterations = newton_iterations + ? \
+             WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
+        )))
+        .bind(step)
+        .bind(iterations)
+        .bind(id)
+        .bind(owner)
+        .execute(&mut *tx)
+        .await?
+        .rows_affected()
+            == 1;
+        if held {
+            sqlx::query(
+                "INSERT OR REPLACE INTO steps (job_id, step, report, points) VALUES (?, ?, ?, ?)",
+            )
+            .bind(id)
+            .bind(step)
+            .bind(report)
+            .bind(points)
+            .execute(&mut *tx)
+            .await?;
+        }
+        tx.commit().await?;
+        Ok(held)
+    }
+
+    /// Ends `owner`'s run of a job with a final status.
+    pub async fn finish(
+        &self,
+        id: i64,
+        owner: &str,
+        status: JobStatus,
+        solve_seconds: f64,
+        error: Option<&str>,
+    ) -> Result<bool, sqlx::Error> {
+        let done = sqlx::query(AssertSqlSafe(format!(
+            "UPDATE jobs SET status = ?, finished_at = ?, solve_seconds = ?, error = ?, lease_owner = NULL, \
+                 lease_expires_at = NULL \
+             WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
+        )))
+        .bind(status)
+        .bind(now())
+        .bind(solve_seconds)
+        .bind(error)
+        .bind(id)
+        .bind(owner)
+        .execute(&self.pool)
+        .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    /// Puts a job `owner` was running back in the queue (shutdown): the
+    /// attempt does not count and its partial steps are dropped.
+    pub async fn requeue(&self, id: i64, owner: &str) -> Result<(), sqlx::Error> {
+        let mut tx = self.pool.begin().await?;
+        let held = sqlx::query(AssertSqlSafe(format!(
+            "UPDATE jobs SET status = '{QUEUED}', attempts = MAX(attempts - 1, 0), lease_owner = NULL, \
+                 lease_expires_at = NULL, started_at = NULL, steps_done = 0, newton_iterations = 0 \
+             WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
+        )))
+        .bind(id)
+        .bind(owner)
+        .execute(&mut *tx)
+        .await?
+        .rows_affected()
+            == 1;
+        if held {
+            sqlx::query("DELETE FROM steps WHERE job_id = ?")
+                .bind(id)
+                .execute(&mut *tx)
+                .await?;
+        }
+        tx.commit().await
+    }
+
+    /// Cancels a queued job at once, or asks a running one to stop.
+    pub async fn cancel(&self, id: i64) -> Result<CancelOutcome, sqlx::Error> {
+        let t = now();
+        let queued = sqlx::query(AssertSqlSafe(format!(
+            "UPDATE jobs SET status = '{CANCELLED}', finished_at = ? WHERE id = ? AND status = '{QUEUED}'"
+        )))
+            .bind(t)
+            .bind(id)
+            .execute(&self.pool)
+            .await?;
+        if queued.rows_affected() == 1 {
+            return Ok(CancelOutcome::Cancelled);
+        }
+        let running = sqlx::query(AssertSqlSafe(format!(
+            "UPDATE jobs SET cancel_requested = 1 WHERE id = ? AND status = '{RUNNING}'"
+        )))
+        .bind(id)
+        .execute(&self.pool)
+        .await?;
+        if running.rows_affected() == 1 {
+            return Ok(CancelOutcome::Requested);
+        }
+        Ok(match self.get(id).await? {
+            Some(job) => CancelOutcome::AlreadyFinal(job.status),
+            None => CancelOutcome::NotFound,
+        })
+    }
+
+    /// Step reports (JSON text) of a job, in step order.
+    pub async fn step_reports(&self, id: i64) -> Result<Vec<String>, sqlx::Error> {
+        sqlx::query_scalar("SELECT report FROM steps WHERE job_id = ? ORDER BY step")
+            .bind(id)
+            .fetch_all(&self.pool)
+            .await
+    }
+
+    /// One step's report and points (JSON text).
+    pub async fn step(&self, id: i64, step: i64) -> Result<Option<(String, String)>, sqlx::Error> {
+        sqlx::query_as("SELECT report, points FROM steps WHERE job_id = ? AND step = ?")
+            .bind(id)
+            .bind(step)
+            .fetch_optional(&self.pool)
+            .await
+    }
+}

@@ -1,0 +1,109 @@
+//! `mpm serve`: the job service with its settings from flags or environment.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use clap::Args;
+use mpm_service::{Config, Server};
+
+use crate::CliError;
+
+#[derive(Args)]
+pub struct ServeArgs {
+    /// Address to listen on (port 0 picks a free port).
+    #[arg(long, env = "MPM_ADDR", default_value = "127.0.0.1:8080")]
+    addr: SocketAddr,
+    /// SQLite database file, created on first start.
+    #[arg(long, env = "MPM_DATABASE", default_value = "mpm.sqlite")]
+    database: PathBuf,
+    /// Jobs solved at once; each uses all cores through rayon.
+    #[arg(long, env = "MPM_WORKERS", default_value_t = 1)]
+    workers: usize,
+    /// Threads in rayon's pool for the solver (default: one per core).
+    #[arg(long, env = "MPM_SOLVER_THREADS")]
+    solver_threads: Option<usize>,
+    /// Bearer token required on every endpoint but /health.
+    #[arg(long, env = "MPM_TOKEN", hide_env_values = true)]
+    token: Option<String>,
+    /// Largest accepted request body, in bytes.
+    #[arg(long, env = "MPM_MAX_BODY_BYTES", default_value_t = 1 << 20)]
+    max_body_bytes: usize,
+    /// Most material points a case may generate.
+    #[arg(long, env = "MPM_MAX_POINTS", default_value_t = 1_000_000)]
+    max_points: usize,
+    /// Most load steps a case may ask for.
+    #[arg(long, env = "MPM_MAX_LOAD_STEPS", default_value_t = 10_000)]
+    max_load_steps: usize,
+    /// Wall-time limit of one job, in seconds; a job over it fails.
+    #[arg(long, env = "MPM_JOB_TIME_LIMIT", default_value_t = 3600)]
+    job_time_limit: u64,
+    /// Lease of a running job, in seconds; a job whose worker died is
+    /// claimed again this long after its last renewal.
+    #[arg(long, env = "MPM_LEASE_SECONDS", default_value_t = 30.0)]
+    lease_seconds: f64,
+    /// Runs of one job (first plus retries after crashes) before it fails.
+    #[arg(long, env = "MPM_MAX_ATTEMPTS", default_value_t = 3)]
+    max_attempts: u32,
+}
+
+pub fn serve(args: ServeArgs) -> Result<(), CliError> {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_env("MPM_LOG")
+                .unwrap_or_else(|_| "info".into()),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    if let Some(n) = args.solver_threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| CliError::failed(e.to_string()))?;
+    }
+    if args.workers == 0 || args.lease_seconds <= 0.0 || args.max_attempts == 0 {
+        return Err(CliError::input(
+            "workers, lease-seconds and max-attempts must be positive",
+        ));
+    }
+    let mut config = Config::new(args.database);
+    config.workers = args.workers;
+    config.token = args.token.filter(|t| !t.is_empty());
+    config.lease = Duration::from_secs_f64(args.lease_seconds);
+    config.poll_interval = config.poll_interval.min(config.lease / 3);
+    config.max_attempts = args.max_attempts;
+    config.limits.max_body_bytes = args.max_body_bytes;
+    config.limits.max_points = args.max_points;
+    config.limits.max_load_steps = args.max_load_steps;
+    config.limits.job_time_limit = Duration::from_secs(args.job_time_limit);
+
+    let runtime = tokio::runtime::Runtime::new()?;
+    runtime.block_on(async {
+        let database = config.database.display().to_string();
+        let server = Server::start(config, args.addr)
+            .await
+            .map_err(|e| CliError::failed(e.to_string()))?;
+        // Scripts (and the tests) read the bound address from this line.
+        println!("listening on http://{} (database {database})", server.addr);
+        shutdown_signal().await;
+        tracing::info!("shutting down: running jobs go back to the queue");
+        server.shutdown().await;
+        Ok(())
+    })
+}
+
+/// Ctrl-C or SIGTERM (what `docker stop` sends).
+async fn shutdown_signal() {
+    let ctrl_c = tokio::signal::ctrl_c();
+    #[cfg(unix)]
+    {
+        let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
+            .expect("install the SIGTERM handler");
+        tokio::select! {
+            _ = ctrl_c => {}
+            _ = term.recv() => {}
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = ctrl_c.await;
+}

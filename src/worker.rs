@@ -1,0 +1,359 @@
+//! The worker pool: dedicated OS threads that claim jobs and run the solver,
+//! off the async runtime. Each running job holds a lease that a small task
+//! on the runtime renews; the solver reports every finished step, which the
+//! worker stores at once, so a client can read step 1 while step 2 runs.
+
+use std::collections::HashMap;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use mpm::output::PointColumns;
+use mpm::{Case, MaterialPoints, Observer, Simulation, SolveError, StepReport};
+use tokio::runtime::Handle;
+use tokio::sync::Notify;
+
+use crate::config::Config;
+use crate::jobs::{Claimed, JobStatus, Store};
+
+/// What the workers share.
+struct Shared {
+    store: Store,
+    config: Arc<Config>,
+    runtime: Handle,
+    /// Woken when a job is submitted, so an idle worker starts at once.
+    wake: Arc<Notify>,
+    /// Set at shutdown: stop claiming, hand running jobs back to the queue.
+    stopping: AtomicBool,
+    /// Distinguishes this process's workers in lease_owner.
+    process_tag: String,
+    running: Arc<RunningJobs>,
+}
+
+/// The stop flags of the jobs this process is running, so a cancel request
+/// reaches the solver at its next Newton iteration. (Jobs run by another
+/// process see the request through their lease renewal.)
+#[derive(Default)]
+pub struct RunningJobs(Mutex<HashMap<i64, Arc<StopFlags>>>);
+
+impl RunningJobs {
+    /// Flags job `id` for cancellation if it runs here.
+    pub fn cancel(&self, id: i64) {
+        if let Some(flags) = self.0.lock().expect("not poisoned").get(&id) {
+            flags.cancel_requested.store(true, Ordering::SeqCst);
+        }
+    }
+}
+
+pub struct WorkerPool {
+    shared: Arc<Shared>,
+    threads: Vec<JoinHandle<()>>,
+}
+
+impl WorkerPool {
+    /// Starts `config.workers` threads. Must be called from within the tokio
+    /// runtime whose handle the workers use for database access.
+    pub fn start(
+        store: Store,
+        config: Arc<Config>,
+        wake: Arc<Notify>,
+        running: Arc<RunningJobs>,
+    ) -> WorkerPool {
+        let shared = Arc::new(Shared {
+            store,
+            runtime: Handle::current(),
+            wake,
+            stopping: AtomicBool::new(false),
+            process_tag: format!(
+                "pid{}-{:x}",
+                std::process::id(),
+                (crate::jobs::store::now() * 1e6) as u64
+            ),
+            config,
+            running,
+        });
+        let threads = (0..shared.config.workers)
+            .map(|i| {
+                let shared = shared.clone();
+                std::thread::Builder::new()
+                    .name(format!("mpm-worker-{i}"))
+                    .spawn(move || worker_loop(&shared, i))
+                    .expect("spawn worker thread")
+            })
+            .collect();
+        WorkerPool { shared, threads }
+    }
+
+    /// Stops claiming, makes running jobs stop at their next Newton iteration
+    /// and go back to the queue, and waits for the threads.
+    pub fn shutdown(self) {
+        self.shared.stopping.store(true, Ordering::SeqCst);
+        self.shared.wake.notify_waiters();
+        for t in self.threads {
+            let _ = t.join();
+        }
+    }
+}
+
+fn worker_loop(shared: &Shared, index: usize) {
+    let owner = format!("{}-w{index}", shared.process_tag);
+    while !shared.stopping.load(Ordering::SeqCst) {
+        let claimed = shared.runtime.block_on(async {
+            shared
+                .store
+                .fail_exhausted(shared.config.max_attempts as i64)
+                .await?;
+            shared.store.claim(&owner, shared.config.lease).await
+        });
+        match claimed {
+            Ok(Some(job)) => run_job(shared, &owner, job),
+            Ok(None) => {
+                // Sleep until a submission wakes us or the poll interval
+                // passes (expired leases need no wake-up).
+                let poll = shared.config.poll_interval;
+                let wake = shared.wake.clone();
+                shared.runtime.block_on(async move {
+                    let _ = tokio::time::timeout(poll, wake.notified()).await;
+                });
+            }
+            Err(e) => {
+                tracing::error!(error = %e, "claiming a job failed");
+                std::thread::sleep(shared.config.poll_interval);
+            }
+        }
+    }
+}
+
+/// Why a run asked the solver to stop.
+#[derive(Default)]
+pub struct StopFlags {
+    cancel_requested: AtomicBool,
+    lease_lost: AtomicBool,
+}
+
+fn run_job(shared: &Shared, owner: &str, job: Claimed) {
+    let started = Instant::now();
+    tracing::info!(job = job.id, attempt = job.attempts, "job started");
+    let flags = Arc::new(StopFlags::default());
+    shared
+        .running
+        .0
+        .lock()
+        .expect("not poisoned")
+        .insert(job.id, flags.clone());
+    let renewal = shared.runtime.spawn(renew_lease(
+        shared.store.clone(),
+        job.id,
+        owner.to_string(),
+        shared.config.lease,
+        flags.clone(),
+    ));
+
+    let mut observer = JobObserver {
+        shared,
+        owner,
+        job: job.id,
+        flags: &flags,
+        deadline: started + shared.config.limits.job_time_limit,
+        timed_out: false,
+        store_error: None,
+    };
+    let outcome = catch_unwind(AssertUnwindSafe(|| {
+        // The case was validated on submission; a failure here means the
+        // stored text was altered or the format changed under it.
+        let case = Case::from_json(&job.case_json)
+            .map_err(|e| Failure::new("invalid_case", e.to_string()))?;
+        let mut sim = Simulation::new(&case);
+        sim.run(&mut observer).map_err(Failure::from)
+    }));
+    renewal.abort();
+    shared
+        .running
+        .0
+        .lock()
+        .expect("not poisoned")
+        .remove(&job.id);
+    let seconds = started.elapsed().as_secs_f64();
+    let outcome = outcome.unwrap_or_else(|panic| {
+        let what = panic
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_default();
+        tracing::error!(job = job.id, panic = %what, "solver panicked");
+        Err(Failure::new(
+            "internal",
+            "the solver stopped on an internal error".into(),
+        ))
+    });
+    let store = &shared.store;
+    let result = shared.runtime.block_on(async {
+        match outcome {
+            Ok(_) => store
+                .finish(job.id, owner, JobStatus::Succeeded, seconds, None)
+                .await
+                .map(|_| ()),
+            Err(f) if f.kind == "cancelled" => {
+                if observer.timed_out {
+                    let f = Failure::new(
+                        "time_limit",
+                        format!(
+                            "the per-job wall-time limit of {} s was reached ({})",
+                            shared.config.limits.job_time_limit.as_secs(),
+                            f.message
+                        ),
+                    );
+                    store
+                        .finish(job.id, owner, JobStatus::Failed, seconds, Some(&f.json()))
+                        .await
+                        .map(|_| ())
+                } else if let Some(e) = &observer.store_error {
+                    let f = Failure::new("internal", format!("storing results failed: {e}"));
+                    store
+                        .finish(job.id, owner, JobStatus::Failed, seconds, Some(&f.json()))
+                        .await
+                        .map(|_| ())
+                } else if flags.cancel_requested.load(Ordering::SeqCst) {
+                    store
+                        .finish(job.id, owner, JobStatus::Cancelled, seconds, None)
+                        .await
+                        .map(|_| ())
+                } else if shared.stopping.load(Ordering::SeqCst) {
+                    store.requeue(job.id, owner).await
+                } else {
+                    // The lease was lost: another worker owns the job now.
+                    Ok(())
+                }
+            }
+            Err(f) => store
+                .finish(job.id, owner, JobStatus::Failed, seconds, Some(&f.json()))
+                .await
+                .map(|_| ()),
+        }
+    });
+    if let Err(e) = result {
+        tracing::error!(job = job.id, error = %e, "recording the job's end failed; its lease will expire and it will be retried");
+    }
+    tracing::info!(job = job.id, seconds, "job ended");
+}
+
+/// Renews the lease every third of its length; notes a cancel request or a
+/// lost lease for the solver to see at its next Newton iteration.
+async fn renew_lease(
+    store: Store,
+    job: i64,
+    owner: String,
+    lease: Duration,
+    flags: Arc<StopFlags>,
+) {
+    loop {
+        tokio::time::sleep(lease / 3).await;
+        match store.renew(job, &owner, lease).await {
+            Ok(Some(cancel)) => {
+                if cancel {
+                    flags.cancel_requested.store(true, Ordering::SeqCst);
+                }
+            }
+            Ok(None) => {
+                flags.lease_lost.store(true, Ordering::SeqCst);
+                return;
+            }
+            Err(e) => tracing::warn!(job, error = %e, "lease renewal failed; will retry"),
+        }
+    }
+}
+
+/// Stores each finished step and tells the solver when to stop.
+struct JobObserver<'a> {
+    shared: &'a Shared,
+    owner: &'a str,
+    job: i64,
+    flags: &'a StopFlags,
+    deadline: Instant,
+    timed_out: bool,
+    store_error: Option<String>,
+}
+
+impl Observer for JobObserver<'_> {
+    fn step_finished(&mut self, report: &StepReport, points: &MaterialPoints) {
+        let report_json = serde_json::to_string(report).expect("reports serialise");
+        let points_json =
+            serde_json::to_string(&PointColumns::new(points)).expect("points serialise");
+        let saved = self.shared.runtime.block_on(self.shared.store.save_step(
+            self.job,
+            self.owner,
+            report.step as i64,
+            report.newton.iterations as i64,
+            &report_json,
+            &points_json,
+        ));
+        match saved {
+            Ok(true) => {}
+            Ok(false) => self.flags.lease_lost.store(true, Ordering::SeqCst),
+            Err(e) => self.store_error = Some(e.to_string()),
+        }
+    }
+
+    fn should_cancel(&mut self) -> bool {
+        if Instant::now() > self.deadline {
+            self.timed_out = true;
+        }
+        self.timed_out
+            || self.store_error.is_some()
+            || self.flags.cancel_requested.load(Ordering::SeqCst)
+            || self.flags.lease_lost.load(Ordering::SeqCst)
+            || self.shared.stopping.load(Ordering::SeqCst)
+    }
+}
+
+/// A job's failure as stored in `jobs.error` and served by the API.
+#[derive(Debug, serde::Serialize)]
+struct Failure {
+    kind: &'static str,
+    message: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    step: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    iteration: Option<usize>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    residual: Option<f64>,
+}
+
+impl Failure {
+    fn new(kind: &'static str, message: String) -> Self {
+        Self {
+            kind,
+            message,
+            step: None,
+            iteration: None,
+            residual: None,
+        }
+    }
+
+    fn json(&self) -> String {
+        serde_json::to_string(self).expect("failures serialise")
+    }
+}
+
+impl From<SolveError> for Failure {
+    fn from(e: SolveError) -> Self {
+        let kind = match e {
+            SolveError::NotConverged { .. } => "not_converged",
+            SolveError::Diverged { .. } => "diverged",
+            SolveError::Inverted { .. } => "inverted_point",
+            SolveError::LinearSolve { .. } => "linear_solve",
+            SolveError::LeftGrid { .. } => "left_grid",
+            SolveError::Cancelled { .. } => "cancelled",
+        };
+        let (step, iteration, residual) = e.location();
+        Failure {
+            kind,
+            message: e.to_string(),
+            step: Some(step),
+            iteration,
+            residual: residual.filter(|r| r.is_finite()),
+        }
+    }
+}

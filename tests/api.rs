@@ -1,0 +1,260 @@
+//! The HTTP API against a real server and a real SQLite file.
+
+mod common;
+
+use std::collections::BTreeSet;
+use std::time::Duration;
+
+use common::{example, is_final, slow_case, spawn_app, spawn_app_with};
+use serde_json::{Value, json};
+
+const LONG: Duration = Duration::from_secs(120);
+
+#[test]
+fn a_job_runs_to_success_and_its_steps_match_the_cli() {
+    let app = spawn_app();
+    let case = example("cantilever-grid");
+    let id = app.submit(&case);
+    let job = app.wait_for(id, LONG, is_final);
+    assert_eq!(job["status"], "succeeded", "{job}");
+    assert_eq!(job["progress"], json!({"step": 5, "of": 5}));
+    assert!(job["solve_seconds"].as_f64().unwrap() > 0.0);
+
+    let steps = app.get_json(&format!("/jobs/{id}/steps"));
+    assert_eq!(steps["steps"].as_array().unwrap().len(), 5);
+
+    // The CLI on the same case writes the same step file.
+    let out = common::TempDir::new("cli");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_mpm"))
+        .args(["run", "--example", "cantilever-grid", "--out"])
+        .arg(&out.0)
+        .output()
+        .unwrap();
+    assert!(status.status.success());
+    let cli: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.0.join("steps/step_0005.json")).unwrap())
+            .unwrap();
+    let api = app.get_json(&format!("/jobs/{id}/steps/5"));
+    for field in ["position", "displacement", "stress", "volume", "jacobian"] {
+        let a = api["points"][field].to_string();
+        let c = cli["points"][field].to_string();
+        assert_eq!(
+            a, c,
+            "points.{field} differ between the service and the CLI"
+        );
+    }
+    assert_eq!(api["report"]["probes"], cli["report"]["probes"]);
+
+    let result = app.get_json(&format!("/jobs/{id}/result"));
+    let tip = result["probes"]["tip"].as_array().unwrap();
+    assert_eq!(tip.len(), 5);
+    assert_eq!(
+        tip[4]["displacement"],
+        cli["report"]["probes"][0]["displacement"]
+    );
+
+    let (status, vtu) = app.get(&format!("/jobs/{id}/steps/5?format=vtu"));
+    assert_eq!(status, 200);
+    assert!(vtu.starts_with("<?xml") && vtu.contains("NumberOfPoints=\"320\""));
+
+    let (status, _) = app.get(&format!("/jobs/{id}/steps/6"));
+    assert_eq!(status, 404);
+}
+
+/// `(status, error.code, error.details.path)` of a rejected submission.
+fn rejection(app: &common::TestApp, body: &str) -> (u16, String, Option<String>) {
+    let (status, text) = app.post("/jobs", body);
+    let v: Value =
+        serde_json::from_str(&text).unwrap_or_else(|_| panic!("error body is JSON: {text}"));
+    let code = v["error"]["code"].as_str().unwrap().to_string();
+    assert!(!v["error"]["message"].as_str().unwrap().is_empty());
+    (
+        status,
+        code,
+        v["error"]["details"]["path"].as_str().map(String::from),
+    )
+}
+
+#[test]
+fn invalid_submissions_are_4xx_naming_the_field_and_create_nothing() {
+    let app = spawn_app_with(|c| {
+        c.limits.max_points = 1000;
+        c.limits.max_body_bytes = 64 * 1024;
+    });
+    let with = |f: &dyn Fn(&mut Value)| {
+        let mut case = example("cantilever-grid");
+        f(&mut case);
+        case.to_string()
+    };
+    assert_eq!(rejection(&app, "{\"version\": 1,").0, 400);
+    assert_eq!(rejection(&app, "{\"version\": 1,").1, "malformed_json");
+
+    let cases: Vec<(String, &str)> = vec![
+        (
+            with(&|c| c["bodies"][0]["material"]["youngs_modulos"] = 1.into()),
+            "bodies[0].material",
+        ),
+        (
+            with(&|c| c["bodies"][0]["material"]["youngs_modulus"] = (-1.0).into()),
+            "bodies[0].material.youngs_modulus",
+        ),
+        (
+            with(&|c| c["bodies"][0]["material"]["poisson_ratio"] = 0.5.into()),
+            "bodies[0].material.poisson_ratio",
+        ),
+        (
+            with(&|c| {
+                c["bodies"][0]["geometry"] = json!({"rectangle": {"min": [0, 0], "max": [0, 2]}})
+            }),
+            "bodies[0].geometry.rectangle.max",
+        ),
+        (with(&|c| c["grid"]["cell_size"] = 0.05.into()), "bodies"), // 32000 points > 1000
+        (with(&|c| c["bodies"] = json!([])), "bodies"),
+    ];
+    for (body, path) in &cases {
+        let (status, code, got) = rejection(&app, body);
+        assert_eq!(status, 422, "{path}: {code}");
+        assert_eq!(got.as_deref(), Some(*path), "{body}");
+    }
+    let huge = format!("{{\"title\": \"{}\"}}", "x".repeat(100 * 1024));
+    let (status, code, _) = rejection(&app, &huge);
+    assert_eq!((status, code.as_str()), (413, "payload_too_large"));
+    assert_eq!(app.total_jobs(), 0);
+}
+
+#[test]
+fn cancel_stops_a_running_job_keeping_its_steps_and_cancels_a_queued_one() {
+    let app = spawn_app();
+    let running = app.submit(&slow_case(400));
+    let queued = app.submit(&slow_case(400));
+    app.wait_for(running, LONG, |j| j["progress"]["step"].as_i64() >= Some(1));
+
+    let (status, body) = app.post(&format!("/jobs/{queued}/cancel"), "");
+    assert_eq!(status, 200, "{body}");
+    assert_eq!(
+        app.get_json(&format!("/jobs/{queued}"))["status"],
+        "cancelled"
+    );
+
+    let (status, body) = app.post(&format!("/jobs/{running}/cancel"), "");
+    assert_eq!(status, 202, "{body}");
+    let job = app.wait_for(running, LONG, is_final);
+    assert_eq!(job["status"], "cancelled", "{job}");
+    let done = job["progress"]["step"].as_i64().unwrap();
+    assert!((1..400).contains(&done), "{job}");
+    let steps = app.get_json(&format!("/jobs/{running}/steps"));
+    assert_eq!(steps["steps"].as_array().unwrap().len() as i64, done);
+
+    let (status, _) = app.post(&format!("/jobs/{running}/cancel"), "");
+    assert_eq!(status, 409);
+    let (status, _) = app.post("/jobs/999/cancel", "");
+    assert_eq!(status, 404);
+}
+
+#[test]
+fn a_failed_solve_says_where_and_the_service_keeps_serving() {
+    let app = spawn_app();
+    let mut case = example("cantilever-grid");
+    case["analysis"]["load_steps"] = 1.into();
+    case["analysis"]["newton"] = json!({"max_iterations": 2});
+    let id = app.submit(&case);
+    let job = app.wait_for(id, LONG, is_final);
+    assert_eq!(job["status"], "failed");
+    let error = &job["error"];
+    assert_eq!(error["kind"], "not_converged", "{job}");
+    assert_eq!(error["step"], 1);
+    assert_eq!(error["iteration"], 2);
+    assert!(error["residual"].as_f64().unwrap() > 1e-9);
+
+    assert_eq!(app.get("/health").0, 200);
+    let next = app.submit(&example("cantilever-grid"));
+    assert_eq!(app.wait_for(next, LONG, is_final)["status"], "succeeded");
+}
+
+#[test]
+fn fifty_concurrent_submissions_are_all_accepted_and_all_finish() {
+    let app = spawn_app();
+    let mut case = example("column");
+    case["analysis"]["load_steps"] = 4.into();
+    let body = case.to_string();
+    let ids: Vec<i64> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..50)
+            .map(|_| {
+                let (agent, base, body) = (common::agent(), app.base.clone(), body.clone());
+                s.spawn(move || {
+                    let (status, text) =
+                        common::request(&agent, "POST", &format!("{base}/jobs"), Some(&body));
+                    assert_eq!(status, 201, "{text}");
+                    serde_json::from_str::<Value>(&text).unwrap()["id"]
+                        .as_i64()
+                        .unwrap()
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert_eq!(ids.iter().collect::<BTreeSet<_>>().len(), 50);
+    for id in ids {
+        assert_eq!(app.wait_for(id, LONG, is_final)["status"], "succeeded");
+    }
+    let page = app.get_json("/jobs?status=succeeded&limit=20");
+    assert_eq!(page["total"], 50);
+    assert_eq!(page["jobs"].as_array().unwrap().len(), 20);
+    assert_eq!(page["next"], "/jobs?status=succeeded&limit=20&offset=20");
+    assert_eq!(app.get("/jobs?status=done").0, 400);
+}
+
+#[test]
+fn a_token_guards_every_endpoint_but_health() {
+    let app = spawn_app_with(|c| c.token = Some("s3cret".into()));
+    assert_eq!(app.get("/health").0, 200);
+    let (status, body) = app.get("/jobs");
+    assert_eq!(status, 401);
+    assert!(body.contains("unauthorized"));
+    let response = app
+        .agent
+        .get(format!("{}/jobs", app.base))
+        .header("authorization", "Bearer s3cret")
+        .call()
+        .unwrap();
+    assert_eq!(response.status().as_u16(), 200);
+}
+
+/// The contract and the server agree: the spec documents exactly the
+/// routes the router declares, its example case is accepted, and every
+/// documented GET answers.
+#[test]
+fn openapi_matches_the_routes_and_its_example_is_accepted() {
+    let spec: serde_yaml::Value = serde_yaml::from_str(mpm_service::http::OPENAPI).unwrap();
+    let paths = spec["paths"].as_mapping().unwrap();
+    let documented: BTreeSet<String> = paths
+        .keys()
+        .map(|k| k.as_str().unwrap().to_string())
+        .collect();
+    let router_source = include_str!("../src/http/mod.rs");
+    let declared: BTreeSet<String> = router_source
+        .split(".route(\"")
+        .skip(1)
+        .map(|s| s.split('"').next().unwrap().to_string())
+        .collect();
+    assert_eq!(documented, declared);
+
+    let app = spawn_app();
+    let example = &paths[&serde_yaml::Value::from("/jobs")]["post"]["requestBody"]["content"]["application/json"]
+        ["example"];
+    let example: Value = serde_json::to_value(example).unwrap();
+    let id = app.submit(&example);
+    assert_eq!(app.wait_for(id, LONG, is_final)["status"], "succeeded");
+    for (path, item) in paths {
+        let path = path.as_str().unwrap();
+        if item.get("get").is_none() {
+            continue;
+        }
+        let url = path.replace("{id}", &id.to_string()).replace("{step}", "1");
+        let (status, body) = app.get(&url);
+        assert_eq!(status, 200, "GET {url}: {body}");
+    }
+    let (status, body) = app.get("/no/such/route");
+    assert_eq!(status, 404);
+    assert!(body.contains("not_found"));
+}

@@ -1,0 +1,191 @@
+//! Test helpers: a real server on 127.0.0.1 port 0 with a fresh SQLite file.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
+
+use mpm_service::{Config, Server};
+use serde_json::Value;
+
+/// A fresh directory under the system's temp dir, removed on drop.
+pub struct TempDir(pub PathBuf);
+
+impl TempDir {
+    pub fn new(tag: &str) -> Self {
+        static COUNTER: AtomicUsize = AtomicUsize::new(0);
+        let n = COUNTER.fetch_add(1, Ordering::SeqCst);
+        let dir = std::env::temp_dir().join(format!("mpm-{tag}-{}-{n}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        TempDir(dir)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// HTTP client that returns 4xx/5xx responses instead of errors.
+pub fn agent() -> ureq::Agent {
+    ureq::Agent::config_builder()
+        .http_status_as_error(false)
+        .timeout_global(Some(Duration::from_secs(60)))
+        .build()
+        .into()
+}
+
+/// A running service and its client.
+pub struct TestApp {
+    pub base: String,
+    pub agent: ureq::Agent,
+    runtime: Option<tokio::runtime::Runtime>,
+    server: Option<Server>,
+    pub dir: TempDir,
+}
+
+/// Starts the service with default settings on a fresh database.
+pub fn spawn_app() -> TestApp {
+    spawn_app_with(|_| {})
+}
+
+/// Starts the service after `adjust` has changed its settings.
+pub fn spawn_app_with(adjust: impl FnOnce(&mut Config)) -> TestApp {
+    let dir = TempDir::new("api");
+    let mut config = Config::new(dir.0.join("jobs.sqlite"));
+    config.poll_interval = Duration::from_millis(100);
+    adjust(&mut config);
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .unwrap();
+    let server = runtime
+        .block_on(Server::start(config, "127.0.0.1:0".parse().unwrap()))
+        .expect("server starts");
+    TestApp {
+        base: format!("http://{}", server.addr),
+        agent: agent(),
+        runtime: Some(runtime),
+        server: Some(server),
+        dir,
+    }
+}
+
+impl Drop for TestApp {
+    fn drop(&mut self) {
+        if let (Some(rt), Some(server)) = (self.runtime.take(), self.server.take()) {
+            rt.block_on(server.shutdown());
+        }
+    }
+}
+
+/// `(status, body)` of a request.
+pub fn request(agent: &ureq::Agent, method: &str, url: &str, body: Option<&str>) -> (u16, String) {
+    let response = match (method, body) {
+        ("GET", _) => agent.get(url).call(),
+        ("POST", Some(b)) => agent
+            .post(url)
+            .header("content-type", "application/json")
+            .send(b),
+        ("POST", None) => agent.post(url).send_empty(),
+        _ => panic!("unsupported {method}"),
+    };
+    let mut response = response.unwrap_or_else(|e| panic!("{method} {url}: {e}"));
+    let status = response.status().as_u16();
+    let bytes = response
+        .body_mut()
+        .with_config()
+        .limit(1 << 30)
+        .read_to_vec()
+        .unwrap_or_default();
+    (status, String::from_utf8_lossy(&bytes).into_owned())
+}
+
+impl TestApp {
+    pub fn get(&self, path: &str) -> (u16, String) {
+        request(&self.agent, "GET", &format!("{}{path}", self.base), None)
+    }
+
+    pub fn get_json(&self, path: &str) -> Value {
+        let (status, body) = self.get(path);
+        assert_eq!(status, 200, "GET {path}: {body}");
+        serde_json::from_str(&body).unwrap()
+    }
+
+    pub fn post(&self, path: &str, body: &str) -> (u16, String) {
+        request(
+            &self.agent,
+            "POST",
+            &format!("{}{path}", self.base),
+            Some(body),
+        )
+    }
+
+    /// Submits a case; returns the job id.
+    pub fn submit(&self, case: &Value) -> i64 {
+        let (status, body) = self.post("/jobs", &case.to_string());
+        assert_eq!(status, 201, "{body}");
+        serde_json::from_str::<Value>(&body).unwrap()["id"]
+            .as_i64()
+            .unwrap()
+    }
+
+    /// Polls a job until `done` holds for it (at most `limit`).
+    pub fn wait_for(&self, id: i64, limit: Duration, done: impl Fn(&Value) -> bool) -> Value {
+        wait_for(&self.agent, &self.base, id, limit, done)
+    }
+
+    pub fn total_jobs(&self) -> i64 {
+        self.get_json("/jobs")["total"].as_i64().unwrap()
+    }
+}
+
+pub fn wait_for(
+    agent: &ureq::Agent,
+    base: &str,
+    id: i64,
+    limit: Duration,
+    done: impl Fn(&Value) -> bool,
+) -> Value {
+    let start = Instant::now();
+    loop {
+        let (status, body) = request(agent, "GET", &format!("{base}/jobs/{id}"), None);
+        assert_eq!(status, 200, "{body}");
+        let job: Value = serde_json::from_str(&body).unwrap();
+        if done(&job) {
+            return job;
+        }
+        assert!(
+            start.elapsed() < limit,
+            "job {id} did not get there in {limit:?}: {job}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+pub fn is_final(job: &Value) -> bool {
+    matches!(
+        job["status"].as_str(),
+        Some("succeeded" | "failed" | "cancelled")
+    )
+}
+
+/// A built-in example case as JSON.
+pub fn example(name: &str) -> Value {
+    serde_json::from_str(mpm::examples::get(name).unwrap()).unwrap()
+}
+
+/// A case that takes tens of milliseconds a step: the self-weight column
+/// made 10 m wide at 0.5 m cells (8000 points, GIMP) over `steps` steps.
+pub fn slow_case(steps: u32) -> Value {
+    let mut case = example("column");
+    case["grid"]["cell_size"] = 0.5.into();
+    case["grid"]["extent"] = serde_json::json!({"min": [0.0, 0.0], "max": [10.0, 50.0]});
+    case["bodies"][0]["geometry"]["rectangle"]["max"] = serde_json::json!([10.0, 50.0]);
+    case["supports"][1]["on"]["x"] = 10.0.into();
+    case["analysis"]["load_steps"] = steps.into();
+    case
+}
