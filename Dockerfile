@@ -9,7 +9,6 @@ COPY crates ./crates
 COPY src ./src
 COPY migrations ./migrations
 COPY openapi.yaml ./
-COPY tests ./tests
 RUN cargo build --release --locked --bin mpm \
  && strip target/release/mpm
 
