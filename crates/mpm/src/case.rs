@@ -71,6 +71,13 @@ pub struct NewtonSpec {
     /// Iteration cap per load step; reaching it fails the job. Default 30.
     #[serde(default = "default_max_iterations")]
     pub max_iterations: u32,
+    /// Stiffness of the soft background added to the tangent over the
+    /// cells the material touches, relative to the stiffest material
+    /// (default 1e-6; 0 turns it off). It keeps the solve regular when a
+    /// point alone reaches new nodes; the converged answer does not depend on
+    /// it.
+    #[serde(default = "default_tangent_regularisation")]
+    pub tangent_regularisation: f64,
 }
 
 fn default_tolerance() -> f64 {
@@ -79,12 +86,16 @@ fn default_tolerance() -> f64 {
 fn default_max_iterations() -> u32 {
     30
 }
+fn default_tangent_regularisation() -> f64 {
+    1e-6
+}
 
 impl Default for NewtonSpec {
     fn default() -> Self {
         Self {
             tolerance: default_tolerance(),
             max_iterations: default_max_iterations(),
+            tangent_regularisation: default_tangent_regularisation(),
         }
     }
 }

@@ -74,6 +74,13 @@ impl Elastic {
 }
 
 impl Material {
+    /// The elastic constants (either model).
+    pub fn elastic(&self) -> Elastic {
+        match *self {
+            Material::Hencky(c) | Material::LinearElastic(c) => c,
+        }
+    }
+
     /// History of an undeformed, unstressed point.
     pub fn initial_history(&self) -> Matrix2<f64> {
         match self {

@@ -19,6 +19,9 @@ pub struct NewtonSettings {
     pub max_iterations: usize,
     /// A relative residual above this (or not finite) is divergence (1e8).
     pub divergence_limit: f64,
+    /// Soft-background stiffness in the tangent, relative to the stiffest
+    /// material (1e-6); see [`crate::assembly::SoftCells`].
+    pub tangent_regularisation: f64,
 }
 
 impl Default for NewtonSettings {
@@ -27,6 +30,7 @@ impl Default for NewtonSettings {
             tolerance: 1e-9,
             max_iterations: 30,
             divergence_limit: 1e8,
+            tangent_regularisation: 1e-6,
         }
     }
 }

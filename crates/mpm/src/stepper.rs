@@ -13,7 +13,7 @@ use std::time::Instant;
 use nalgebra::Matrix2;
 use rayon::prelude::*;
 
-use crate::assembly::{self, Connectivity, Pattern};
+use crate::assembly::{self, Connectivity, Pattern, SoftCells};
 use crate::basis::{Basis, Grid};
 use crate::case::{Case, Support};
 use crate::linsolve::{Factorisation, SparseSolver};
@@ -79,6 +79,7 @@ impl Simulation {
             settings: NewtonSettings {
                 tolerance: case.analysis.newton.tolerance,
                 max_iterations: case.analysis.newton.max_iterations as usize,
+                tangent_regularisation: case.analysis.newton.tangent_regularisation,
                 ..Default::default()
             },
             load_steps: case.analysis.load_steps as usize,
@@ -119,9 +120,10 @@ impl Simulation {
         let pattern = Pattern::build(&conn);
         let fixed = self.constrained_dofs(&conn);
         let f_ext = self.external_force(&conn, load_factor);
+        let soft = self.soft_cells(&conn);
         let grid_seconds = started.elapsed().as_secs_f64();
 
-        let mut eq = StepEquilibrium::new(&conn, &pattern, &self.points, &fixed, f_ext);
+        let mut eq = StepEquilibrium::new(&conn, &pattern, &self.points, &fixed, f_ext, soft);
         let (u, newton) = newton::solve(&mut eq, &self.settings, step, observer)?;
 
         let update_start = Instant::now();
@@ -192,6 +194,30 @@ impl Simulation {
             }
         }
         fixed
+    }
+
+    /// The soft background of the tangent, with the stiffest material's
+    /// constants scaled by the regularisation ratio.
+    fn soft_cells(&self, conn: &Connectivity) -> Option<SoftCells> {
+        let ratio = self.settings.tangent_regularisation;
+        if ratio == 0.0 {
+            return None;
+        }
+        let stiffest = self
+            .points
+            .materials
+            .iter()
+            .map(|m| m.elastic())
+            .max_by(|a, b| (a.lambda + 2.0 * a.mu).total_cmp(&(b.lambda + 2.0 * b.mu)))?;
+        Some(SoftCells::new(
+            &self.grid,
+            conn,
+            &self.points,
+            self.basis,
+            stiffest.lambda,
+            stiffest.mu,
+            ratio,
+        ))
     }
 
     /// Body force and point loads, scaled by the load factor.
@@ -325,6 +351,7 @@ struct StepEquilibrium<'a> {
     pattern: &'a Pattern,
     points: &'a MaterialPoints,
     fixed: &'a [bool],
+    soft: Option<SoftCells>,
     f_ext: Vec<f64>,
     f_int: Vec<f64>,
     responses: Vec<Response>,
@@ -339,12 +366,14 @@ impl<'a> StepEquilibrium<'a> {
         points: &'a MaterialPoints,
         fixed: &'a [bool],
         f_ext: Vec<f64>,
+        soft: Option<SoftCells>,
     ) -> Self {
         Self {
             conn,
             pattern,
             points,
             fixed,
+            soft,
             f_ext,
             f_int: Vec::new(),
             responses: Vec::new(),
@@ -378,6 +407,9 @@ impl Equilibrium for StepEquilibrium<'_> {
             })
             .collect::<Result<_, _>>()?;
         self.f_int = assembly::internal_force(conn, mp, &self.responses);
+        if let Some(soft) = &self.soft {
+            soft.add_force(u, &mut self.f_int);
+        }
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
         let scale = norm(&self.f_ext)
             .max(norm(&self.f_int))
@@ -398,6 +430,9 @@ impl Equilibrium for StepEquilibrium<'_> {
     fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
         let t = Instant::now();
         let mut k = assembly::stiffness(self.conn, self.pattern, self.points, &self.responses);
+        if let Some(soft) = &self.soft {
+            soft.add_to(self.pattern, &mut k);
+        }
         assembly::constrain(self.pattern, &mut k, self.fixed);
         self.timings.assembly += t.elapsed().as_secs_f64();
         // Hyperelastic materials under dead loads have a symmetric tangent.
