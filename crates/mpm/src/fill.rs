@@ -9,13 +9,15 @@
 
 use crate::case::{Body, Geometry};
 
-/// One material point as generated: position, volume and the half-widths of
-/// its (rectangular) domain.
+/// One material point as generated: position, volume, the half-widths of
+/// its (rectangular) domain, and its place `(i, j)` in the body's lattice
+/// (neighbours differ by one in `i` or `j`; the boundary is found from it).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SeedPoint {
     pub position: [f64; 2],
     pub volume: f64,
     pub half_width: [f64; 2],
+    pub lattice: [i64; 2],
 }
 
 /// The material points of `body` for a grid of `cell_size` with a node at
@@ -45,6 +47,7 @@ pub fn fill_body(body: &Body, cell_size: f64, origin: [f64; 2]) -> Vec<SeedPoint
                         ],
                         volume: step[0] * step[1],
                         half_width: [step[0] / 2.0, step[1] / 2.0],
+                        lattice: [i as i64, j as i64],
                     });
                 }
             }
@@ -79,6 +82,7 @@ fn lattice_inside(
                     position: p,
                     volume: s * s,
                     half_width: [s / 2.0, s / 2.0],
+                    lattice: [i, j],
                 });
             }
         }

@@ -12,6 +12,7 @@
 
 pub mod assembly;
 pub mod basis;
+pub mod boundary;
 pub mod case;
 pub mod examples;
 pub mod fill;

@@ -18,8 +18,11 @@ pub struct MaterialPoints {
     pub mass: Vec<f64>,
     /// Half-widths of the point's domain in the reference configuration.
     pub half_width0: Vec<[f64; 2]>,
-    /// Index into [`MaterialPoints::materials`].
+    /// Index into [`MaterialPoints::materials`] (one material per body, so
+    /// this is also the body index).
     pub material: Vec<u32>,
+    /// Place in the body's generation lattice (see [`crate::fill::SeedPoint`]).
+    pub lattice: Vec<[i64; 2]>,
     /// Total deformation gradient `F` (in-plane block).
     pub deformation: Vec<Matrix2<f64>>,
     /// Constitutive history (see [`Material::respond`]).
@@ -50,6 +53,7 @@ impl MaterialPoints {
                 mp.mass.push(rho * seed.volume);
                 mp.half_width0.push(seed.half_width);
                 mp.material.push(b as u32);
+                mp.lattice.push(seed.lattice);
                 mp.deformation.push(Matrix2::identity());
                 mp.history.push(material.initial_history());
                 mp.stress.push(CauchyStress::default());
