@@ -150,7 +150,7 @@ mod tests {
 
     #[test]
     fn a_hole_gives_a_clockwise_inner_loop() {
-        let (lattice, ids) = pixels(&["#####", "#...#", "#...#", "#####"]);
+        let (lattice, _) = pixels(&["#####", "#...#", "#...#", "#####"]);
         let reference: Vec<[f64; 2]> = lattice.iter().map(|l| l.map(|c| c as f64)).collect();
         let body = vec![0; lattice.len()];
         let loops = find_loops(&lattice, &body, &reference);
