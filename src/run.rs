@@ -5,8 +5,9 @@ use std::fs::{self, File};
 use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
-use mpm::output::{PointColumns, write_pvd, write_vtu};
-use mpm::{Case, MaterialPoints, Observer, RunReport, Simulation, StepReport};
+use mpm::boundary::BoundaryOutput;
+use mpm::output::{PointColumns, write_pvd, write_vtp, write_vtu};
+use mpm::{Case, Observer, RunReport, Simulation, StepReport, StepState};
 use serde::Serialize;
 
 use crate::{CliError, DEFAULT_EXAMPLE};
@@ -46,6 +47,7 @@ pub fn run(
         steps_dir,
         point_files,
         step_files: Vec::new(),
+        boundary_files: Vec::new(),
         progress: Progress::new(),
         io_error: None,
     };
@@ -59,6 +61,10 @@ pub fn run(
         write_pvd(
             BufWriter::new(File::create(out.join("points.pvd"))?),
             &writer.step_files,
+        )?;
+        write_pvd(
+            BufWriter::new(File::create(out.join("boundary.pvd"))?),
+            &writer.boundary_files,
         )?;
     }
     let summary = Summary::new(&case, &source, &report);
@@ -145,12 +151,13 @@ impl<'a> Summary<'a> {
     }
 }
 
-/// One step's file: its report and the material points (the same shape as
-/// the service's `GET /jobs/{id}/steps/{k}`).
+/// One step's file: its report, the material points and the boundary
+/// curves (the same shape as the service's `GET /jobs/{id}/steps/{k}`).
 #[derive(Serialize)]
 struct StepFile<'a> {
     report: &'a StepReport,
     points: &'a PointColumns,
+    boundaries: &'a [BoundaryOutput],
 }
 
 struct ResultWriter {
@@ -158,18 +165,21 @@ struct ResultWriter {
     point_files: bool,
     /// `(load factor, file name relative to the output directory)`.
     step_files: Vec<(f64, String)>,
+    boundary_files: Vec<(f64, String)>,
     progress: Progress,
     io_error: Option<std::io::Error>,
 }
 
 impl ResultWriter {
-    fn write_step(&mut self, report: &StepReport, points: &MaterialPoints) -> std::io::Result<()> {
+    fn write_step(&mut self, report: &StepReport, state: &StepState<'_>) -> std::io::Result<()> {
         let stem = format!("step_{:04}", report.step);
         let json = File::create(self.steps_dir.join(format!("{stem}.json")))?;
-        let columns = PointColumns::new(points);
+        let columns = PointColumns::new(state.points);
+        let boundaries = state.boundaries();
         let file = StepFile {
             report,
             points: &columns,
+            boundaries: &boundaries,
         };
         let mut w = BufWriter::new(json);
         serde_json::to_writer(&mut w, &file)?;
@@ -177,8 +187,15 @@ impl ResultWriter {
         let mut vtu = BufWriter::new(File::create(self.steps_dir.join(format!("{stem}.vtu")))?);
         write_vtu(&mut vtu, &columns)?;
         vtu.flush()?;
+        let mut vtp = BufWriter::new(File::create(
+            self.steps_dir.join(format!("{stem}_boundary.vtp")),
+        )?);
+        write_vtp(&mut vtp, &boundaries)?;
+        vtp.flush()?;
         self.step_files
             .push((report.load_factor, format!("steps/{stem}.vtu")));
+        self.boundary_files
+            .push((report.load_factor, format!("steps/{stem}_boundary.vtp")));
         Ok(())
     }
 }
@@ -192,7 +209,7 @@ impl Observer for ResultWriter {
         self.progress.iteration(iteration, residual);
     }
 
-    fn step_finished(&mut self, report: &StepReport, points: &MaterialPoints) {
+    fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
         self.progress.clear();
         let probes: Vec<String> = report
             .probes
@@ -215,7 +232,7 @@ impl Observer for ResultWriter {
             probes.join("  ")
         );
         if self.point_files && self.io_error.is_none() {
-            if let Err(e) = self.write_step(report, points) {
+            if let Err(e) = self.write_step(report, state) {
                 self.io_error = Some(e);
             }
         }

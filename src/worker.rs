@@ -11,12 +11,12 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use mpm::output::PointColumns;
-use mpm::{Case, MaterialPoints, Observer, Simulation, SolveError, StepReport};
+use mpm::{Case, Observer, Simulation, SolveError, StepReport, StepState};
 use tokio::runtime::Handle;
 use tokio::sync::Notify;
 
 use crate::config::Config;
-use crate::jobs::{Claimed, JobStatus, Store};
+use crate::jobs::{Claimed, JobStatus, StepJson, Store};
 
 /// What the workers share.
 struct Shared {
@@ -277,17 +277,19 @@ struct JobObserver<'a> {
 }
 
 impl Observer for JobObserver<'_> {
-    fn step_finished(&mut self, report: &StepReport, points: &MaterialPoints) {
-        let report_json = serde_json::to_string(report).expect("reports serialise");
-        let points_json =
-            serde_json::to_string(&PointColumns::new(points)).expect("points serialise");
+    fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
+        let json = StepJson {
+            report: serde_json::to_string(report).expect("reports serialise"),
+            points: serde_json::to_string(&PointColumns::new(state.points))
+                .expect("points serialise"),
+            boundaries: serde_json::to_string(&state.boundaries()).expect("boundaries serialise"),
+        };
         let saved = self.shared.runtime.block_on(self.shared.store.save_step(
             self.job,
             self.owner,
             report.step as i64,
             report.newton.iterations as i64,
-            &report_json,
-            &points_json,
+            &json,
         ));
         match saved {
             Ok(true) => {}

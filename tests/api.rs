@@ -44,6 +44,9 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
         );
     }
     assert_eq!(api["report"]["probes"], cli["report"]["probes"]);
+    assert_eq!(api["boundaries"].to_string(), cli["boundaries"].to_string());
+    // The beam's boundary: one loop through its 2 (40 + 8) - 4 outer points.
+    assert_eq!(api["boundaries"][0]["points"].as_array().unwrap().len(), 92);
 
     let result = app.get_json(&format!("/jobs/{id}/result"));
     let tip = result["probes"]["tip"].as_array().unwrap();

@@ -47,8 +47,12 @@ fn run_writes_summary_step_files_and_a_series() {
             summary["points"].as_u64().unwrap() as usize
         );
         assert!(out.join(format!("steps/step_{k:04}.vtu")).exists());
+        assert!(out.join(format!("steps/step_{k:04}_boundary.vtp")).exists());
+        assert_eq!(step["boundaries"].as_array().unwrap().len(), 1);
     }
     let pvd = std::fs::read_to_string(out.join("points.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 5);
+    let pvd = std::fs::read_to_string(out.join("boundary.pvd")).unwrap();
     assert_eq!(pvd.matches("<DataSet").count(), 5);
 }
 

@@ -270,24 +270,28 @@ struct StepQuery {
     format: Option<String>,
 }
 
-/// `GET /jobs/{id}/steps/{k}`: report and material points, as JSON or VTU.
+/// `GET /jobs/{id}/steps/{k}`: report, material points and boundary curves
+/// as JSON, or the points as VTU.
 async fn step(
     State(state): State<AppState>,
     Path((id, k)): Path<(i64, i64)>,
     Query(q): Query<StepQuery>,
 ) -> Result<Response, ApiError> {
-    let (report, points) = state
+    let step = state
         .store
         .step(id, k)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("step {k} of job {id}")))?;
     match q.format.as_deref() {
         None | Some("json") => {
-            let body = format!("{{\"report\":{report},\"points\":{points}}}");
+            let body = format!(
+                "{{\"report\":{},\"points\":{},\"boundaries\":{}}}",
+                step.report, step.points, step.boundaries
+            );
             Ok(([(header::CONTENT_TYPE, "application/json")], body).into_response())
         }
         Some("vtu") => {
-            let columns: PointColumns = serde_json::from_str(&points)
+            let columns: PointColumns = serde_json::from_str(&step.points)
                 .map_err(|e| ApiError::Internal(format!("stored points: {e}")))?;
             let mut vtu = Vec::new();
             write_vtu(&mut vtu, &columns).map_err(|e| ApiError::Internal(e.to_string()))?;

@@ -4,4 +4,4 @@ mod status;
 pub mod store;
 
 pub use status::JobStatus;
-pub use store::{CancelOutcome, Claimed, JobRow, Store};
+pub use store::{CancelOutcome, Claimed, JobRow, StepJson, Store};

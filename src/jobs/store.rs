@@ -62,6 +62,17 @@ pub struct Claimed {
     pub attempts: i64,
 }
 
+/// A step's stored JSON documents.
+#[derive(Debug, Clone, FromRow)]
+pub struct StepJson {
+    /// `mpm::StepReport`
+    pub report: String,
+    /// `mpm::output::PointColumns`
+    pub points: String,
+    /// `[mpm::boundary::BoundaryOutput]`
+    pub boundaries: String,
+}
+
 /// What `POST /jobs/{id}/cancel` did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CancelOutcome {
@@ -245,16 +256,16 @@ impl Store {
         .await
     }
 
-    /// Stores a finished step and advances the job's progress, in one
-    /// transaction. Returns false if `owner` no longer holds the job.
+    /// Stores a finished step (report, points and boundaries as JSON text)
+    /// and advances the job's progress, in one transaction. Returns false if
+    /// `owner` no longer holds the job.
     pub async fn save_step(
         &self,
         id: i64,
         owner: &str,
         step: i64,
         iterations: i64,
-        report: &str,
-        points: &str,
+        json: &StepJson,
     ) -> Result<bool, sqlx::Error> {
         let mut tx = self.pool.begin().await?;
         let held = sqlx::query(AssertSqlSafe(format!(
@@ -271,12 +282,13 @@ impl Store {
             == 1;
         if held {
             sqlx::query(
-                "INSERT OR REPLACE INTO steps (job_id, step, report, points) VALUES (?, ?, ?, ?)",
+                "INSERT OR REPLACE INTO steps (job_id, step, report, points, boundaries) VALUES (?, ?, ?, ?, ?)",
             )
             .bind(id)
             .bind(step)
-            .bind(report)
-            .bind(points)
+            .bind(&json.report)
+            .bind(&json.points)
+            .bind(&json.boundaries)
             .execute(&mut *tx)
             .await?;
         }
@@ -369,9 +381,9 @@ impl Store {
             .await
     }
 
-    /// One step's report and points (JSON text).
-    pub async fn step(&self, id: i64, step: i64) -> Result<Option<(String, String)>, sqlx::Error> {
-        sqlx::query_as("SELECT report, points FROM steps WHERE job_id = ? AND step = ?")
+    /// One step's report, points and boundaries (JSON text).
+    pub async fn step(&self, id: i64, step: i64) -> Result<Option<StepJson>, sqlx::Error> {
+        sqlx::query_as("SELECT report, points, boundaries FROM steps WHERE job_id = ? AND step = ?")
             .bind(id)
             .bind(step)
             .fetch_optional(&self.pool)

@@ -26,7 +26,7 @@ pub mod stepper;
 
 pub use case::{Case, CaseError};
 pub use newton::{NewtonSettings, SolveError};
-pub use observer::{NoObserver, Observer};
+pub use observer::{NoObserver, Observer, StepState};
 pub use output::{RunReport, StepReport};
 pub use points::MaterialPoints;
 pub use stepper::Simulation;

@@ -157,6 +157,78 @@ pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
     out.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
 }
 
+/// Writes boundary polylines as a VTK XML poly-data file (ASCII), one line
+/// cell per loop with its body index and whether it is a hole.
+pub fn write_vtp(
+    mut out: impl Write,
+    boundaries: &[crate::boundary::BoundaryOutput],
+) -> io::Result<()> {
+    let n_points: usize = boundaries.iter().map(|b| b.polyline.len()).sum();
+    writeln!(out, "<?xml version=\"1.0\"?>")?;
+    writeln!(
+        out,
+        "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\">"
+    )?;
+    writeln!(out, "  <PolyData>")?;
+    writeln!(
+        out,
+        "    <Piece NumberOfPoints=\"{n_points}\" NumberOfLines=\"{}\">",
+        boundaries.len()
+    )?;
+    writeln!(
+        out,
+        "      <Points>\n        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">"
+    )?;
+    for b in boundaries {
+        for p in &b.polyline {
+            writeln!(out, "{:e} {:e} 0", p[0], p[1])?;
+        }
+    }
+    writeln!(out, "        </DataArray>\n      </Points>\n      <Lines>")?;
+    writeln!(
+        out,
+        "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
+    )?;
+    let mut first = 0;
+    let mut offsets = Vec::with_capacity(boundaries.len());
+    for b in boundaries {
+        let ids: Vec<String> = (first..first + b.polyline.len())
+            .map(|i| i.to_string())
+            .collect();
+        writeln!(out, "{}", ids.join(" "))?;
+        first += b.polyline.len();
+        offsets.push(first.to_string());
+    }
+    writeln!(out, "        </DataArray>")?;
+    writeln!(
+        out,
+        "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n{}\n        </DataArray>",
+        offsets.join(" ")
+    )?;
+    writeln!(out, "      </Lines>\n      <CellData>")?;
+    let column = |f: &dyn Fn(&crate::boundary::BoundaryOutput) -> usize| {
+        boundaries
+            .iter()
+            .map(|b| f(b).to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    writeln!(
+        out,
+        "        <DataArray type=\"Int32\" Name=\"body\" format=\"ascii\">\n{}\n        </DataArray>",
+        column(&|b| b.body)
+    )?;
+    writeln!(
+        out,
+        "        <DataArray type=\"Int32\" Name=\"hole\" format=\"ascii\">\n{}\n        </DataArray>",
+        column(&|b| b.hole as usize)
+    )?;
+    writeln!(
+        out,
+        "      </CellData>\n    </Piece>\n  </PolyData>\n</VTKFile>"
+    )
+}
+
 /// A ParaView collection (`.pvd`) listing one file per load step, with the
 /// load factor as its time value.
 pub fn write_pvd(mut out: impl Write, files: &[(f64, String)]) -> io::Result<()> {

@@ -15,11 +15,12 @@ use rayon::prelude::*;
 
 use crate::assembly::{self, Connectivity, Pattern, SoftCells};
 use crate::basis::{Basis, Grid};
+use crate::boundary::{BoundaryLoop, find_loops};
 use crate::case::{Case, Support};
 use crate::linsolve::{Factorisation, SparseSolver};
 use crate::material::Response;
 use crate::newton::{self, Equilibrium, InvertedPoint, NewtonSettings, SolveError};
-use crate::observer::Observer;
+use crate::observer::{Observer, StepState};
 use crate::output::{ProbeReport, RunReport, StepReport, StepTimings};
 use crate::points::MaterialPoints;
 
@@ -39,6 +40,8 @@ pub struct Simulation {
     /// exist, and material must stay inside it.
     pub extent: Option<([f64; 2], [f64; 2])>,
     pub points: MaterialPoints,
+    /// Boundary loops of the material points, found once (Lagrangian).
+    pub loops: Vec<BoundaryLoop>,
     pub probes: Probes,
     gravity: [f64; 2],
     /// `(point, force)`: each point load rides on its nearest material point.
@@ -72,6 +75,7 @@ impl Simulation {
                 reference: case.probes.iter().map(|p| p.at).collect(),
                 position: case.probes.iter().map(|p| p.at).collect(),
             },
+            loops: find_loops(&points.lattice, &points.material, &points.reference),
             points,
             gravity: case.loads.gravity.unwrap_or([0.0, 0.0]),
             point_loads,
@@ -93,7 +97,13 @@ impl Simulation {
         for step in 1..=self.load_steps {
             observer.step_started(step, self.load_steps);
             let report = self.load_step(step, observer)?;
-            observer.step_finished(&report, &self.points);
+            observer.step_finished(
+                &report,
+                &StepState {
+                    points: &self.points,
+                    loops: &self.loops,
+                },
+            );
             steps.push(report);
         }
         Ok(RunReport {
