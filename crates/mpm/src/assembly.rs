@@ -132,8 +132,17 @@ pub struct Pattern {
 
 impl Pattern {
     /// Two nodes are neighbours when some point links to both.
-    pub fn build(conn: &Connectivity) -> Self {
+    /// Two nodes are also neighbours when they share one of the `groups`
+    /// (couplings that do not come from points, e.g. boundary loads).
+    pub fn build(conn: &Connectivity, groups: &[Vec<u32>]) -> Self {
         let n_nodes = conn.n_nodes();
+        let mut node_groups: Vec<Vec<u32>> =
+            vec![Vec::new(); if groups.is_empty() { 0 } else { n_nodes }];
+        for (g, members) in groups.iter().enumerate() {
+            for &a in members {
+                node_groups[a as usize].push(g as u32);
+            }
+        }
         // Node -> points incidence, in compressed form.
         let mut start = vec![0usize; n_nodes + 1];
         for l in &conn.links {
@@ -157,6 +166,9 @@ impl Pattern {
                     .iter()
                     .flat_map(|&p| conn.point_links(p as usize).iter().map(|l| l.node))
                     .collect();
+                if let Some(gs) = node_groups.get(b) {
+                    nb.extend(gs.iter().flat_map(|&g| groups[g as usize].iter().copied()));
+                }
                 nb.sort_unstable();
                 nb.dedup();
                 nb
@@ -198,9 +210,25 @@ impl Pattern {
     /// `block(a, b) + r + c * 2 * degree(b)`.
     #[inline]
     fn block(&self, a: u32, b: u32) -> (usize, usize) {
+        self.try_block(a, b).expect("linked nodes are neighbours")
+    }
+
+    fn try_block(&self, a: u32, b: u32) -> Option<(usize, usize)> {
         let nb = &self.neighbours[self.first[b as usize]..self.first[b as usize + 1]];
-        let k = nb.binary_search(&a).expect("linked nodes are neighbours");
-        (self.col_ptr[2 * b as usize] + 2 * k, 2 * nb.len())
+        let k = nb.binary_search(&a).ok()?;
+        Some((self.col_ptr[2 * b as usize] + 2 * k, 2 * nb.len()))
+    }
+
+    /// Adds `value` at `(row, col)` (DOF indices); returns false, adding
+    /// nothing, if the entry is outside the pattern.
+    pub fn add(&self, values: &mut [f64], row: usize, col: usize, value: f64) -> bool {
+        match self.try_block((row / 2) as u32, (col / 2) as u32) {
+            Some((base, stride)) => {
+                values[base + row % 2 + (col % 2) * stride] += value;
+                true
+            }
+            None => false,
+        }
     }
 }
 

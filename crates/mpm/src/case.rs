@@ -38,6 +38,29 @@ pub struct Case {
     /// Named reference points advected with the grid displacement.
     #[serde(default)]
     pub probes: Vec<Probe>,
+    /// Where the boundary curve runs.
+    #[serde(default)]
+    pub boundary: BoundarySpec,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    #[serde(default)]
+    pub representation: Representation,
+}
+
+/// Where the boundary curve's data points are.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Representation {
+    /// On the material's edge: each outer point pushed out to the edge of
+    /// its domain (half a spacing), mapped by its deformation gradient.
+    #[default]
+    Edge,
+    /// Through the outer material points themselves (the paper's choice),
+    /// half a point spacing inside the material's edge.
+    Points,
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
@@ -230,6 +253,23 @@ pub struct Loads {
     pub gravity: Option<[f64; 2]>,
     #[serde(default)]
     pub point_loads: Vec<PointLoad>,
+    /// Loads on the boundary curve, ramped with the load factor.
+    #[serde(default)]
+    pub boundary: Vec<BoundaryLoad>,
+}
+
+/// A load on the stretch of boundary that `on` selects in the reference
+/// configuration: exactly one of a dead `traction` `[tx, ty]` (Pa) or a
+/// follower `pressure` (Pa, positive pushes into the material, normal to
+/// the current boundary).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BoundaryLoad {
+    pub on: Selector,
+    #[serde(default)]
+    pub traction: Option<[f64; 2]>,
+    #[serde(default)]
+    pub pressure: Option<f64>,
 }
 
 /// A dead force (N per metre thickness) carried by the material point
@@ -381,6 +421,23 @@ impl Case {
         for (i, l) in self.loads.point_loads.iter().enumerate() {
             finite_pair(&format!("loads.point_loads[{i}].at"), l.at)?;
             finite_pair(&format!("loads.point_loads[{i}].force"), l.force)?;
+        }
+        for (i, l) in self.loads.boundary.iter().enumerate() {
+            let path = format!("loads.boundary[{i}]");
+            l.on.validate(&format!("{path}.on"))?;
+            match (l.traction, l.pressure) {
+                (Some(t), None) => finite_pair(&format!("{path}.traction"), t)?,
+                (None, Some(p)) if p.is_finite() => {}
+                (None, Some(_)) => {
+                    return Err(CaseError::new(format!("{path}.pressure"), "must be finite"));
+                }
+                _ => {
+                    return Err(CaseError::new(
+                        path,
+                        "give exactly one of traction, pressure",
+                    ));
+                }
+            }
         }
         for (i, s) in self.supports.iter().enumerate() {
             s.on.validate(&format!("supports[{i}].on"))?;

@@ -15,7 +15,8 @@ use rayon::prelude::*;
 
 use crate::assembly::{self, Connectivity, Pattern, SoftCells};
 use crate::basis::{Basis, Grid};
-use crate::boundary::{BoundaryLoop, find_loops};
+use crate::boundary::loading::{BoundaryLoading, LoadedStretch, select};
+use crate::boundary::{BoundaryLoop, find_loops, set_offsets};
 use crate::case::{Case, Support};
 use crate::linsolve::{Factorisation, SparseSolver};
 use crate::material::Response;
@@ -46,6 +47,8 @@ pub struct Simulation {
     gravity: [f64; 2],
     /// `(point, force)`: each point load rides on its nearest material point.
     point_loads: Vec<(usize, [f64; 2])>,
+    /// Loads on stretches of the boundary curves.
+    boundary_loads: Vec<LoadedStretch>,
     supports: Vec<Support>,
     pub settings: NewtonSettings,
     pub load_steps: usize,
@@ -60,6 +63,8 @@ impl Simulation {
         };
         let points = MaterialPoints::from_case(case);
         let extent = case.grid.extent.map(|b| (b.min, b.max));
+        let mut loops = find_loops(&points.lattice, &points.material, &points.reference);
+        set_offsets(&mut loops, &points, case.boundary.representation);
         let point_loads = case
             .loads
             .point_loads
@@ -75,7 +80,8 @@ impl Simulation {
                 reference: case.probes.iter().map(|p| p.at).collect(),
                 position: case.probes.iter().map(|p| p.at).collect(),
             },
-            loops: find_loops(&points.lattice, &points.material, &points.reference),
+            boundary_loads: select(&case.loads.boundary, &loops, &points, grid.h),
+            loops,
             points,
             gravity: case.loads.gravity.unwrap_or([0.0, 0.0]),
             point_loads,
@@ -127,13 +133,22 @@ impl Simulation {
         let conn = Connectivity::build(&self.grid, self.basis, &self.points, |node| {
             self.node_in_grid(node)
         });
-        let pattern = Pattern::build(&conn);
+        let loading = BoundaryLoading {
+            grid: &self.grid,
+            conn: &conn,
+            points: &self.points,
+            loops: &self.loops,
+            stretches: &self.boundary_loads,
+            load_factor,
+        };
+        let pattern = Pattern::build(&conn, &loading.coupling_groups());
         let fixed = self.constrained_dofs(&conn);
         let f_ext = self.external_force(&conn, load_factor);
         let soft = self.soft_cells(&conn);
         let grid_seconds = started.elapsed().as_secs_f64();
 
-        let mut eq = StepEquilibrium::new(&conn, &pattern, &self.points, &fixed, f_ext, soft);
+        let mut eq =
+            StepEquilibrium::new(&conn, &pattern, &self.points, &fixed, f_ext, soft, loading);
         let (u, newton) = newton::solve(&mut eq, &self.settings, step, observer)?;
 
         let update_start = Instant::now();
@@ -362,7 +377,14 @@ struct StepEquilibrium<'a> {
     points: &'a MaterialPoints,
     fixed: &'a [bool],
     soft: Option<SoftCells>,
+    /// Boundary loads, evaluated on the trial boundary.
+    loading: BoundaryLoading<'a>,
+    /// Loads that do not depend on the displacement (gravity, point loads).
+    f_ext_fixed: Vec<f64>,
+    /// All external forces at the last trial state.
     f_ext: Vec<f64>,
+    /// The last trial increment.
+    u: Vec<f64>,
     f_int: Vec<f64>,
     responses: Vec<Response>,
     solver: SparseSolver,
@@ -377,6 +399,7 @@ impl<'a> StepEquilibrium<'a> {
         fixed: &'a [bool],
         f_ext: Vec<f64>,
         soft: Option<SoftCells>,
+        loading: BoundaryLoading<'a>,
     ) -> Self {
         Self {
             conn,
@@ -384,7 +407,10 @@ impl<'a> StepEquilibrium<'a> {
             points,
             fixed,
             soft,
-            f_ext,
+            loading,
+            f_ext: f_ext.clone(),
+            f_ext_fixed: f_ext,
+            u: Vec::new(),
             f_int: Vec::new(),
             responses: Vec::new(),
             solver: SparseSolver::new(conn.n_dofs()),
@@ -402,6 +428,8 @@ impl Equilibrium for StepEquilibrium<'_> {
     /// then the internal force.
     fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
         let t = Instant::now();
+        self.u.clear();
+        self.u.extend_from_slice(u);
         let (conn, mp) = (self.conn, self.points);
         self.responses = (0..mp.len())
             .into_par_iter()
@@ -417,6 +445,10 @@ impl Equilibrium for StepEquilibrium<'_> {
             })
             .collect::<Result<_, _>>()?;
         self.f_int = assembly::internal_force(conn, mp, &self.responses);
+        if !self.loading.stretches.is_empty() {
+            self.f_ext.clone_from(&self.f_ext_fixed);
+            self.loading.add_forces(u, &mut self.f_ext);
+        }
         if let Some(soft) = &self.soft {
             soft.add_force(u, &mut self.f_int);
         }
@@ -443,10 +475,16 @@ impl Equilibrium for StepEquilibrium<'_> {
         if let Some(soft) = &self.soft {
             soft.add_to(self.pattern, &mut k);
         }
+        // Boundary loads move with the boundary: their load stiffness makes
+        // the tangent non-symmetric. Hyperelastic materials under loads that
+        // do not move have a symmetric tangent.
+        let symmetric = self.loading.stretches.is_empty();
+        for (row, col, value) in self.loading.stiffness(&self.u) {
+            self.pattern.add(&mut k, row, col, value);
+        }
         assembly::constrain(self.pattern, &mut k, self.fixed);
         self.timings.assembly += t.elapsed().as_secs_f64();
-        // Hyperelastic materials under dead loads have a symmetric tangent.
-        let (du, kind, timing) = self.solver.solve(self.pattern, &k, r, true)?;
+        let (du, kind, timing) = self.solver.solve(self.pattern, &k, r, symmetric)?;
         self.timings.factorisation += timing.factorise;
         self.timings.solve += timing.solve;
         if du.iter().any(|v| !v.is_finite()) {

@@ -4,7 +4,8 @@
 //! 1. A unit tangent at every data point from the five-point formula
 //!    (eq. 9.29-9.31): with chords `q_k = Q_k - Q_(k-1)`,
 //!    `alpha_k = |q_(k-1) x q_k| / (|q_(k-1) x q_k| + |q_(k+1) x q_(k+2)|)`
-//!    (1/2 when both vanish) and `T_k ~ (1 - alpha_k) q_k + alpha_k q_(k+1)`.
+//!    (with `|.|` smoothed for nearly parallel chords, see
+//!    [`smooth_abs_cross`]) and `T_k ~ (1 - alpha_k) q_k + alpha_k q_(k+1)`.
 //!    A corner (see [`is_corner`]) keeps two tangents, the incoming and the
 //!    outgoing chord, so the curve turns sharply there.
 //! 2. Between neighbours a cubic Bezier segment `Q_k, Q_k + a/3 T_k,
@@ -81,57 +82,121 @@ pub fn is_corner(q_prev: Point, q_in: Point, q_out: Point, q_next: Point) -> boo
         && here > 2.0 * turn(q_out, q_next)
 }
 
+/// `|a x b|`, smoothed where the chords are nearly parallel:
+/// `sqrt((a x b)^2 + (1e-3 |a| |b|)^2)`. On a straight run both crosses of
+/// the five-point formula are round-off, and their ratio (the weight
+/// `alpha`) would jump at random as the points move; Newton differentiates
+/// the boundary loads through it, so it must be smooth. Chords that turn by
+/// more than a few milliradians are unaffected.
+fn smooth_abs_cross(a: Point, b: Point) -> f64 {
+    let c = cross(a, b);
+    let floor = 1e-3 * norm(a) * norm(b);
+    (c * c + floor * floor).sqrt()
+}
+
+/// The tangents at a data point: equal unless it is a corner.
+#[derive(Debug, Clone, Copy)]
+struct DataTangent {
+    incoming: Point,
+    outgoing: Point,
+    corner: bool,
+}
+
+/// Tangent(s) at data point `k` of a closed loop, from its five-point
+/// stencil `Q_(k-2) .. Q_(k+2)`.
+fn data_tangent(points: &[Point], k: usize) -> DataTangent {
+    let n = points.len() as isize;
+    let at = |i: isize| points[(k as isize + i).rem_euclid(n) as usize];
+    // q(i) = Q_(k+i) - Q_(k+i-1)
+    let q = |i: isize| sub(at(i), at(i - 1));
+    if is_corner(q(-1), q(0), q(1), q(2)) {
+        return DataTangent {
+            incoming: unit(q(0)),
+            outgoing: unit(q(1)),
+            corner: true,
+        };
+    }
+    let c1 = smooth_abs_cross(q(-1), q(0));
+    let c2 = smooth_abs_cross(q(1), q(2));
+    let alpha = if c1 + c2 > 0.0 { c1 / (c1 + c2) } else { 0.5 };
+    let v = add(scale(q(0), 1.0 - alpha), scale(q(1), alpha));
+    // Opposite chords (a spike) give v = 0: fall back to the chord.
+    let t = if norm(v) > 0.0 { unit(v) } else { unit(q(1)) };
+    DataTangent {
+        incoming: t,
+        outgoing: t,
+        corner: false,
+    }
+}
+
+/// The outward unit normals at each data point of a closed loop, before and
+/// after it (they differ at corners). The material lies to the left.
+pub fn data_normals(points: &[Point]) -> Vec<(Point, Point)> {
+    (0..points.len())
+        .map(|k| {
+            let t = data_tangent(points, k);
+            (
+                [t.incoming[1], -t.incoming[0]],
+                [t.outgoing[1], -t.outgoing[0]],
+            )
+        })
+        .collect()
+}
+
+/// The equal-speed Bezier segment from data point `k` to `k + 1` and its
+/// parameter length.
+fn bezier_segment(
+    points: &[Point],
+    k: usize,
+    start: &DataTangent,
+    end: &DataTangent,
+) -> ([Point; 4], f64) {
+    let (p0, p3) = (points[k], points[(k + 1) % points.len()]);
+    let (ts, te) = (start.outgoing, end.incoming);
+    let chord = sub(p3, p0);
+    let tsum = add(ts, te);
+    let a = 16.0 - dot(tsum, tsum);
+    let b = 12.0 * dot(chord, tsum);
+    let c = -36.0 * dot(chord, chord);
+    let length = (-b + (b * b - 4.0 * a * c).sqrt()) / (2.0 * a);
+    (
+        [
+            p0,
+            add(p0, scale(ts, length / 3.0)),
+            sub(p3, scale(te, length / 3.0)),
+            p3,
+        ],
+        length,
+    )
+}
+
+/// Segment `k` of the curve through a closed loop, computed from the data
+/// points around it only (the scheme is local: `Q_(k-2) .. Q_(k+3)`).
+pub fn local_segment(points: &[Point], k: usize) -> [Point; 4] {
+    let n = points.len();
+    bezier_segment(
+        points,
+        k,
+        &data_tangent(points, k),
+        &data_tangent(points, (k + 1) % n),
+    )
+    .0
+}
+
 impl ClosedCurve {
     /// Interpolates a closed loop (the first point is not repeated at the
     /// end). Consecutive duplicate points are not allowed.
     pub fn interpolate(points: &[Point]) -> Self {
         let n = points.len();
         assert!(n >= 3, "a closed loop needs at least 3 points");
-        let at = |k: isize| points[k.rem_euclid(n as isize) as usize];
-        // q(k) = Q_k - Q_(k-1)
-        let q = |k: isize| sub(at(k), at(k - 1));
-        let mut incoming = Vec::with_capacity(n);
-        let mut outgoing = Vec::with_capacity(n);
-        let mut corners = Vec::with_capacity(n);
-        for k in 0..n as isize {
-            if is_corner(q(k - 1), q(k), q(k + 1), q(k + 2)) {
-                incoming.push(unit(q(k)));
-                outgoing.push(unit(q(k + 1)));
-                corners.push(true);
-            } else {
-                let c1 = cross(q(k - 1), q(k)).abs();
-                let c2 = cross(q(k + 1), q(k + 2)).abs();
-                let alpha = if c1 + c2 > 0.0 { c1 / (c1 + c2) } else { 0.5 };
-                let v = add(scale(q(k), 1.0 - alpha), scale(q(k + 1), alpha));
-                // Opposite chords (a spike) give v = 0: fall back to the chord.
-                let t = if norm(v) > 0.0 {
-                    unit(v)
-                } else {
-                    unit(q(k + 1))
-                };
-                incoming.push(t);
-                outgoing.push(t);
-                corners.push(false);
-            }
-        }
+        let tangents: Vec<DataTangent> = (0..n).map(|k| data_tangent(points, k)).collect();
+        let corners = tangents.iter().map(|t| t.corner).collect();
         let mut segments = Vec::with_capacity(n);
         let mut params = Vec::with_capacity(n + 1);
         params.push(0.0);
         for k in 0..n {
-            let (p0, p3) = (points[k], points[(k + 1) % n]);
-            let (ts, te) = (outgoing[k], incoming[(k + 1) % n]);
-            let chord = sub(p3, p0);
-            let tsum = add(ts, te);
-            let a = 16.0 - dot(tsum, tsum);
-            let b = 12.0 * dot(chord, tsum);
-            let c = -36.0 * dot(chord, chord);
-            let length = (-b + (b * b - 4.0 * a * c).sqrt()) / (2.0 * a);
-            segments.push([
-                p0,
-                add(p0, scale(ts, length / 3.0)),
-                sub(p3, scale(te, length / 3.0)),
-                p3,
-            ]);
+            let (segment, length) = bezier_segment(points, k, &tangents[k], &tangents[(k + 1) % n]);
+            segments.push(segment);
             params.push(params[k] + length);
         }
         Self {
@@ -286,7 +351,8 @@ impl ClosedCurve {
     }
 }
 
-fn bezier(p: &[Point; 4], t: f64) -> Point {
+/// Point of a cubic Bezier segment at `t in [0, 1]`.
+pub fn bezier(p: &[Point; 4], t: f64) -> Point {
     let s = 1.0 - t;
     let b = [s * s * s, 3.0 * s * s * t, 3.0 * s * t * t, t * t * t];
     [
@@ -295,7 +361,8 @@ fn bezier(p: &[Point; 4], t: f64) -> Point {
     ]
 }
 
-fn bezier_derivative(p: &[Point; 4], t: f64) -> Point {
+/// `dC/dt` of a cubic Bezier segment.
+pub fn bezier_derivative(p: &[Point; 4], t: f64) -> Point {
     let s = 1.0 - t;
     let d = [sub(p[1], p[0]), sub(p[2], p[1]), sub(p[3], p[2])];
     let b = [3.0 * s * s, 6.0 * s * t, 3.0 * t * t];

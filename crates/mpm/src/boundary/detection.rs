@@ -24,6 +24,11 @@ pub struct BoundaryLoop {
     pub points: Vec<usize>,
     /// True for a loop around a hole (clockwise).
     pub hole: bool,
+    /// Per data point, the vector in the reference configuration from the
+    /// material point to the curve's data point: zero when the curve runs
+    /// through the points, out to the edge of the point's domain otherwise
+    /// (see [`crate::case::Representation`]).
+    pub offset: Vec<[f64; 2]>,
 }
 
 /// Loops of the pixels at `lattice` (one entry per point, `ids` the points'
@@ -105,10 +110,12 @@ pub fn find_loops(lattice: &[[i64; 2]], body: &[u32], reference: &[[f64; 2]]) ->
         for points in loops_of_lattice(&cells, &ids) {
             let ring: Vec<[f64; 2]> = points.iter().map(|&p| reference[p]).collect();
             let hole = ring.len() >= 3 && signed_area(&ring) < 0.0;
+            let offset = vec![[0.0, 0.0]; points.len()];
             out.push(BoundaryLoop {
                 body: b,
                 points,
                 hole,
+                offset,
             });
         }
     }

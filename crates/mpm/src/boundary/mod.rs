@@ -4,13 +4,68 @@
 
 pub mod bspline;
 pub mod detection;
+pub mod loading;
+pub mod traction;
 
 use serde::Serialize;
 
 pub use bspline::{BSplineData, ClosedCurve};
 pub use detection::{BoundaryLoop, find_loops};
 
+use crate::case::Representation;
 use crate::points::MaterialPoints;
+
+/// Sets each loop's data-point offsets for the chosen representation: zero
+/// through the points; for the material edge, out along the reference
+/// normal to the edge of the point's rectangular domain (half-widths
+/// `(hx, hy)`): `(hx n_x, hy n_y) / max(|n_x|, |n_y|)`, which reaches the
+/// middle of a domain's side on a straight edge and its corner at a corner
+/// (where `n` is the mean of the two normals).
+pub fn set_offsets(
+    loops: &mut [BoundaryLoop],
+    points: &MaterialPoints,
+    representation: Representation,
+) {
+    for l in loops.iter_mut() {
+        l.offset = match representation {
+            Representation::Points => vec![[0.0, 0.0]; l.points.len()],
+            Representation::Edge => {
+                let ring: Vec<[f64; 2]> = l.points.iter().map(|&p| points.reference[p]).collect();
+                if ring.len() < 3 {
+                    vec![[0.0, 0.0]; ring.len()]
+                } else {
+                    bspline::data_normals(&ring)
+                        .into_iter()
+                        .zip(&l.points)
+                        .map(|((n_in, n_out), &p)| {
+                            let n = [n_in[0] + n_out[0], n_in[1] + n_out[1]];
+                            let m = n[0].abs().max(n[1].abs());
+                            let hw = points.half_width0[p];
+                            if m > 0.0 {
+                                [hw[0] * n[0] / m, hw[1] * n[1] / m]
+                            } else {
+                                [0.0, 0.0]
+                            }
+                        })
+                        .collect()
+                }
+            }
+        };
+    }
+}
+
+/// Current position of a loop's data point `k`: its material point plus
+/// the offset mapped by the point's deformation gradient.
+pub fn data_point(l: &BoundaryLoop, k: usize, points: &MaterialPoints) -> [f64; 2] {
+    let p = l.points[k];
+    let x = points.position[p];
+    let d = l.offset[k];
+    let f = &points.deformation[p];
+    [
+        x[0] + f[(0, 0)] * d[0] + f[(0, 1)] * d[1],
+        x[1] + f[(1, 0)] * d[0] + f[(1, 1)] * d[1],
+    ]
+}
 
 /// Polyline samples per curve segment in the outputs.
 const POLYLINE_SAMPLES_PER_SEGMENT: usize = 8;
@@ -36,7 +91,9 @@ pub fn curves(loops: &[BoundaryLoop], points: &MaterialPoints) -> Vec<(usize, Cl
         .enumerate()
         .filter(|(_, l)| l.points.len() >= 3)
         .map(|(i, l)| {
-            let ring: Vec<[f64; 2]> = l.points.iter().map(|&p| points.position[p]).collect();
+            let ring: Vec<[f64; 2]> = (0..l.points.len())
+                .map(|k| data_point(l, k, points))
+                .collect();
             (i, ClosedCurve::interpolate(&ring))
         })
         .collect()

@@ -1,0 +1,262 @@
+//! Boundary loads within a load step: their nodal forces on the trial
+//! boundary and the derivative of those forces (the load stiffness).
+//!
+//! The boundary moves with the trial displacement: a loop's data point is
+//! its material point's position plus the grid displacement there (plus its
+//! offset to the material's edge, mapped by the trial deformation gradient),
+//! and the curve through the data points carries the loads. A follower pressure therefore depends on `u`, and so does a
+//! dead traction (through the length it acts on); both enter the Newton
+//! tangent as `-df_ext/du`. The local cubic scheme makes `f` depend on each
+//! `Q_k` only through the six segments around it, so `df/dQ_k` is computed
+//! by central differences on those segments (step 1e-6 h: truncation and
+//! round-off both near 1e-10 relative), then chained with `dQ_k/du_b =
+//! w_b I` (see [`BoundaryLoading::ring`]).
+
+use super::bspline::{Point, local_segment};
+use super::data_point;
+use super::detection::BoundaryLoop;
+use super::traction::{Traction, segment_forces};
+use crate::assembly::Connectivity;
+use crate::basis::{Grid, node_key};
+use crate::case::BoundaryLoad;
+use crate::points::MaterialPoints;
+
+/// The segments of one loop that a boundary load acts on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadedStretch {
+    pub loop_index: usize,
+    /// Segment `k` runs from the loop's data point `k` to `k + 1`.
+    pub segments: Vec<usize>,
+    pub traction: Traction,
+}
+
+/// Resolves the case's boundary loads to loop segments: a segment is loaded
+/// when both its end points lie on the selection, within the point's half
+/// width (the outer points sit half a spacing inside the material's edge).
+pub fn select(
+    loads: &[BoundaryLoad],
+    loops: &[BoundaryLoop],
+    points: &MaterialPoints,
+    h: f64,
+) -> Vec<LoadedStretch> {
+    let mut out = Vec::new();
+    for load in loads {
+        let traction = match (load.traction, load.pressure) {
+            (Some(t), _) => Traction::Dead(t),
+            (None, Some(p)) => Traction::Pressure(p),
+            (None, None) => continue, // rejected by validation
+        };
+        for (l, lp) in loops.iter().enumerate() {
+            let on = |p: usize| {
+                let hw = points.half_width0[p];
+                load.on
+                    .contains(points.reference[p], 1.01 * hw[0].max(hw[1]) + 1e-9 * h)
+            };
+            let n = lp.points.len();
+            let segments: Vec<usize> = (0..n)
+                .filter(|&k| on(lp.points[k]) && on(lp.points[(k + 1) % n]))
+                .collect();
+            if !segments.is_empty() {
+                out.push(LoadedStretch {
+                    loop_index: l,
+                    segments,
+                    traction,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The boundary loads of one load step.
+pub struct BoundaryLoading<'a> {
+    pub grid: &'a Grid,
+    pub conn: &'a Connectivity,
+    pub points: &'a MaterialPoints,
+    pub loops: &'a [BoundaryLoop],
+    pub stretches: &'a [LoadedStretch],
+    pub load_factor: f64,
+}
+
+/// Segments whose shape depends on data point `k` of an `n`-point loop.
+fn segments_touching(k: usize, n: usize) -> impl Iterator<Item = usize> {
+    (0..6).map(move |i| (k + n + i - 3) % n)
+}
+
+impl BoundaryLoading<'_> {
+    /// Trial positions of a loop's data points for increment `u`: with the
+    /// offset `d` of data point `k` of point `p`,
+    /// `Q_k = x_p + dF F_n d = x_p + F_n d + sum_b w_b u_b`, linear in `u`
+    /// with weights `w_b = N_b(x_p) + g_b . (F_n d)`.
+    fn ring(&self, l: &BoundaryLoop, u: &[f64]) -> Vec<Point> {
+        (0..l.points.len())
+            .map(|k| {
+                let mut x = data_point(l, k, self.points);
+                for (node, w) in self.weights(l, k) {
+                    x[0] += w * u[2 * node];
+                    x[1] += w * u[2 * node + 1];
+                }
+                x
+            })
+            .collect()
+    }
+
+    /// `(node, w_b)`: how data point `k` of loop `l` moves with each node.
+    fn weights<'b>(
+        &'b self,
+        l: &'b BoundaryLoop,
+        k: usize,
+    ) -> impl Iterator<Item = (usize, f64)> + 'b {
+        let p = l.points[k];
+        let f = &self.points.deformation[p];
+        let d = l.offset[k];
+        let fd = [
+            f[(0, 0)] * d[0] + f[(0, 1)] * d[1],
+            f[(1, 0)] * d[0] + f[(1, 1)] * d[1],
+        ];
+        self.conn.point_links(p).iter().map(move |link| {
+            (
+                link.node as usize,
+                link.n + link.grad[0] * fd[0] + link.grad[1] * fd[1],
+            )
+        })
+    }
+
+    /// Adds the boundary loads' nodal forces at increment `u` to `f`.
+    pub fn add_forces(&self, u: &[f64], f: &mut [f64]) {
+        let zero = vec![0.0; u.len()];
+        for s in self.stretches {
+            let l = &self.loops[s.loop_index];
+            let (start, ring) = (self.ring(l, &zero), self.ring(l, u));
+            for &k in &s.segments {
+                let (base, ctrl) = (local_segment(&start, k), local_segment(&ring, k));
+                segment_forces(
+                    &base,
+                    &ctrl,
+                    s.traction,
+                    self.load_factor,
+                    self.grid,
+                    &self.conn.nodes,
+                    &mut |a, force| {
+                        f[2 * a] += force[0];
+                        f[2 * a + 1] += force[1];
+                    },
+                );
+            }
+        }
+    }
+
+    /// Entries `(row DOF, column DOF, value)` of the load stiffness
+    /// `-df_ext/du` at increment `u` (duplicates are to be summed).
+    pub fn stiffness(&self, u: &[f64]) -> Vec<(usize, usize, f64)> {
+        let mut out = Vec::new();
+        let eps = 1e-6 * self.grid.h;
+        let zero = vec![0.0; u.len()];
+        for s in self.stretches {
+            let l = &self.loops[s.loop_index];
+            let n = l.points.len();
+            let start = self.ring(l, &zero);
+            let mut loaded = vec![false; n];
+            for &k in &s.segments {
+                loaded[k] = true;
+            }
+            let mut ring = self.ring(l, u);
+            for k in 0..n {
+                let affected: Vec<usize> = segments_touching(k, n).filter(|&j| loaded[j]).collect();
+                if affected.is_empty() {
+                    continue;
+                }
+                let weights: Vec<(usize, f64)> = self.weights(l, k).collect();
+                for c in 0..2 {
+                    let mut df: Vec<(usize, [f64; 2])> = Vec::new();
+                    for (sign, delta) in [(1.0, eps), (-1.0, -eps)] {
+                        ring[k][c] += delta;
+                        for &j in &affected {
+                            let (base, ctrl) = (local_segment(&start, j), local_segment(&ring, j));
+                            segment_forces(
+                                &base,
+                                &ctrl,
+                                s.traction,
+                                self.load_factor,
+                                self.grid,
+                                &self.conn.nodes,
+                                &mut |a, force| {
+                                    df.push((
+                                        a,
+                                        [
+                                            sign * force[0] / (2.0 * eps),
+                                            sign * force[1] / (2.0 * eps),
+                                        ],
+                                    ));
+                                },
+                            );
+                        }
+                        ring[k][c] -= delta;
+                    }
+                    for (a, d) in df {
+                        for &(node, w) in &weights {
+                            let col = 2 * node + c;
+                            out.push((2 * a, col, -d[0] * w));
+                            out.push((2 * a + 1, col, -d[1] * w));
+                        }
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Groups of active nodes that the load stiffness may couple: for each
+    /// data point, its material point's nodes and the active nodes within a
+    /// cell of the segments it shapes. The stiffness pattern must contain
+    /// every pair within a group.
+    pub fn coupling_groups(&self) -> Vec<Vec<u32>> {
+        let zero = vec![0.0; self.conn.n_dofs()];
+        let mut groups = Vec::new();
+        for s in self.stretches {
+            let l = &self.loops[s.loop_index];
+            let n = l.points.len();
+            let ring = self.ring(l, &zero);
+            let mut loaded = vec![false; n];
+            for &k in &s.segments {
+                loaded[k] = true;
+            }
+            for k in 0..n {
+                let affected: Vec<usize> = segments_touching(k, n).filter(|&j| loaded[j]).collect();
+                if affected.is_empty() {
+                    continue;
+                }
+                let mut lo = [f64::INFINITY; 2];
+                let mut hi = [f64::NEG_INFINITY; 2];
+                for &j in &affected {
+                    for p in local_segment(&ring, j) {
+                        for d in 0..2 {
+                            lo[d] = lo[d].min(p[d]);
+                            hi[d] = hi[d].max(p[d]);
+                        }
+                    }
+                }
+                let (g, h) = (self.grid, self.grid.h);
+                let first = |d: usize| ((lo[d] - g.origin[d]) / h).floor() as i64 - 1;
+                let last = |d: usize| ((hi[d] - g.origin[d]) / h).ceil() as i64 + 1;
+                let mut group: Vec<u32> = self
+                    .conn
+                    .point_links(l.points[k])
+                    .iter()
+                    .map(|link| link.node)
+                    .collect();
+                for i in first(0)..=last(0) {
+                    for j in first(1)..=last(1) {
+                        if let Ok(a) = self.conn.nodes.binary_search(&node_key(i, j)) {
+                            group.push(a as u32);
+                        }
+                    }
+                }
+                group.sort_unstable();
+                group.dedup();
+                groups.push(group);
+            }
+        }
+        groups
+    }
+}
