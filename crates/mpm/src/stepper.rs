@@ -133,14 +133,14 @@ impl Simulation {
         let conn = Connectivity::build(&self.grid, self.basis, &self.points, |node| {
             self.node_in_grid(node)
         });
-        let loading = BoundaryLoading {
-            grid: &self.grid,
-            conn: &conn,
-            points: &self.points,
-            loops: &self.loops,
-            stretches: &self.boundary_loads,
+        let loading = BoundaryLoading::new(
+            &self.grid,
+            &conn,
+            &self.points,
+            &self.loops,
+            &self.boundary_loads,
             load_factor,
-        };
+        );
         let pattern = Pattern::build(&conn, &loading.coupling_groups());
         let fixed = self.constrained_dofs(&conn);
         let f_ext = self.external_force(&conn, load_factor);
@@ -445,7 +445,7 @@ impl Equilibrium for StepEquilibrium<'_> {
             })
             .collect::<Result<_, _>>()?;
         self.f_int = assembly::internal_force(conn, mp, &self.responses);
-        if !self.loading.stretches.is_empty() {
+        if !self.loading.is_empty() {
             self.f_ext.clone_from(&self.f_ext_fixed);
             self.loading.add_forces(u, &mut self.f_ext);
         }
@@ -478,7 +478,7 @@ impl Equilibrium for StepEquilibrium<'_> {
         // Boundary loads move with the boundary: their load stiffness makes
         // the tangent non-symmetric. Hyperelastic materials under loads that
         // do not move have a symmetric tangent.
-        let symmetric = self.loading.stretches.is_empty();
+        let symmetric = self.loading.is_empty();
         for (row, col, value) in self.loading.stiffness(&self.u) {
             self.pattern.add(&mut k, row, col, value);
         }

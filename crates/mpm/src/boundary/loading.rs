@@ -15,7 +15,7 @@
 use super::bspline::{Point, local_segment};
 use super::data_point;
 use super::detection::BoundaryLoop;
-use super::traction::{Traction, segment_forces};
+use super::traction::{SegmentQuadrature, Traction};
 use crate::assembly::Connectivity;
 use crate::basis::{Grid, node_key};
 use crate::case::BoundaryLoad;
@@ -70,12 +70,15 @@ pub fn select(
 
 /// The boundary loads of one load step.
 pub struct BoundaryLoading<'a> {
-    pub grid: &'a Grid,
-    pub conn: &'a Connectivity,
-    pub points: &'a MaterialPoints,
-    pub loops: &'a [BoundaryLoop],
-    pub stretches: &'a [LoadedStretch],
-    pub load_factor: f64,
+    grid: &'a Grid,
+    conn: &'a Connectivity,
+    points: &'a MaterialPoints,
+    loops: &'a [BoundaryLoop],
+    stretches: &'a [LoadedStretch],
+    load_factor: f64,
+    /// Per stretch, per data point of its loop: the quadrature of the
+    /// segment starting there, if it is loaded.
+    quadrature: Vec<Vec<Option<SegmentQuadrature>>>,
 }
 
 /// Segments whose shape depends on data point `k` of an `n`-point loop.
@@ -83,7 +86,51 @@ fn segments_touching(k: usize, n: usize) -> impl Iterator<Item = usize> {
     (0..6).map(move |i| (k + n + i - 3) % n)
 }
 
-impl BoundaryLoading<'_> {
+impl<'a> BoundaryLoading<'a> {
+    /// Prepares the loads of a step: the loaded segments' quadrature in the
+    /// step's start configuration.
+    pub fn new(
+        grid: &'a Grid,
+        conn: &'a Connectivity,
+        points: &'a MaterialPoints,
+        loops: &'a [BoundaryLoop],
+        stretches: &'a [LoadedStretch],
+        load_factor: f64,
+    ) -> Self {
+        let mut loading = Self {
+            grid,
+            conn,
+            points,
+            loops,
+            stretches,
+            load_factor,
+            quadrature: Vec::new(),
+        };
+        let zero = vec![0.0; conn.n_dofs()];
+        loading.quadrature = stretches
+            .iter()
+            .map(|s| {
+                let l = &loops[s.loop_index];
+                let start = loading.ring(l, &zero);
+                let mut q = vec![None; l.points.len()];
+                for &k in &s.segments {
+                    q[k] = Some(SegmentQuadrature::new(
+                        &local_segment(&start, k),
+                        grid,
+                        &conn.nodes,
+                    ));
+                }
+                q
+            })
+            .collect();
+        loading
+    }
+
+    /// Whether there are boundary loads at all.
+    pub fn is_empty(&self) -> bool {
+        self.stretches.is_empty()
+    }
+
     /// Trial positions of a loop's data points for increment `u`: with the
     /// offset `d` of data point `k` of point `p`,
     /// `Q_k = x_p + dF F_n d = x_p + F_n d + sum_b w_b u_b`, linear in `u`
@@ -124,19 +171,16 @@ impl BoundaryLoading<'_> {
 
     /// Adds the boundary loads' nodal forces at increment `u` to `f`.
     pub fn add_forces(&self, u: &[f64], f: &mut [f64]) {
-        let zero = vec![0.0; u.len()];
-        for s in self.stretches {
-            let l = &self.loops[s.loop_index];
-            let (start, ring) = (self.ring(l, &zero), self.ring(l, u));
+        for (s, quadrature) in self.stretches.iter().zip(&self.quadrature) {
+            let ring = self.ring(&self.loops[s.loop_index], u);
             for &k in &s.segments {
-                let (base, ctrl) = (local_segment(&start, k), local_segment(&ring, k));
-                segment_forces(
-                    &base,
-                    &ctrl,
+                let q = quadrature[k]
+                    .as_ref()
+                    .expect("loaded segments have a quadrature");
+                q.forces(
+                    &local_segment(&ring, k),
                     s.traction,
                     self.load_factor,
-                    self.grid,
-                    &self.conn.nodes,
                     &mut |a, force| {
                         f[2 * a] += force[0];
                         f[2 * a + 1] += force[1];
@@ -151,18 +195,14 @@ impl BoundaryLoading<'_> {
     pub fn stiffness(&self, u: &[f64]) -> Vec<(usize, usize, f64)> {
         let mut out = Vec::new();
         let eps = 1e-6 * self.grid.h;
-        let zero = vec![0.0; u.len()];
-        for s in self.stretches {
+        for (s, quadrature) in self.stretches.iter().zip(&self.quadrature) {
             let l = &self.loops[s.loop_index];
             let n = l.points.len();
-            let start = self.ring(l, &zero);
-            let mut loaded = vec![false; n];
-            for &k in &s.segments {
-                loaded[k] = true;
-            }
             let mut ring = self.ring(l, u);
             for k in 0..n {
-                let affected: Vec<usize> = segments_touching(k, n).filter(|&j| loaded[j]).collect();
+                let affected: Vec<usize> = segments_touching(k, n)
+                    .filter(|&j| quadrature[j].is_some())
+                    .collect();
                 if affected.is_empty() {
                     continue;
                 }
@@ -172,14 +212,13 @@ impl BoundaryLoading<'_> {
                     for (sign, delta) in [(1.0, eps), (-1.0, -eps)] {
                         ring[k][c] += delta;
                         for &j in &affected {
-                            let (base, ctrl) = (local_segment(&start, j), local_segment(&ring, j));
-                            segment_forces(
-                                &base,
-                                &ctrl,
+                            let q = quadrature[j]
+                                .as_ref()
+                                .expect("affected segments are loaded");
+                            q.forces(
+                                &local_segment(&ring, j),
                                 s.traction,
                                 self.load_factor,
-                                self.grid,
-                                &self.conn.nodes,
                                 &mut |a, force| {
                                     df.push((
                                         a,
@@ -193,7 +232,20 @@ impl BoundaryLoading<'_> {
                         }
                         ring[k][c] -= delta;
                     }
+                    // Sum the contributions per node before spreading them
+                    // over the columns (a few nodes, many quadrature points).
+                    df.sort_unstable_by_key(|e| e.0);
+                    let mut merged: Vec<(usize, [f64; 2])> = Vec::with_capacity(16);
                     for (a, d) in df {
+                        match merged.last_mut() {
+                            Some(last) if last.0 == a => {
+                                last.1[0] += d[0];
+                                last.1[1] += d[1];
+                            }
+                            _ => merged.push((a, d)),
+                        }
+                    }
+                    for (a, d) in merged {
                         for &(node, w) in &weights {
                             let col = 2 * node + c;
                             out.push((2 * a, col, -d[0] * w));

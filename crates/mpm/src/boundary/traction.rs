@@ -17,6 +17,7 @@
 //! that corner's share to the active ones, in proportion.
 
 use super::bspline::{ClosedCurve, Point, bezier, bezier_derivative};
+
 use crate::basis::{Basis, Grid, NodeKey};
 
 /// Gauss-Legendre nodes on [0, 1] and weights (summing to 1), 4 points.
@@ -69,13 +70,10 @@ pub fn add_nodal_forces(
 ) {
     for &k in segments {
         let (ctrl, _, _) = curve.segment(k);
-        segment_forces(
-            &ctrl,
+        SegmentQuadrature::new(&ctrl, grid, nodes).forces(
             &ctrl,
             traction,
             factor,
-            grid,
-            nodes,
             &mut |a, force| {
                 f[2 * a] += force[0];
                 f[2 * a + 1] += force[1];
@@ -84,50 +82,75 @@ pub fn add_nodal_forces(
     }
 }
 
-/// The nodal forces of `traction` (scaled by `factor`) on one Bezier
-/// segment, passed to `sink` as `(active node index, force)`.
+/// The quadrature of one boundary segment in the configuration at the
+/// step's start: Gauss points (split at grid lines) with their weights and
+/// their shares of the active nodes.
 ///
-/// In a load step the shape functions belong to the configuration at the
-/// step's start: a boundary point moves with `u(X) = sum_a N_a(X) u_a`, so
-/// the virtual work of the traction is `sum_a du_a . int N_a(X) t dGamma`.
-/// `start` is the segment in that configuration (where `N_a` is evaluated
-/// and the cell crossings are found), `current` the same segment now (which
-/// sets the traction's direction and the length element), both on the same
-/// parameter.
-pub fn segment_forces(
-    start: &[Point; 4],
-    current: &[Point; 4],
-    traction: Traction,
-    factor: f64,
-    grid: &Grid,
-    nodes: &[NodeKey],
-    sink: &mut impl FnMut(usize, [f64; 2]),
-) {
-    let mut weights = Vec::with_capacity(4);
-    let mut active = Vec::with_capacity(4);
-    let splits = cell_crossings(start, grid);
-    for piece in splits.windows(2) {
-        let (t0, t1) = (piece[0], piece[1]);
-        for &(xi, w) in &GAUSS4 {
-            let t = t0 + xi * (t1 - t0);
-            let x = bezier(start, t);
-            let density = traction.density(bezier_derivative(current, t));
-            let scale = factor * w * (t1 - t0);
-            weights.clear();
-            Basis::Linear.eval(grid, x, [0.0, 0.0], &mut weights);
-            active.clear();
-            active.extend(
-                weights
-                    .iter()
-                    .filter_map(|nw| nodes.binary_search(&nw.node).ok().map(|a| (a, nw.n))),
-            );
-            let total: f64 = active.iter().map(|(_, n)| n).sum();
-            if total <= 0.0 {
-                continue;
+/// In a load step the shape functions belong to that configuration: a
+/// boundary point moves with `u(X) = sum_a N_a(X) u_a`, so the virtual work
+/// of the traction is `sum_a du_a . int N_a(X) t dGamma`. The shape
+/// functions and cell crossings are therefore fixed for the step; the
+/// segment's current shape (same parameter) only sets the traction's
+/// direction and length element. Computed once per step, reused by every
+/// Newton iteration and every finite difference of the load stiffness.
+#[derive(Debug, Clone, Default)]
+pub struct SegmentQuadrature {
+    /// `(t, weight)` per Gauss point; its node shares are
+    /// `shares[first[q]..first[q + 1]]`.
+    points: Vec<(f64, f64)>,
+    first: Vec<usize>,
+    shares: Vec<(usize, f64)>,
+}
+
+impl SegmentQuadrature {
+    pub fn new(start: &[Point; 4], grid: &Grid, nodes: &[NodeKey]) -> Self {
+        let mut q = SegmentQuadrature {
+            first: vec![0],
+            ..Default::default()
+        };
+        let mut weights = Vec::with_capacity(4);
+        for piece in cell_crossings(start, grid).windows(2) {
+            let (t0, t1) = (piece[0], piece[1]);
+            for &(xi, w) in &GAUSS4 {
+                let t = t0 + xi * (t1 - t0);
+                weights.clear();
+                Basis::Linear.eval(grid, bezier(start, t), [0.0, 0.0], &mut weights);
+                let before = q.shares.len();
+                q.shares.extend(
+                    weights
+                        .iter()
+                        .filter_map(|nw| nodes.binary_search(&nw.node).ok().map(|a| (a, nw.n))),
+                );
+                let total: f64 = q.shares[before..].iter().map(|(_, n)| n).sum();
+                if total <= 0.0 {
+                    q.shares.truncate(before);
+                    continue;
+                }
+                for share in &mut q.shares[before..] {
+                    share.1 /= total;
+                }
+                q.points.push((t, w * (t1 - t0)));
+                q.first.push(q.shares.len());
             }
-            for &(a, n) in &active {
-                let share = scale * n / total;
-                sink(a, [share * density[0], share * density[1]]);
+        }
+        q
+    }
+
+    /// The nodal forces of `traction` (scaled by `factor`) on the segment
+    /// whose current control points are `current`, passed to `sink` as
+    /// `(active node index, force)`.
+    pub fn forces(
+        &self,
+        current: &[Point; 4],
+        traction: Traction,
+        factor: f64,
+        sink: &mut impl FnMut(usize, [f64; 2]),
+    ) {
+        for (i, &(t, w)) in self.points.iter().enumerate() {
+            let density = traction.density(bezier_derivative(current, t));
+            for &(a, share) in &self.shares[self.first[i]..self.first[i + 1]] {
+                let s = factor * w * share;
+                sink(a, [s * density[0], s * density[1]]);
             }
         }
     }
