@@ -297,7 +297,8 @@ impl Simulation {
             .into_par_iter()
             .enumerate()
             .for_each(|(p, (x, f, history, stress))| {
-                let (dx, df) = increment(conn.point_links(p), u);
+                let (dx, grad_u) = increment(conn.point_links(p), u);
+                let df = Matrix2::identity() + grad_u;
                 x[0] += dx[0];
                 x[1] += dx[1];
                 *f = df * *f;
@@ -353,11 +354,11 @@ fn nearest_point(points: &MaterialPoints, x: [f64; 2]) -> usize {
         .unwrap_or(0)
 }
 
-/// Displacement `sum_a N_a u_a` and incremental deformation gradient
-/// `dF = I + sum_a u_a (x) g_a` of a point.
+/// Displacement `sum_a N_a u_a` and displacement gradient
+/// `grad_u = sum_a u_a (x) g_a` of a point (`dF = I + grad_u`).
 fn increment(links: &[assembly::Link], u: &[f64]) -> ([f64; 2], Matrix2<f64>) {
     let mut dx = [0.0; 2];
-    let mut df = Matrix2::identity();
+    let mut df = Matrix2::zeros();
     for l in links {
         let ua = [u[2 * l.node as usize], u[2 * l.node as usize + 1]];
         for i in 0..2 {
@@ -434,14 +435,14 @@ impl Equilibrium for StepEquilibrium<'_> {
         self.responses = (0..mp.len())
             .into_par_iter()
             .map(|p| {
-                let (_, df) = increment(conn.point_links(p), u);
+                let (_, grad_u) = increment(conn.point_links(p), u);
                 let j_start = mp.deformation[p].determinant();
-                let jacobian = j_start * df.determinant();
+                let jacobian = j_start * (Matrix2::identity() + grad_u).determinant();
                 if jacobian.is_nan() || jacobian <= 0.0 {
                     return Err(InvertedPoint { point: p, jacobian });
                 }
                 let material = &mp.materials[mp.material[p] as usize];
-                Ok(material.respond(&mp.history[p], &df, j_start))
+                Ok(material.respond(&mp.history[p], &grad_u, j_start))
             })
             .collect::<Result<_, _>>()?;
         self.f_int = assembly::internal_force(conn, mp, &self.responses);
