@@ -191,6 +191,16 @@ pub enum Geometry {
         inner_radius: f64,
         outer_radius: f64,
     },
+    /// The part of an annulus between two angles (degrees, counter-clockwise
+    /// from +x, less than a full turn apart), filled on a polar lattice so
+    /// that its arcs are rows of points.
+    AnnulusSector {
+        center: [f64; 2],
+        inner_radius: f64,
+        outer_radius: f64,
+        start_angle: f64,
+        end_angle: f64,
+    },
 }
 
 /// How densely a body is filled with material points: exactly one of
@@ -322,6 +332,11 @@ pub struct Selector {
     pub x_between: Option<[f64; 2]>,
     #[serde(default)]
     pub y_between: Option<[f64; 2]>,
+    /// With `radius`: on the circle of that radius about `center`.
+    #[serde(default)]
+    pub center: Option<[f64; 2]>,
+    #[serde(default)]
+    pub radius: Option<f64>,
 }
 
 impl Selector {
@@ -332,10 +347,17 @@ impl Selector {
         let within = |r: Option<[f64; 2]>, c: f64| {
             r.is_none_or(|[a, b]| c >= a.min(b) - tol && c <= a.max(b) + tol)
         };
+        let on_circle = match (self.center, self.radius) {
+            (Some(c), Some(r)) => {
+                (((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)).sqrt() - r).abs() <= tol
+            }
+            _ => true,
+        };
         on(self.x, p[0])
             && on(self.y, p[1])
             && within(self.x_between, p[0])
             && within(self.y_between, p[1])
+            && on_circle
     }
 }
 
@@ -481,6 +503,36 @@ impl Body {
             Geometry::Circle { center, radius } => {
                 finite_pair(&format!("{g}.circle.center"), *center)?;
                 positive(&format!("{g}.circle.radius"), *radius)?;
+            }
+            Geometry::AnnulusSector {
+                center,
+                inner_radius,
+                outer_radius,
+                start_angle,
+                end_angle,
+            } => {
+                let g = format!("{g}.annulus_sector");
+                finite_pair(&format!("{g}.center"), *center)?;
+                positive(&format!("{g}.inner_radius"), *inner_radius)?;
+                if outer_radius.partial_cmp(inner_radius) != Some(std::cmp::Ordering::Greater)
+                    || !outer_radius.is_finite()
+                {
+                    return Err(CaseError::new(
+                        format!("{g}.outer_radius"),
+                        format!(
+                            "must be greater than inner_radius ({inner_radius}), got {outer_radius}"
+                        ),
+                    ));
+                }
+                let sweep = end_angle - start_angle;
+                if !(sweep > 0.0 && sweep < 360.0) {
+                    return Err(CaseError::new(
+                        format!("{g}.end_angle"),
+                        format!(
+                            "must exceed start_angle by less than 360 degrees, got a sweep of {sweep}"
+                        ),
+                    ));
+                }
             }
             Geometry::Annulus {
                 center,

@@ -18,6 +18,17 @@ pub struct SeedPoint {
     pub volume: f64,
     pub half_width: [f64; 2],
     pub lattice: [i64; 2],
+    /// The point's domain as a rectangle in its own frame: half-widths and
+    /// the frame's angle (radians; radial/tangential for polar fills). The
+    /// boundary's offset to the material edge uses it.
+    pub domain: Domain,
+}
+
+/// A point's rectangular domain in a rotated frame.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Domain {
+    pub half_width: [f64; 2],
+    pub angle: f64,
 }
 
 /// The material points of `body` for a grid of `cell_size` with a node at
@@ -48,17 +59,67 @@ pub fn fill_body(body: &Body, cell_size: f64, origin: [f64; 2]) -> Vec<SeedPoint
                         volume: step[0] * step[1],
                         half_width: [step[0] / 2.0, step[1] / 2.0],
                         lattice: [i as i64, j as i64],
+                        domain: Domain {
+                            half_width: [step[0] / 2.0, step[1] / 2.0],
+                            angle: 0.0,
+                        },
                     });
                 }
             }
             out
         }
+        Geometry::AnnulusSector {
+            center,
+            inner_radius,
+            outer_radius,
+            start_angle,
+            end_angle,
+        } => polar_sector(
+            *center,
+            *inner_radius,
+            *outer_radius,
+            start_angle.to_radians(),
+            end_angle.to_radians(),
+            spacing,
+        ),
         geometry => {
             let (lo, hi) = bounding_box(geometry);
             let inside = |p: [f64; 2]| contains(geometry, p);
             lattice_inside(lo, hi, spacing, origin, inside)
         }
     }
+}
+
+/// A polar lattice on an annulus sector: `n_r` rings of equal width and
+/// `n_t` equal angular divisions, both from the spacing (at the mean
+/// radius). Each point has the exact area of its annular cell; its lattice
+/// place is (ring, division), which maps counter-clockwise loops to
+/// counter-clockwise loops.
+fn polar_sector(c: [f64; 2], a: f64, b: f64, t0: f64, t1: f64, s: f64) -> Vec<SeedPoint> {
+    let n_r = (((b - a) / s).round() as usize).max(1);
+    let n_t = (((t1 - t0) * 0.5 * (a + b) / s).round() as usize).max(1);
+    let (dr, dt) = ((b - a) / n_r as f64, (t1 - t0) / n_t as f64);
+    let mut out = Vec::with_capacity(n_r * n_t);
+    for j in 0..n_t {
+        for i in 0..n_r {
+            let r = a + (i as f64 + 0.5) * dr;
+            let t = t0 + (j as f64 + 0.5) * dt;
+            let volume = r * dr * dt;
+            // GIMP domains are axis-aligned: the square of the same area.
+            let square = volume.sqrt() / 2.0;
+            out.push(SeedPoint {
+                position: [c[0] + r * t.cos(), c[1] + r * t.sin()],
+                volume,
+                half_width: [square, square],
+                lattice: [i as i64, j as i64],
+                domain: Domain {
+                    half_width: [dr / 2.0, r * dt / 2.0],
+                    angle: t,
+                },
+            });
+        }
+    }
+    out
 }
 
 fn lattice_inside(
@@ -83,6 +144,10 @@ fn lattice_inside(
                     volume: s * s,
                     half_width: [s / 2.0, s / 2.0],
                     lattice: [i, j],
+                    domain: Domain {
+                        half_width: [s / 2.0, s / 2.0],
+                        angle: 0.0,
+                    },
                 });
             }
         }
@@ -107,6 +172,11 @@ pub fn bounding_box(geometry: &Geometry) -> ([f64; 2], [f64; 2]) {
         }
         Geometry::Circle { center, radius: r }
         | Geometry::Annulus {
+            center,
+            outer_radius: r,
+            ..
+        }
+        | Geometry::AnnulusSector {
             center,
             outer_radius: r,
             ..
@@ -135,6 +205,18 @@ pub fn contains(geometry: &Geometry, p: [f64; 2]) -> bool {
         } => {
             let d = dist(center);
             d > *inner_radius && d < *outer_radius
+        }
+        Geometry::AnnulusSector {
+            center,
+            inner_radius,
+            outer_radius,
+            start_angle,
+            end_angle,
+        } => {
+            let d = dist(center);
+            let t = (p[1] - center[1]).atan2(p[0] - center[0]).to_degrees();
+            let t = start_angle + (t - start_angle).rem_euclid(360.0);
+            d > *inner_radius && d < *outer_radius && t < *end_angle
         }
     }
 }

@@ -23,6 +23,8 @@ pub struct MaterialPoints {
     pub material: Vec<u32>,
     /// Place in the body's generation lattice (see [`crate::fill::SeedPoint`]).
     pub lattice: Vec<[i64; 2]>,
+    /// The point's domain in its own frame, in the reference configuration.
+    pub domain: Vec<crate::fill::Domain>,
     /// Total deformation gradient `F` (in-plane block).
     pub deformation: Vec<Matrix2<f64>>,
     /// Constitutive history (see [`Material::respond`]).
@@ -54,6 +56,7 @@ impl MaterialPoints {
                 mp.half_width0.push(seed.half_width);
                 mp.material.push(b as u32);
                 mp.lattice.push(seed.lattice);
+                mp.domain.push(seed.domain);
                 mp.deformation.push(Matrix2::identity());
                 mp.history.push(material.initial_history());
                 mp.stress.push(CauchyStress::default());

@@ -48,7 +48,7 @@ pub fn select(
         };
         for (l, lp) in loops.iter().enumerate() {
             let on = |p: usize| {
-                let hw = points.half_width0[p];
+                let hw = points.domain[p].half_width;
                 load.on
                     .contains(points.reference[p], 1.01 * hw[0].max(hw[1]) + 1e-9 * h)
             };

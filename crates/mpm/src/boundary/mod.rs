@@ -17,10 +17,11 @@ use crate::points::MaterialPoints;
 
 /// Sets each loop's data-point offsets for the chosen representation: zero
 /// through the points; for the material edge, out along the reference
-/// normal to the edge of the point's rectangular domain (half-widths
-/// `(hx, hy)`): `(hx n_x, hy n_y) / max(|n_x|, |n_y|)`, which reaches the
-/// middle of a domain's side on a straight edge and its corner at a corner
-/// (where `n` is the mean of the two normals).
+/// normal to the edge of the point's rectangular domain: in the domain's
+/// frame (half-widths `(h1, h2)`, normal `(n1, n2)`) the offset is
+/// `(h1 n1, h2 n2) / max(|n1|, |n2|)`, which reaches the middle of a
+/// domain's side on a straight edge and its corner at a corner (where `n` is
+/// the mean of the two normals).
 pub fn set_offsets(
     loops: &mut [BoundaryLoop],
     points: &MaterialPoints,

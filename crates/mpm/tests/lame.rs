@@ -1,0 +1,124 @@
+//! Pressurised thick cylinder (Lame), plane strain, small strain: a quarter
+//! of the annulus a = 1 m < r < b = 2 m with rollers on its straight edges
+//! (x = 0 and y = 0, on grid lines) and pressure p on the curved inner
+//! boundary. The analytic solution (e.g. Timoshenko & Goodier, Theory of
+//! Elasticity, section 28, with the plane-strain constants):
+//!   sigma_rr = A (1 - b^2 / r^2),  sigma_tt = A (1 + b^2 / r^2),
+//!   u_r = (1 + nu) / E * A * ((1 - 2 nu) r + b^2 / r),  A = p a^2 / (b^2 - a^2).
+//! As in the cantilever test, a small pressure keeps the follower pressure's
+//! turning and the updated geometry far below the discretisation error.
+
+mod common;
+
+use common::run;
+use serde_json::json;
+
+const A: f64 = 1.0;
+const B: f64 = 2.0;
+const E: f64 = 1.0e6;
+const NU: f64 = 0.3;
+const P: f64 = 1.0;
+
+fn coefficient() -> f64 {
+    P * A * A / (B * B - A * A)
+}
+
+fn exact_u_r(r: f64) -> f64 {
+    (1.0 + NU) / E * coefficient() * ((1.0 - 2.0 * NU) * r + B * B / r)
+}
+
+fn exact_stress(r: f64) -> (f64, f64) {
+    let c = coefficient();
+    (c * (1.0 - B * B / (r * r)), c * (1.0 + B * B / (r * r)))
+}
+
+/// The quarter cylinder with cells of `h`, 2x2 points per cell on a polar
+/// lattice. The grid ends at the symmetry planes (extent from the origin):
+/// GIMP domains of the points next to them would otherwise reach node rows
+/// beyond them that no support holds.
+fn cylinder(h: f64, basis: &str) -> serde_json::Value {
+    let d = std::f64::consts::FRAC_1_SQRT_2;
+    json!({
+        "version": 1,
+        "analysis": { "load_steps": 1 },
+        "grid": { "cell_size": h, "extent": { "min": [0.0, 0.0], "max": [2.5, 2.5] } },
+        "basis": basis,
+        "bodies": [{
+            "geometry": { "annulus_sector": { "center": [0.0, 0.0], "inner_radius": A, "outer_radius": B,
+                                              "start_angle": 0.0, "end_angle": 90.0 } },
+            "points": { "per_cell": 2 },
+            "material": { "model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": NU, "density": 0.0 }
+        }],
+        "loads": { "boundary": [ { "on": { "center": [0.0, 0.0], "radius": A }, "pressure": P } ] },
+        "supports": [ { "on": { "x": 0.0 }, "fix": "x" }, { "on": { "y": 0.0 }, "fix": "y" } ],
+        "probes": [ { "name": "inner", "at": [A * d, A * d] }, { "name": "outer", "at": [B * d, B * d] } ]
+    })
+}
+
+/// Relative errors: radial displacement at the inner and outer radius (at
+/// 45 degrees) and the stress norm sum_p |sigma_p - sigma(r_p)| V_p /
+/// (p * area), over sigma_rr and sigma_tt.
+fn errors(h: f64, basis: &str) -> (f64, f64, f64) {
+    let (sim, report) = run(&cylinder(h, basis));
+    let d = std::f64::consts::FRAC_1_SQRT_2;
+    let u_r = |i: usize| {
+        let u = report.steps[0].probes[i].displacement;
+        (u[0] + u[1]) * d
+    };
+    let e_in = (u_r(0) - exact_u_r(A)) / exact_u_r(A);
+    let e_out = (u_r(1) - exact_u_r(B)) / exact_u_r(B);
+    let mp = &sim.points;
+    let mut stress_error = 0.0;
+    let mut area = 0.0;
+    for p in 0..mp.len() {
+        let x = mp.reference[p];
+        let r = (x[0] * x[0] + x[1] * x[1]).sqrt();
+        let (c, s) = (x[0] / r, x[1] / r);
+        let [sxx, syy, sxy] = mp.stress[p].plane;
+        let srr = c * c * sxx + s * s * syy + 2.0 * c * s * sxy;
+        let stt = s * s * sxx + c * c * syy - 2.0 * c * s * sxy;
+        let (err, ett) = exact_stress(r);
+        stress_error += ((srr - err).abs() + (stt - ett).abs()) * mp.volume0[p];
+        area += mp.volume0[p];
+    }
+    (e_in, e_out, stress_error / (P * area))
+}
+
+#[test]
+fn pressurised_thick_cylinder_converges_to_lame() {
+    // Measured (h = 0.25, 0.125, 0.0625; relative errors):
+    //   gimp:   u_r(a) 1.8e-1, 3.3e-2, 3e-6 (passing through zero);
+    //           u_r(b) 1.4e-2, 1.3e-2, 3.6e-3;
+    //           stress 1.0e-1, 6.1e-2, 4.1e-2 (order about 0.7)
+    //   linear: u_r(a) 3.5e-2, 2.8e-2, 1.3e-2; u_r(b) 0.7e-2, 1.3e-2, 1.6e-2;
+    //           stress 0.21, 0.16, 0.16: the bilinear basis integrated at
+    //           points that do not line up with the cells gives noisy
+    //           stresses (ring averages are within a few percent, single
+    //           points up to 40% off) that do not fall with h.
+    // Asserted for GIMP: every error falls and the finest are within the
+    // bounds below; the linear basis is reported only.
+    let sizes = [0.25, 0.125, 0.0625];
+    for basis in ["gimp", "linear"] {
+        let mut rows = Vec::new();
+        for h in sizes {
+            let (e_in, e_out, e_s) = errors(h, basis);
+            eprintln!(
+                "{basis:>6} h {h:<7} u_r(a) {e_in:+.3e}  u_r(b) {e_out:+.3e}  stress {e_s:.3e}"
+            );
+            rows.push((e_in.abs(), e_out.abs(), e_s));
+        }
+        if basis == "gimp" {
+            for w in rows.windows(2) {
+                assert!(
+                    w[1].0 < w[0].0 && w[1].1 < w[0].1 && w[1].2 < w[0].2,
+                    "{rows:?}"
+                );
+            }
+            let finest = rows[2];
+            assert!(
+                finest.0 < 1e-2 && finest.1 < 1e-2 && finest.2 < 6e-2,
+                "{rows:?}"
+            );
+        }
+    }
+}
