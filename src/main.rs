@@ -16,7 +16,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 /// The built-in case `mpm run` solves when given no file.
-pub const DEFAULT_EXAMPLE: &str = "cantilever-grid";
+pub const DEFAULT_EXAMPLE: &str = "cantilever";
 
 #[derive(Parser)]
 #[command(
@@ -34,7 +34,7 @@ enum Command {
     /// Solve a case and write its results.
     Run {
         /// Case file (JSON). Without one, runs the built-in example given by
-        /// --example (default: cantilever-grid).
+        /// --example (default: cantilever, the paper's case).
         case: Option<PathBuf>,
         /// Run this built-in example instead of a file.
         #[arg(long, conflicts_with = "case")]
