@@ -180,14 +180,7 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, CliError> {
             .map_err(|e| CliError::failed(format!("{}: {e}", scene.name)))?;
         iterations += r.newton.iterations;
         dofs = r.active_dofs;
-        let t = r.timings;
-        timings.grid += t.grid;
-        timings.point_loop += t.point_loop;
-        timings.assembly += t.assembly;
-        timings.factorisation += t.factorisation;
-        timings.solve += t.solve;
-        timings.update += t.update;
-        timings.total += t.total;
+        timings += &r.timings;
     }
     Ok(Row {
         points: sim.points.len(),

@@ -133,14 +133,7 @@ impl ResultView {
                     displacement: p.displacement,
                 });
             }
-            let t = &s.timings;
-            timings.grid += t.grid;
-            timings.point_loop += t.point_loop;
-            timings.assembly += t.assembly;
-            timings.factorisation += t.factorisation;
-            timings.solve += t.solve;
-            timings.update += t.update;
-            timings.total += t.total;
+            timings += &s.timings;
         }
         Self {
             job: JobView::new(job),

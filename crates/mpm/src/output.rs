@@ -26,6 +26,19 @@ pub struct StepTimings {
     pub total: f64,
 }
 
+impl std::ops::AddAssign<&StepTimings> for StepTimings {
+    /// Sums stage by stage (timings of several steps).
+    fn add_assign(&mut self, t: &StepTimings) {
+        self.grid += t.grid;
+        self.point_loop += t.point_loop;
+        self.assembly += t.assembly;
+        self.factorisation += t.factorisation;
+        self.solve += t.solve;
+        self.update += t.update;
+        self.total += t.total;
+    }
+}
+
 #[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
 pub struct ProbeReport {
     pub name: String,
