@@ -46,23 +46,12 @@ pub fn select(
             (None, Some(p)) => Traction::Pressure(p),
             (None, None) => continue, // rejected by validation
         };
-        for (l, lp) in loops.iter().enumerate() {
-            let on = |p: usize| {
-                let hw = points.domain[p].half_width;
-                load.on
-                    .contains(points.reference[p], 1.01 * hw[0].max(hw[1]) + 1e-9 * h)
-            };
-            let n = lp.points.len();
-            let segments: Vec<usize> = (0..n)
-                .filter(|&k| on(lp.points[k]) && on(lp.points[(k + 1) % n]))
-                .collect();
-            if !segments.is_empty() {
-                out.push(LoadedStretch {
-                    loop_index: l,
-                    segments,
-                    traction,
-                });
-            }
+        for (loop_index, segments) in super::selected_segments(&load.on, loops, points, h) {
+            out.push(LoadedStretch {
+                loop_index,
+                segments,
+                traction,
+            });
         }
     }
     out

@@ -55,6 +55,32 @@ pub fn set_offsets(
     }
 }
 
+/// The segments of each loop that `selector` picks in the reference
+/// configuration, as `(loop index, segments)` for loops with any: a segment
+/// is picked when both its end points are within their domain's half width
+/// (1% more, for round-off) of the selection, since the outer points sit
+/// half a spacing inside the material's edge.
+pub fn selected_segments(
+    selector: &crate::case::Selector,
+    loops: &[BoundaryLoop],
+    points: &MaterialPoints,
+    h: f64,
+) -> Vec<(usize, Vec<usize>)> {
+    let on = |p: usize| {
+        let hw = points.domain[p].half_width;
+        selector.contains(points.reference[p], 1.01 * hw[0].max(hw[1]) + 1e-9 * h)
+    };
+    loops
+        .iter()
+        .enumerate()
+        .filter_map(|(l, lp)| {
+            let n = lp.points.len();
+            let segments: Vec<usize> = (0..n).filter(|&k| on(lp.points[k]) && on(lp.points[(k + 1) % n])).collect();
+            (!segments.is_empty()).then_some((l, segments))
+        })
+        .collect()
+}
+
 /// Current position of a loop's data point `k`: its material point plus
 /// the offset mapped by the point's deformation gradient.
 pub fn data_point(l: &BoundaryLoop, k: usize, points: &MaterialPoints) -> [f64; 2] {
