@@ -169,7 +169,7 @@ pub fn bench_row(scene: usize, target: usize) -> Result<(), CliError> {
 fn measure(scene: &Scene, target: usize) -> Result<Row, CliError> {
     let case = Case::from_json(&(scene.build)(target).to_string())
         .map_err(|e| CliError::failed(e.to_string()))?;
-    let mut sim = Simulation::new(&case);
+    let mut sim = Simulation::new(&case).map_err(|e| CliError::failed(e.to_string()))?;
     let steps = 2.min(sim.load_steps);
     let mut timings = StepTimings::default();
     let mut iterations = 0;
@@ -201,7 +201,7 @@ fn end_to_end(repeats: usize) -> Result<(f64, f64, f64, usize), CliError> {
     let mut points = 0;
     for _ in 0..repeats.max(1) {
         let t = Instant::now();
-        let mut sim = Simulation::new(&case);
+        let mut sim = Simulation::new(&case).map_err(|e| CliError::failed(e.to_string()))?;
         sim.run(&mut NoObserver)
             .map_err(|e| CliError::failed(format!("cantilever: {e}")))?;
         times.push(t.elapsed().as_secs_f64());

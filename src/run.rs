@@ -32,7 +32,7 @@ pub fn run(
         }
     };
     let case = Case::from_json(&text).map_err(|e| CliError::input(format!("{source}: {e}")))?;
-    let mut sim = Simulation::new(&case);
+    let mut sim = Simulation::new(&case).map_err(|e| CliError::input(format!("{source}: {e}")))?;
     eprintln!(
         "{}: {} material points, {} load steps, {:?} basis, cells of {} m",
         case.title.as_deref().unwrap_or(&source),

@@ -165,7 +165,8 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
         // stored text was altered or the format changed under it.
         let case = Case::from_json(&job.case_json)
             .map_err(|e| Failure::new("invalid_case", e.to_string()))?;
-        let mut sim = Simulation::new(&case);
+        let mut sim =
+            Simulation::new(&case).map_err(|e| Failure::new("invalid_case", e.to_string()))?;
         sim.run(&mut observer).map_err(Failure::from)
     }));
     renewal.abort();

@@ -112,7 +112,16 @@ fn invalid_submissions_are_4xx_naming_the_field_and_create_nothing() {
             "bodies[0].geometry.rectangle.max",
         ),
         (with(&|c| c["grid"]["cell_size"] = 0.05.into()), "bodies"), // 32000 points > 1000
+        // 2e11 points: refused from the bounding box, before any is made.
+        (
+            with(&|c| c["bodies"][0]["points"] = json!({"spacing": 1e-5})),
+            "bodies",
+        ),
         (with(&|c| c["bodies"] = json!([])), "bodies"),
+        (
+            with(&|c| c["loads"]["boundary"] = json!([{"on": {"y": 7.0}, "pressure": 1.0}])),
+            "loads.boundary[0].on",
+        ),
     ];
     for (body, path) in &cases {
         let (status, code, got) = rejection(&app, body);

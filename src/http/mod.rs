@@ -14,8 +14,8 @@ use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
-use mpm::Case;
 use mpm::output::{PointColumns, write_vtu};
+use mpm::{Case, Simulation};
 use serde::Deserialize;
 use serde_json::{Value, json};
 use tokio::sync::Notify;
@@ -121,11 +121,34 @@ async fn submit(
             ),
         });
     }
-    let points: usize = case
+    // Refuse a case far over the limit before generating anything.
+    let bound: f64 = case
         .bodies
         .iter()
-        .map(|b| mpm::fill::fill_body(b, case.grid.cell_size, case.grid.origin).len())
+        .map(|b| mpm::fill::max_points(b, case.grid.cell_size))
         .sum();
+    if bound > 4.0 * limits.max_points as f64 {
+        return Err(ApiError::LimitExceeded {
+            path: "bodies".into(),
+            message: format!(
+                "the bodies make about {bound:.3e} material points, over this service's limit of {}",
+                limits.max_points
+            ),
+        });
+    }
+    // Generating the points (and the boundary they make) is CPU work: off
+    // the async threads. It also checks what only the points can tell, e.g.
+    // that a boundary load selects some stretch of boundary.
+    let built = {
+        let case = case.clone();
+        tokio::task::spawn_blocking(move || Simulation::new(&case).map(|sim| sim.points.len()))
+            .await
+            .map_err(|e| ApiError::Internal(format!("case check: {e}")))?
+    };
+    let points = built.map_err(|e| ApiError::InvalidCase {
+        path: e.path,
+        message: e.message,
+    })?;
     if points > limits.max_points {
         return Err(ApiError::LimitExceeded {
             path: "bodies".into(),

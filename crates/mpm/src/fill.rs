@@ -155,6 +155,20 @@ fn lattice_inside(
     out
 }
 
+/// An upper bound on the number of points `fill_body` makes, without
+/// making them: the bounding box's area over a point's area (exact for
+/// rectangles). Lets a service refuse a huge case before allocating it.
+pub fn max_points(body: &Body, cell_size: f64) -> f64 {
+    let (lo, hi) = bounding_box(&body.geometry);
+    let area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
+    match (body.points.count, body.points.per_cell, body.points.spacing) {
+        (Some([nx, ny]), _, _) => nx as f64 * ny as f64,
+        (_, Some(n), _) => area / (cell_size / n as f64).powi(2) + 1.0,
+        (_, _, Some(s)) => area / (s * s) + 1.0,
+        _ => 0.0,
+    }
+}
+
 /// Axis-aligned bounding box of a geometry.
 pub fn bounding_box(geometry: &Geometry) -> ([f64; 2], [f64; 2]) {
     match geometry {

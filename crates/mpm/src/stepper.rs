@@ -16,8 +16,8 @@ use rayon::prelude::*;
 use crate::assembly::{self, Connectivity, Pattern, SoftCells};
 use crate::basis::{Basis, Grid};
 use crate::boundary::loading::{BoundaryLoading, LoadedStretch, select};
-use crate::boundary::{BoundaryLoop, find_loops, set_offsets};
-use crate::case::{Case, Support};
+use crate::boundary::{BoundaryLoop, find_loops, selected_segments, set_offsets};
+use crate::case::{Case, CaseError, Support};
 use crate::linsolve::{Factorisation, SparseSolver};
 use crate::material::Response;
 use crate::newton::{self, Equilibrium, InvertedPoint, NewtonSettings, SolveError};
@@ -55,8 +55,10 @@ pub struct Simulation {
 }
 
 impl Simulation {
-    /// Builds the initial state of a validated case.
-    pub fn new(case: &Case) -> Self {
+    /// Builds the initial state of a validated case. Fails, naming the
+    /// field, when a boundary load selects no stretch of any body's boundary
+    /// (which could not be told before the points were generated).
+    pub fn new(case: &Case) -> Result<Self, CaseError> {
         let grid = Grid {
             h: case.grid.cell_size,
             origin: case.grid.origin,
@@ -65,13 +67,23 @@ impl Simulation {
         let extent = case.grid.extent.map(|b| (b.min, b.max));
         let mut loops = find_loops(&points.lattice, &points.material, &points.reference);
         set_offsets(&mut loops, &points, case.boundary.representation);
+        for (i, load) in case.loads.boundary.iter().enumerate() {
+            if selected_segments(&load.on, &loops, &points, grid.h).is_empty() {
+                return Err(CaseError {
+                    path: format!("loads.boundary[{i}].on"),
+                    message: "selects no stretch of any body's boundary (it must pass within a point spacing of \
+                              two neighbouring outer points)"
+                        .into(),
+                });
+            }
+        }
         let point_loads = case
             .loads
             .point_loads
             .iter()
             .map(|l| (nearest_point(&points, l.at), l.force))
             .collect();
-        Self {
+        Ok(Self {
             grid,
             basis: case.basis.into(),
             extent,
@@ -93,7 +105,7 @@ impl Simulation {
                 ..Default::default()
             },
             load_steps: case.analysis.load_steps as usize,
-        }
+        })
     }
 
     /// Runs every load step, reporting each to `observer`.

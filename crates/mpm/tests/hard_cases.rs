@@ -17,7 +17,7 @@ fn tip_corner_crossing(regularisation: f64) -> Result<(), SolveError> {
     case["analysis"]["load_steps"] = 400.into();
     case["analysis"]["newton"] = serde_json::json!({"tangent_regularisation": regularisation});
     let case = Case::from_json(&case.to_string()).unwrap();
-    let mut sim = Simulation::new(&case);
+    let mut sim = Simulation::new(&case).unwrap();
     for step in 1..=40 {
         sim.load_step(step, &mut NoObserver)?;
     }

@@ -57,9 +57,13 @@ pub fn set_offsets(
 
 /// The segments of each loop that `selector` picks in the reference
 /// configuration, as `(loop index, segments)` for loops with any: a segment
-/// is picked when both its end points are within their domain's half width
-/// (1% more, for round-off) of the selection, since the outer points sit
-/// half a spacing inside the material's edge.
+/// is picked when both its end points are within one point spacing (twice
+/// the domain's half width, 1% more for round-off) of the selection. The
+/// outer points of a grid-aligned edge sit half a spacing inside it; those
+/// of a curved edge filled on a Cartesian lattice, up to about one spacing.
+/// Only loop points are candidates, so on a rectangle the tolerance cannot
+/// reach round a corner: the second point along the neighbouring side is
+/// one and a half spacings from the selected edge.
 pub fn selected_segments(
     selector: &crate::case::Selector,
     loops: &[BoundaryLoop],
@@ -68,14 +72,16 @@ pub fn selected_segments(
 ) -> Vec<(usize, Vec<usize>)> {
     let on = |p: usize| {
         let hw = points.domain[p].half_width;
-        selector.contains(points.reference[p], 1.01 * hw[0].max(hw[1]) + 1e-9 * h)
+        selector.contains(points.reference[p], 2.02 * hw[0].max(hw[1]) + 1e-9 * h)
     };
     loops
         .iter()
         .enumerate()
         .filter_map(|(l, lp)| {
             let n = lp.points.len();
-            let segments: Vec<usize> = (0..n).filter(|&k| on(lp.points[k]) && on(lp.points[(k + 1) % n])).collect();
+            let segments: Vec<usize> = (0..n)
+                .filter(|&k| on(lp.points[k]) && on(lp.points[(k + 1) % n]))
+                .collect();
             (!segments.is_empty()).then_some((l, segments))
         })
         .collect()

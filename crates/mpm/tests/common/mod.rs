@@ -11,7 +11,7 @@ pub fn example(name: &str) -> serde_json::Value {
 /// Parses (validating) and runs a case.
 pub fn run(case: &serde_json::Value) -> (Simulation, RunReport) {
     let case = Case::from_json(&case.to_string()).expect("valid case");
-    let mut sim = Simulation::new(&case);
+    let mut sim = Simulation::new(&case).expect("valid case");
     let report = sim.run(&mut NoObserver).expect("the solve converges");
     (sim, report)
 }
