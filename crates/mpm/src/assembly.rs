@@ -338,7 +338,8 @@ impl SoftCells {
                 let x = points.position[p];
                 let lp = match basis {
                     Basis::Linear => [0.0, 0.0],
-                    Basis::Gimp => points.half_width(p),
+                    // As in `Basis::eval`, which caps the domain at a cell.
+                    Basis::Gimp => points.half_width(p).map(|l| l.min(grid.h)),
                 };
                 let range = |d: usize| {
                     let lo = ((x[d] - lp[d] - grid.origin[d]) / grid.h).floor() as i64;

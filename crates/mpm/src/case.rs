@@ -512,18 +512,7 @@ impl Body {
                 end_angle,
             } => {
                 let g = format!("{g}.annulus_sector");
-                finite_pair(&format!("{g}.center"), *center)?;
-                positive(&format!("{g}.inner_radius"), *inner_radius)?;
-                if outer_radius.partial_cmp(inner_radius) != Some(std::cmp::Ordering::Greater)
-                    || !outer_radius.is_finite()
-                {
-                    return Err(CaseError::new(
-                        format!("{g}.outer_radius"),
-                        format!(
-                            "must be greater than inner_radius ({inner_radius}), got {outer_radius}"
-                        ),
-                    ));
-                }
+                check_annulus(&g, *center, *inner_radius, *outer_radius)?;
                 let sweep = end_angle - start_angle;
                 if !(sweep > 0.0 && sweep < 360.0) {
                     return Err(CaseError::new(
@@ -538,20 +527,12 @@ impl Body {
                 center,
                 inner_radius,
                 outer_radius,
-            } => {
-                finite_pair(&format!("{g}.annulus.center"), *center)?;
-                positive(&format!("{g}.annulus.inner_radius"), *inner_radius)?;
-                if outer_radius.partial_cmp(inner_radius) != Some(std::cmp::Ordering::Greater)
-                    || !outer_radius.is_finite()
-                {
-                    return Err(CaseError::new(
-                        format!("{g}.annulus.outer_radius"),
-                        format!(
-                            "must be greater than inner_radius ({inner_radius}), got {outer_radius}"
-                        ),
-                    ));
-                }
-            }
+            } => check_annulus(
+                &format!("{g}.annulus"),
+                *center,
+                *inner_radius,
+                *outer_radius,
+            )?,
         }
         let p = &self.points;
         let given = [p.per_cell.is_some(), p.spacing.is_some(), p.count.is_some()];
@@ -625,6 +606,18 @@ impl Selector {
         }
         Ok(())
     }
+}
+
+fn check_annulus(path: &str, center: [f64; 2], inner: f64, outer: f64) -> Result<(), CaseError> {
+    finite_pair(&format!("{path}.center"), center)?;
+    positive(&format!("{path}.inner_radius"), inner)?;
+    if outer.partial_cmp(&inner) != Some(std::cmp::Ordering::Greater) || !outer.is_finite() {
+        return Err(CaseError::new(
+            format!("{path}.outer_radius"),
+            format!("must be greater than inner_radius ({inner}), got {outer}"),
+        ));
+    }
+    Ok(())
 }
 
 fn positive(path: &str, v: f64) -> Result<(), CaseError> {
