@@ -3,7 +3,10 @@
 //! For each load step `k` of `n` (load factor `k/n`):
 //! 1. reset the grid: shape functions at the points' current positions, the
 //!    active nodes and the stiffness pattern ([`Connectivity`], [`Pattern`]);
-//! 2. external forces and constrained DOFs on the active nodes;
+//! 2. external forces and constrained DOFs on the active nodes; boundary
+//!    loads on the B-spline, which move with the trial displacement
+//!    ([`BoundaryLoading`]); the soft background of the cells the material
+//!    touches ([`SoftCells`]);
 //! 3. Newton-Raphson for the incremental nodal displacements ([`newton`]);
 //! 4. move the points and probes with the converged grid displacement and
 //!    commit their deformation, history and stress.
