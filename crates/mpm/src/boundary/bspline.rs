@@ -71,15 +71,18 @@ fn turn(a: Point, b: Point) -> f64 {
 }
 
 /// A data point is a corner when the loop turns there by at least 30
-/// degrees and by more than twice as much as at either neighbour: on a
+/// degrees and by more than twice as much as at one of its neighbours: on a
 /// sampled smooth curve neighbouring turns are alike, at the corner of a
-/// (deformed) polygon the neighbours are nearly straight. This extends the
-/// book's rule (collinear chords on both sides) to deformed bodies.
+/// (deformed) polygon the side it comes from or goes to is nearly straight.
+/// One straight side is enough: the two corners of a side only two points
+/// long are neighbours, and each turns as much as the other (regression:
+/// requiring both made a two-point-wide column's base a bulging arc). This
+/// extends the book's rule (collinear chords on both sides) to deformed
+/// bodies.
 pub fn is_corner(q_prev: Point, q_in: Point, q_out: Point, q_next: Point) -> bool {
     let here = turn(q_in, q_out);
     here >= 30f64.to_radians()
-        && here > 2.0 * turn(q_prev, q_in)
-        && here > 2.0 * turn(q_out, q_next)
+        && (here > 2.0 * turn(q_prev, q_in) || here > 2.0 * turn(q_out, q_next))
 }
 
 /// `|a x b|`, smoothed where the chords are nearly parallel:
@@ -528,6 +531,32 @@ mod tests {
             "circle errors (n, position, normal angle): {:?}",
             ns.iter().zip(&errs).collect::<Vec<_>>()
         );
+    }
+
+    #[test]
+    fn a_side_two_points_long_keeps_both_corners() {
+        // The outer points of a body two points wide: the base has only its
+        // two corners, each turning 90 degrees like its neighbour.
+        let data = [
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [1.0, 1.0],
+            [1.0, 2.0],
+            [1.0, 3.0],
+            [0.0, 3.0],
+            [0.0, 2.0],
+            [0.0, 1.0],
+        ];
+        let c = ClosedCurve::interpolate(&data);
+        assert_eq!(c.corners.iter().filter(|c| **c).count(), 4);
+        for i in 0..=10 {
+            let u = c.params[1] * i as f64 / 10.0;
+            assert!(
+                c.point(u)[1].abs() < 1e-12,
+                "the base bulges at {u}: {:?}",
+                c.point(u)
+            );
+        }
     }
 
     #[test]
