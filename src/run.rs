@@ -231,10 +231,11 @@ impl Observer for ResultWriter {
             report.timings.total,
             probes.join("  ")
         );
-        if self.point_files && self.io_error.is_none() {
-            if let Err(e) = self.write_step(report, state) {
-                self.io_error = Some(e);
-            }
+        if self.point_files
+            && self.io_error.is_none()
+            && let Err(e) = self.write_step(report, state)
+        {
+            self.io_error = Some(e);
         }
     }
 

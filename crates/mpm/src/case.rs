@@ -589,15 +589,23 @@ impl Selector {
         if *self == Selector::default() {
             return Err(CaseError::new(
                 path,
-                "select something: give x, y, x_between or y_between",
+                "select something: give x, y, x_between, y_between or center with radius",
             ));
         }
         for (name, v) in [("x", self.x), ("y", self.y)] {
-            if let Some(v) = v {
-                if !v.is_finite() {
-                    return Err(CaseError::new(format!("{path}.{name}"), "must be finite"));
-                }
+            if let Some(v) = v
+                && !v.is_finite()
+            {
+                return Err(CaseError::new(format!("{path}.{name}"), "must be finite"));
             }
+        }
+        match (self.center, self.radius) {
+            (Some(c), Some(r)) => {
+                finite_pair(&format!("{path}.center"), c)?;
+                positive(&format!("{path}.radius"), r)?;
+            }
+            (None, None) => {}
+            _ => return Err(CaseError::new(path, "center and radius go together")),
         }
         for (name, r) in [("x_between", self.x_between), ("y_between", self.y_between)] {
             if let Some(r) = r {
@@ -727,6 +735,17 @@ mod tests {
         v["bodies"][0]["geometry"] =
             serde_json::json!({"rectangle": {"min": [0, 0], "max": [0, 1]}});
         assert_eq!(error_for(v).path, "bodies[0].geometry.rectangle.max");
+    }
+
+    #[test]
+    fn a_radius_without_a_center_is_rejected() {
+        // Otherwise the circle condition would be ignored and the selector
+        // would pick everything.
+        let mut v = column_json();
+        v["supports"][0]["on"] = serde_json::json!({"radius": 1.0});
+        let e = error_for(v);
+        assert_eq!(e.path, "supports[0].on");
+        assert!(e.message.contains("center and radius"), "{e}");
     }
 
     #[test]
