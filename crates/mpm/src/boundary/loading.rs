@@ -158,23 +158,43 @@ impl<'a> BoundaryLoading<'a> {
         })
     }
 
+    /// The nodal forces of stretch `i` on its loaded segment `k` of the
+    /// data points `ring`, passed to `sink`.
+    fn segment_forces(
+        &self,
+        i: usize,
+        ring: &[Point],
+        k: usize,
+        sink: &mut impl FnMut(usize, [f64; 2]),
+    ) {
+        let q = self.quadrature[i][k]
+            .as_ref()
+            .expect("loaded segments have a quadrature");
+        q.forces(
+            &local_segment(ring, k),
+            self.stretches[i].traction,
+            self.load_factor,
+            sink,
+        );
+    }
+
+    /// The loaded segments of stretch `i` whose shape depends on data point
+    /// `k` of its `n`-point loop.
+    fn affected(&self, i: usize, k: usize, n: usize) -> Vec<usize> {
+        segments_touching(k, n)
+            .filter(|&j| self.quadrature[i][j].is_some())
+            .collect()
+    }
+
     /// Adds the boundary loads' nodal forces at increment `u` to `f`.
     pub fn add_forces(&self, u: &[f64], f: &mut [f64]) {
-        for (s, quadrature) in self.stretches.iter().zip(&self.quadrature) {
+        for (i, s) in self.stretches.iter().enumerate() {
             let ring = self.ring(&self.loops[s.loop_index], u);
             for &k in &s.segments {
-                let q = quadrature[k]
-                    .as_ref()
-                    .expect("loaded segments have a quadrature");
-                q.forces(
-                    &local_segment(&ring, k),
-                    s.traction,
-                    self.load_factor,
-                    &mut |a, force| {
-                        f[2 * a] += force[0];
-                        f[2 * a + 1] += force[1];
-                    },
-                );
+                self.segment_forces(i, &ring, k, &mut |a, force| {
+                    f[2 * a] += force[0];
+                    f[2 * a + 1] += force[1];
+                });
             }
         }
     }
@@ -184,14 +204,12 @@ impl<'a> BoundaryLoading<'a> {
     pub fn stiffness(&self, u: &[f64]) -> Vec<(usize, usize, f64)> {
         let mut out = Vec::new();
         let eps = 1e-6 * self.grid.h;
-        for (s, quadrature) in self.stretches.iter().zip(&self.quadrature) {
+        for (i, s) in self.stretches.iter().enumerate() {
             let l = &self.loops[s.loop_index];
             let n = l.points.len();
             let mut ring = self.ring(l, u);
             for k in 0..n {
-                let affected: Vec<usize> = segments_touching(k, n)
-                    .filter(|&j| quadrature[j].is_some())
-                    .collect();
+                let affected = self.affected(i, k, n);
                 if affected.is_empty() {
                     continue;
                 }
@@ -201,23 +219,12 @@ impl<'a> BoundaryLoading<'a> {
                     for (sign, delta) in [(1.0, eps), (-1.0, -eps)] {
                         ring[k][c] += delta;
                         for &j in &affected {
-                            let q = quadrature[j]
-                                .as_ref()
-                                .expect("affected segments are loaded");
-                            q.forces(
-                                &local_segment(&ring, j),
-                                s.traction,
-                                self.load_factor,
-                                &mut |a, force| {
-                                    df.push((
-                                        a,
-                                        [
-                                            sign * force[0] / (2.0 * eps),
-                                            sign * force[1] / (2.0 * eps),
-                                        ],
-                                    ));
-                                },
-                            );
+                            self.segment_forces(i, &ring, j, &mut |a, force| {
+                                df.push((
+                                    a,
+                                    [sign * force[0] / (2.0 * eps), sign * force[1] / (2.0 * eps)],
+                                ));
+                            });
                         }
                         ring[k][c] -= delta;
                     }
@@ -254,16 +261,12 @@ impl<'a> BoundaryLoading<'a> {
     pub fn coupling_groups(&self) -> Vec<Vec<u32>> {
         let zero = vec![0.0; self.conn.n_dofs()];
         let mut groups = Vec::new();
-        for s in self.stretches {
+        for (i, s) in self.stretches.iter().enumerate() {
             let l = &self.loops[s.loop_index];
             let n = l.points.len();
             let ring = self.ring(l, &zero);
-            let mut loaded = vec![false; n];
-            for &k in &s.segments {
-                loaded[k] = true;
-            }
             for k in 0..n {
-                let affected: Vec<usize> = segments_touching(k, n).filter(|&j| loaded[j]).collect();
+                let affected = self.affected(i, k, n);
                 if affected.is_empty() {
                     continue;
                 }
