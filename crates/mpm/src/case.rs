@@ -48,6 +48,11 @@ pub struct Case {
 pub struct BoundarySpec {
     #[serde(default)]
     pub representation: Representation,
+    /// Width `delta` (m) of the band inside the boundary over which the
+    /// implicit boundary method's D-functions rise from 0 to 1. Default
+    /// 1% of the cell size (see `boundary::ibm`).
+    #[serde(default)]
+    pub band_width: Option<f64>,
 }
 
 /// Where the boundary curve's data points are.
@@ -297,9 +302,45 @@ pub struct PointLoad {
 pub struct Support {
     pub on: Selector,
     pub fix: Fix,
+    /// How the condition is imposed (default `grid`).
+    #[serde(default)]
+    pub method: SupportMethod,
+    /// Prescribed displacement `[ux, uy]` (m) reached at the last load step,
+    /// ramped with the load factor; only its held components count.
+    /// Implicit boundary method only. Default zero.
+    #[serde(default)]
+    pub displacement: Option<[f64; 2]>,
+    /// Prescribed rotation of the selected boundary about a point, on top
+    /// of `displacement`, its angle ramped with the load factor. Implicit
+    /// boundary method only.
+    #[serde(default)]
+    pub rotation: Option<Rotation>,
 }
 
-/// Which displacement components a support holds at zero.
+/// A rigid rotation of the boundary it applies to.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Rotation {
+    /// Counter-clockwise angle in degrees at the last load step.
+    pub angle: f64,
+    /// Centre (m), in the reference configuration.
+    pub center: [f64; 2],
+}
+
+/// Where a support acts.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SupportMethod {
+    /// On the grid nodes that the selector contains (AMPLE's way): exact
+    /// when the boundary lies on grid lines.
+    #[default]
+    Grid,
+    /// The implicit boundary method on the boundary curve the selector
+    /// picks: works for boundaries anywhere in the grid, at any angle.
+    Ibm,
+}
+
+/// Which displacement components a support holds.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum Fix {
@@ -309,9 +350,13 @@ pub enum Fix {
     Y,
     /// Both held.
     Xy,
+    /// The component normal to the boundary held (a roller on a boundary at
+    /// any angle, or curved). Implicit boundary method only.
+    Normal,
 }
 
 impl Fix {
+    /// Whether a grid support holds Cartesian component `component`.
     pub fn holds(self, component: usize) -> bool {
         matches!((self, component), (Fix::Xy, _) | (Fix::X, 0) | (Fix::Y, 1))
     }
@@ -337,6 +382,10 @@ pub struct Selector {
     pub center: Option<[f64; 2]>,
     #[serde(default)]
     pub radius: Option<f64>,
+    /// On the straight segment between these two points: a side at any
+    /// angle.
+    #[serde(default)]
+    pub segment: Option<[[f64; 2]; 2]>,
 }
 
 impl Selector {
@@ -353,11 +402,17 @@ impl Selector {
             }
             _ => true,
         };
+        let on_segment = self.segment.is_none_or(|[a, b]| {
+            let (d, r) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
+            let t = ((r[0] * d[0] + r[1] * d[1]) / (d[0] * d[0] + d[1] * d[1])).clamp(0.0, 1.0);
+            (r[0] - t * d[0]).hypot(r[1] - t * d[1]) <= tol
+        });
         on(self.x, p[0])
             && on(self.y, p[1])
             && within(self.x_between, p[0])
             && within(self.y_between, p[1])
             && on_circle
+            && on_segment
     }
 }
 
@@ -463,6 +518,39 @@ impl Case {
         }
         for (i, s) in self.supports.iter().enumerate() {
             s.on.validate(&format!("supports[{i}].on"))?;
+            if s.method == SupportMethod::Grid && s.fix == Fix::Normal {
+                return Err(CaseError::new(
+                    format!("supports[{i}].fix"),
+                    "normal needs \"method\": \"ibm\"",
+                ));
+            }
+            if let Some(d) = s.displacement {
+                finite_pair(&format!("supports[{i}].displacement"), d)?;
+                if s.method == SupportMethod::Grid {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].displacement"),
+                        "prescribed displacements need \"method\": \"ibm\"",
+                    ));
+                }
+            }
+            if let Some(r) = s.rotation {
+                if !r.angle.is_finite() {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].rotation.angle"),
+                        "must be finite",
+                    ));
+                }
+                finite_pair(&format!("supports[{i}].rotation.center"), r.center)?;
+                if s.method == SupportMethod::Grid {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].rotation"),
+                        "prescribed rotations need \"method\": \"ibm\"",
+                    ));
+                }
+            }
+        }
+        if let Some(b) = self.boundary.band_width {
+            positive("boundary.band_width", b)?;
         }
         for (i, p) in self.probes.iter().enumerate() {
             if p.name.trim().is_empty() {
@@ -589,7 +677,7 @@ impl Selector {
         if *self == Selector::default() {
             return Err(CaseError::new(
                 path,
-                "select something: give x, y, x_between, y_between or center with radius",
+                "select something: give x, y, x_between, y_between, segment or center with radius",
             ));
         }
         for (name, v) in [("x", self.x), ("y", self.y)] {
@@ -610,6 +698,16 @@ impl Selector {
         for (name, r) in [("x_between", self.x_between), ("y_between", self.y_between)] {
             if let Some(r) = r {
                 finite_pair(&format!("{path}.{name}"), r)?;
+            }
+        }
+        if let Some([a, b]) = self.segment {
+            finite_pair(&format!("{path}.segment[0]"), a)?;
+            finite_pair(&format!("{path}.segment[1]"), b)?;
+            if a == b {
+                return Err(CaseError::new(
+                    format!("{path}.segment"),
+                    "needs two different end points",
+                ));
             }
         }
         Ok(())

@@ -18,9 +18,10 @@ use rayon::prelude::*;
 
 use crate::assembly::{self, Connectivity, Pattern, SoftCells};
 use crate::basis::{Basis, Grid};
+use crate::boundary::ibm::{self, Anchor, BandTerms};
 use crate::boundary::loading::{BoundaryLoading, LoadedStretch, select};
 use crate::boundary::{BoundaryLoop, find_loops, selected_segments, set_offsets};
-use crate::case::{Case, CaseError, Support};
+use crate::case::{Case, CaseError, Support, SupportMethod};
 use crate::linsolve::{Factorisation, SparseSolver};
 use crate::material::Response;
 use crate::newton::{self, Equilibrium, InvertedPoint, NewtonSettings, SolveError};
@@ -52,6 +53,10 @@ pub struct Simulation {
     point_loads: Vec<(usize, [f64; 2])>,
     /// Loads on stretches of the boundary curves.
     boundary_loads: Vec<LoadedStretch>,
+    /// Quadrature points of the supports imposed on the boundary curves by
+    /// the implicit boundary method, and the band width `delta` they use.
+    anchors: Vec<Anchor>,
+    band_width: f64,
     supports: Vec<Support>,
     pub settings: NewtonSettings,
     pub load_steps: usize,
@@ -96,6 +101,8 @@ impl Simulation {
                 position: case.probes.iter().map(|p| p.at).collect(),
             },
             boundary_loads: select(&case.loads.boundary, &loops, &points, grid.h),
+            anchors: ibm::anchors(&case.supports, &loops, &points, &grid),
+            band_width: case.boundary.band_width.unwrap_or(0.01 * grid.h),
             loops,
             points,
             gravity: case.loads.gravity.unwrap_or([0.0, 0.0]),
@@ -156,23 +163,51 @@ impl Simulation {
             &self.boundary_loads,
             load_factor,
         );
-        let pattern = Pattern::build(&conn, &loading.coupling_groups());
+        let band = BandTerms::new(
+            &self.anchors,
+            &self.loops,
+            &self.points,
+            &conn,
+            &self.grid,
+            self.band_width,
+            load_factor,
+        );
+        let mut groups = loading.coupling_groups();
+        groups.extend(band.coupling_groups());
+        let pattern = Pattern::build(&conn, &groups);
         let fixed = self.constrained_dofs(&conn);
         let f_ext = self.external_force(&conn, load_factor);
         let soft = self.soft_cells(&conn);
         let grid_seconds = started.elapsed().as_secs_f64();
 
-        let mut eq =
-            StepEquilibrium::new(&conn, &pattern, &self.points, &fixed, f_ext, soft, loading);
+        let mut eq = StepEquilibrium::new(
+            &conn,
+            &pattern,
+            &self.points,
+            &fixed,
+            f_ext,
+            soft,
+            BoundaryTerms { loading, band },
+        );
         let (u, newton) = newton::solve(&mut eq, &self.settings, step, observer)?;
 
         let update_start = Instant::now();
-        let reactions = self.reactions(&conn, &eq.f_int, &eq.f_ext);
+        let mut reactions = self.reactions(&conn, &eq.f_int, &eq.f_ext);
+        for (r, b) in
+            reactions
+                .iter_mut()
+                .zip(eq.band.reactions(&self.anchors, &u, self.supports.len()))
+        {
+            r[0] += b[0];
+            r[1] += b[1];
+        }
         let mut timings = eq.timings;
         timings.grid = grid_seconds;
         let responses = std::mem::take(&mut eq.responses);
+        let band = std::mem::take(&mut eq.band);
         self.update_points(&conn, &u, &responses);
         self.advect_probes(&conn, &u);
+        band.advance(&mut self.anchors, &u);
         timings.update = update_start.elapsed().as_secs_f64();
         timings.total = started.elapsed().as_secs_f64();
 
@@ -227,7 +262,7 @@ impl Simulation {
         let mut fixed = vec![false; conn.n_dofs()];
         for (a, &key) in conn.nodes.iter().enumerate() {
             let x = self.grid.node_position(key);
-            for s in self.supports.iter().filter(|s| s.on.contains(x, tol)) {
+            for s in self.grid_supports().filter(|s| s.on.contains(x, tol)) {
                 for c in 0..2 {
                     fixed[2 * a + c] |= s.fix.holds(c);
                 }
@@ -260,6 +295,13 @@ impl Simulation {
         ))
     }
 
+    /// The supports imposed on grid nodes.
+    fn grid_supports(&self) -> impl Iterator<Item = &Support> {
+        self.supports
+            .iter()
+            .filter(|s| s.method == SupportMethod::Grid)
+    }
+
     /// Body force and point loads, scaled by the load factor.
     fn external_force(&self, conn: &Connectivity, load_factor: f64) -> Vec<f64> {
         let g = self.gravity.map(|g| g * load_factor);
@@ -286,6 +328,9 @@ impl Simulation {
             .iter()
             .map(|s| {
                 let mut r = [0.0; 2];
+                if s.method != SupportMethod::Grid {
+                    return r; // from the band terms
+                }
                 for (a, &key) in conn.nodes.iter().enumerate() {
                     if s.on.contains(self.grid.node_position(key), tol) {
                         for (c, rc) in r.iter_mut().enumerate() {
@@ -395,6 +440,10 @@ struct StepEquilibrium<'a> {
     soft: Option<SoftCells>,
     /// Boundary loads, evaluated on the trial boundary.
     loading: BoundaryLoading<'a>,
+    /// Implicit-boundary supports.
+    band: BandTerms,
+    /// `BandTerms::load_norm`, once per step.
+    band_load: f64,
     /// Loads that do not depend on the displacement (gravity, point loads).
     f_ext_fixed: Vec<f64>,
     /// All external forces at the last trial state.
@@ -407,6 +456,12 @@ struct StepEquilibrium<'a> {
     timings: StepTimings,
 }
 
+/// What the boundary curves contribute to a step: loads and IBM supports.
+struct BoundaryTerms<'a> {
+    loading: BoundaryLoading<'a>,
+    band: BandTerms,
+}
+
 impl<'a> StepEquilibrium<'a> {
     fn new(
         conn: &'a Connectivity,
@@ -415,7 +470,7 @@ impl<'a> StepEquilibrium<'a> {
         fixed: &'a [bool],
         f_ext: Vec<f64>,
         soft: Option<SoftCells>,
-        loading: BoundaryLoading<'a>,
+        BoundaryTerms { loading, band }: BoundaryTerms<'a>,
     ) -> Self {
         Self {
             conn,
@@ -424,6 +479,8 @@ impl<'a> StepEquilibrium<'a> {
             fixed,
             soft,
             loading,
+            band_load: band.load_norm(conn.n_dofs()),
+            band,
             f_ext: f_ext.clone(),
             f_ext_fixed: f_ext,
             u: Vec::new(),
@@ -461,6 +518,12 @@ impl Equilibrium for StepEquilibrium<'_> {
             })
             .collect::<Result<_, _>>()?;
         self.f_int = assembly::internal_force(conn, mp, &self.responses);
+        // Forces are measured against the material's own internal force
+        // (which includes the reactions) and the loads: the supports' band
+        // terms balance the former at convergence, so they cannot be the
+        // yardstick.
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let material_norm = norm(&self.f_int);
         if !self.loading.is_empty() {
             self.f_ext.clone_from(&self.f_ext_fixed);
             self.loading.add_forces(u, &mut self.f_ext);
@@ -468,9 +531,10 @@ impl Equilibrium for StepEquilibrium<'_> {
         if let Some(soft) = &self.soft {
             soft.add_force(u, &mut self.f_int);
         }
-        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        self.band.add_forces(u, &mut self.f_int);
         let scale = norm(&self.f_ext)
-            .max(norm(&self.f_int))
+            .max(material_norm)
+            .max(self.band_load)
             .max(f64::MIN_POSITIVE);
         let r = (0..u.len())
             .map(|i| {
@@ -491,6 +555,7 @@ impl Equilibrium for StepEquilibrium<'_> {
         if let Some(soft) = &self.soft {
             soft.add_to(self.pattern, &mut k);
         }
+        self.band.add_stiffness(self.pattern, &mut k);
         // Boundary loads move with the boundary: their load stiffness makes
         // the tangent non-symmetric. Hyperelastic materials under loads that
         // do not move have a symmetric tangent.

@@ -59,17 +59,39 @@ fn column(cells: usize) -> serde_json::Value {
     case
 }
 
-/// Normalised stress error sum_p |sigma_p - sigma(Y_p)| V0_p / (rho0 g L V0).
+/// The same column with its base (fixed) and sides (rollers) held by the
+/// implicit boundary method on the boundary curve instead of grid nodes,
+/// and no grid extent: the grid goes on below and beside the column.
+fn ibm_column(cells: usize) -> serde_json::Value {
+    let h = L / cells as f64;
+    let mut case = column(cells);
+    case["grid"] = serde_json::json!({ "cell_size": h });
+    case["supports"] = serde_json::json!([
+        { "on": { "x": 0.0 }, "fix": "normal", "method": "ibm" },
+        { "on": { "x": h }, "fix": "normal", "method": "ibm" },
+        { "on": { "y": 0.0 }, "fix": "xy", "method": "ibm" }
+    ]);
+    case
+}
+
+/// Normalised stress error sum_p |sigma_p - sigma(Y_p)| V0_p / (rho0 g L V0)
+/// and the top displacement.
 fn stress_error(cells: usize) -> (f64, f64) {
-    let (sim, report) = run(&column(cells));
+    let (err, top, _) = stress_error_of(&column(cells));
+    (err, top)
+}
+
+/// `stress_error` of any column case, with the last step's reactions.
+fn stress_error_of(case: &serde_json::Value) -> (f64, f64, Vec<[f64; 2]>) {
+    let (sim, report) = run(case);
     let mp = &sim.points;
     let v0: f64 = mp.volume0.iter().sum();
     let err: f64 = (0..mp.len())
         .map(|p| (mp.stress[p].plane[1] + RHO_G * (L - mp.reference[p][1])).abs() * mp.volume0[p])
         .sum::<f64>()
         / (RHO_G * L * v0);
-    let top = report.steps.last().unwrap().probes[0].displacement[1];
-    (err, top)
+    let last = report.steps.last().unwrap();
+    (err, last.probes[0].displacement[1], last.reactions.clone())
 }
 
 #[test]
@@ -109,6 +131,39 @@ fn stress_error_matches_or_beats_ample_and_converges() {
     // least 1.5 over the whole range.
     let overall = (errors[0] / errors[4]).log2() / 4.0;
     assert!(overall >= 1.5, "overall order {overall:.2}, {p:?}");
+}
+
+/// The implicit boundary method must give the same exact solution: the
+/// same bound against AMPLE's errors and the same order. Measured (4..64
+/// cells): 3.69e-2, 1.13e-2, 3.43e-3, 9.81e-4, 4.04e-4, a little below the
+/// grid-node supports' errors. The reactions balance the weight rho0 g L h
+/// to round-off in every step: the sides carry nothing vertical (their
+/// normal is the reference wall's, see `boundary::ibm::Anchor`).
+#[test]
+fn ibm_supports_give_the_same_exact_solution() {
+    let ample = [4.13e-2, 1.29e-2, 3.66e-3, 1.05e-3, 4.36e-4];
+    let cells = [4, 8, 16, 32, 64];
+    let mut errors = Vec::new();
+    for (&n, &reference) in cells.iter().zip(&ample) {
+        let (err, top, reactions) = stress_error_of(&ibm_column(n));
+        eprintln!(
+            "cells {n:>3}: error {err:.3e} (AMPLE {reference:.2e}), top {top:.4} m, reactions {reactions:?}"
+        );
+        assert!(err <= 1.05 * reference, "{n} cells: {err:.3e}");
+        let weight = RHO_G * L * (L / n as f64);
+        assert!(
+            (reactions[2][1] - weight).abs() < 1e-9 * weight,
+            "{reactions:?}"
+        );
+        for r in &reactions {
+            assert!(r[0].abs() < 1e-9 * weight, "{reactions:?}");
+        }
+        assert!(reactions[0][1].abs() < 1e-9 * weight, "{reactions:?}");
+        assert!(reactions[1][1].abs() < 1e-9 * weight, "{reactions:?}");
+        errors.push(err);
+    }
+    let overall = (errors[0] / errors[4]).log2() / 4.0;
+    assert!(overall >= 1.5, "overall order {overall:.2}, {errors:?}");
 }
 
 #[test]

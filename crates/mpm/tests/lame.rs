@@ -87,11 +87,10 @@ fn errors(h: f64, basis: &str) -> (f64, f64, f64) {
 #[test]
 fn pressurised_thick_cylinder_converges_to_lame() {
     // Measured (h = 0.25, 0.125, 0.0625; relative errors):
-    //   gimp:   u_r(a) 1.8e-1, 3.3e-2, 3e-6 (passing through zero);
-    //           u_r(b) 1.4e-2, 1.3e-2, 3.6e-3;
-    //           stress 1.0e-1, 6.1e-2, 4.1e-2 (order about 0.7)
-    //   linear: u_r(a) 3.5e-2, 2.8e-2, 1.3e-2; u_r(b) 0.7e-2, 1.3e-2, 1.6e-2;
-    //           stress 0.21, 0.16, 0.16: the bilinear basis integrated at
+    //   gimp:   u_r(a) 9.6e-2, 2.0e-2, 4.9e-4; u_r(b) 1.4e-2, 9.6e-3, 1.3e-3;
+    //           stress 1.5e-1, 7.5e-2, 5.0e-2 (order about 0.8)
+    //   linear: u_r(a) 4.5e-2, 1.7e-2, 1.1e-2; u_r(b) 1.8e-3, 7.0e-3, 1.2e-2;
+    //           stress 0.21, 0.16, 0.17: the bilinear basis integrated at
     //           points that do not line up with the cells gives noisy
     //           stresses (ring averages are within a few percent, single
     //           points up to 40% off) that do not fall with h.

@@ -4,6 +4,7 @@
 
 pub mod bspline;
 pub mod detection;
+pub mod ibm;
 pub mod loading;
 pub mod traction;
 
@@ -21,7 +22,9 @@ use crate::points::MaterialPoints;
 /// frame (half-widths `(h1, h2)`, normal `(n1, n2)`) the offset is
 /// `(h1 n1, h2 n2) / max(|n1|, |n2|)`, which reaches the middle of a
 /// domain's side on a straight edge and its corner at a corner (where `n` is
-/// the mean of the two normals).
+/// the mean of the two normals). Polar fills' domains are turned with their
+/// angle; the offset is taken in that frame (an axis-aligned one tilted the
+/// radial edges of a sector turned by 30 degrees by up to half a degree).
 pub fn set_offsets(
     loops: &mut [BoundaryLoop],
     points: &MaterialPoints,
@@ -40,10 +43,16 @@ pub fn set_offsets(
                         .zip(&l.points)
                         .map(|((n_in, n_out), &p)| {
                             let n = [n_in[0] + n_out[0], n_in[1] + n_out[1]];
+                            // In the domain's own frame (radial/tangential
+                            // on a polar lattice).
+                            let domain = &points.domain[p];
+                            let (s, c) = domain.angle.sin_cos();
+                            let n = [c * n[0] + s * n[1], -s * n[0] + c * n[1]];
                             let m = n[0].abs().max(n[1].abs());
-                            let hw = points.half_width0[p];
+                            let hw = domain.half_width;
                             if m > 0.0 {
-                                [hw[0] * n[0] / m, hw[1] * n[1] / m]
+                                let d = [hw[0] * n[0] / m, hw[1] * n[1] / m];
+                                [c * d[0] - s * d[1], s * d[0] + c * d[1]]
                             } else {
                                 [0.0, 0.0]
                             }

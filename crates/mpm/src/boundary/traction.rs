@@ -18,7 +18,7 @@
 
 use super::bspline::{ClosedCurve, Point, bezier, bezier_derivative};
 
-use crate::basis::{Basis, Grid, NodeKey};
+use crate::basis::{Basis, Grid, NodeKey, NodeWeight};
 
 /// Gauss-Legendre nodes on [0, 1] and weights (summing to 1), 4 points.
 const GAUSS4: [(f64, f64); 4] = [
@@ -109,29 +109,12 @@ impl SegmentQuadrature {
             ..Default::default()
         };
         let mut weights = Vec::with_capacity(4);
-        for piece in cell_crossings(start, grid).windows(2) {
-            let (t0, t1) = (piece[0], piece[1]);
-            for &(xi, w) in &GAUSS4 {
-                let t = t0 + xi * (t1 - t0);
-                weights.clear();
-                Basis::Linear.eval(grid, bezier(start, t), [0.0, 0.0], &mut weights);
-                let before = q.shares.len();
-                q.shares.extend(
-                    weights
-                        .iter()
-                        .filter_map(|nw| nodes.binary_search(&nw.node).ok().map(|a| (a, nw.n))),
-                );
-                let total: f64 = q.shares[before..].iter().map(|(_, n)| n).sum();
-                if total <= 0.0 {
-                    q.shares.truncate(before);
-                    continue;
-                }
-                for share in &mut q.shares[before..] {
-                    share.1 /= total;
-                }
-                q.points.push((t, w * (t1 - t0)));
-                q.first.push(q.shares.len());
+        for (t, w) in gauss_points(start, grid) {
+            if !hat_shares(grid, bezier(start, t), nodes, &mut weights, &mut q.shares) {
+                continue;
             }
+            q.points.push((t, w));
+            q.first.push(q.shares.len());
         }
         q
     }
@@ -154,6 +137,50 @@ impl SegmentQuadrature {
             }
         }
     }
+}
+
+/// Appends to `shares` the active nodes' bilinear shape functions at `x`
+/// as `(active node index, share)`, normalised to sum to one (a point on
+/// the edge of the active cells may touch an inactive node with a zero or
+/// round-off share). Returns false, appending nothing, when no active node
+/// has a share. `weights` is scratch space.
+pub fn hat_shares(
+    grid: &Grid,
+    x: Point,
+    nodes: &[NodeKey],
+    weights: &mut Vec<NodeWeight>,
+    shares: &mut Vec<(usize, f64)>,
+) -> bool {
+    weights.clear();
+    Basis::Linear.eval(grid, x, [0.0, 0.0], weights);
+    let before = shares.len();
+    shares.extend(
+        weights
+            .iter()
+            .filter_map(|nw| nodes.binary_search(&nw.node).ok().map(|a| (a, nw.n))),
+    );
+    let total: f64 = shares[before..].iter().map(|(_, n)| n).sum();
+    if total <= 0.0 {
+        shares.truncate(before);
+        return false;
+    }
+    for share in &mut shares[before..] {
+        share.1 /= total;
+    }
+    true
+}
+
+/// `(t, weight in t)` of four Gauss points on each piece of the segment
+/// between grid lines: the integrands (products of the cells' bilinear
+/// shape functions and the curve's smooth terms) are smooth on each piece.
+pub fn gauss_points(ctrl: &[Point; 4], grid: &Grid) -> impl Iterator<Item = (f64, f64)> {
+    let crossings = cell_crossings(ctrl, grid);
+    (1..crossings.len()).flat_map(move |i| {
+        let (t0, t1) = (crossings[i - 1], crossings[i]);
+        GAUSS4
+            .iter()
+            .map(move |&(xi, w)| (t0 + xi * (t1 - t0), w * (t1 - t0)))
+    })
 }
 
 /// Parameters `0 = t_0 < ... < t_m = 1` where the segment crosses grid

@@ -1,0 +1,448 @@
+//! Dirichlet conditions on the boundary curve by the implicit boundary
+//! method (Burla & Kumar 2008; Kumar et al. 2008; in MPM, Cortis et al.
+//! 2018).
+//!
+//! The trial displacement is `u = D u_h + u_a`: `u_h` the grid
+//! interpolation, `u_a` the prescribed values, `D` a D-function of the
+//! distance `phi` from the boundary, `D = 1 - (1 - phi/delta)^2` across a
+//! band of width `delta` inside the material and 1 beyond. Integrated across
+//! the band, the strain energy of `D u_h` has the leading part
+//! `int_Gamma (4 / (3 delta)) (u_h - u_a) . A_nn (u_h - u_a) dGamma`, since
+//! `int_0^delta D'(phi)^2 dphi = 4 / (3 delta)`, with `A_nn` the acoustic
+//! tensor `A_iKjL n_K n_L` of the material next to the boundary. The band is
+//! far thinner than a point spacing, so no point lies in it and the points
+//! keep their ordinary integration; the band adds that boundary term,
+//! integrated by Gauss quadrature along the B-spline (split at grid lines,
+//! as tractions are). A fixed condition holds both components, a roller the
+//! normal one (`P = n n` in `P A_nn P`), so inclined and curved rollers are
+//! the same code.
+//!
+//! The band width: the term acts as a penalty of about `(4/3) C / delta` per
+//! unit boundary length against an element stiffness of about `C`, so the
+//! condition holds to a gap of about `(3/4) delta` times the boundary strain
+//! and the matrix's conditioning grows like `h / delta`. The default
+//! `delta = h / 100` keeps the gap at 1% of the displacement across one cell
+//! for a factor of about 100 in conditioning, which the direct solver does
+//! not notice.
+//!
+//! Updated-Lagrangian steps reset the grid, so a step's band term sees only
+//! that step's increment, while a support must hold the boundary's total
+//! displacement: a penalty spring rebuilt each step would let the boundary
+//! creep by `reaction / penalty` every step. The band's quadrature points
+//! are therefore [`Anchor`]s: fixed on the reference curve (Gauss points of
+//! its segments, split at the grid lines of the first step) and carried by
+//! the grid's own displacement at the end of every step, so that each one
+//! knows how far it has moved; the step's target is the prescribed
+//! displacement minus that. Measuring the motion on the rebuilt curve
+//! instead (whose data points follow the points' deformation gradients, not
+//! the grid field the band holds) feeds their difference back every step,
+//! and a self-weight column with rollers grew a sideways mode by about five
+//! times per step until it collapsed.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Matrix2, Vector2};
+
+use super::bspline::{bezier, bezier_derivative, local_segment};
+use super::detection::BoundaryLoop;
+use super::traction::{gauss_points, hat_shares};
+use super::{data_point, selected_segments};
+use crate::assembly::{Connectivity, Pattern};
+use crate::basis::{Grid, NodeKey, node_indices, node_key};
+use crate::case::{Fix, Rotation, Support, SupportMethod};
+use crate::points::MaterialPoints;
+
+/// A quadrature point of an implicit-boundary support, Lagrangian: fixed on
+/// the reference curve, carried by the grid's displacement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Anchor {
+    /// Index of the support in the case (for reactions).
+    pub support: usize,
+    loop_index: usize,
+    segment: usize,
+    /// Parameter on the segment and Gauss weight in it.
+    t: f64,
+    weight: f64,
+    /// The material point next to it (the nearer end of the segment): its
+    /// tangent stiffness and deformation gradient stand for the band's.
+    point: usize,
+    fix: Fix,
+    /// Outward unit normal of the reference curve: the wall a roller slides
+    /// on. It stays put while the body deforms; the body's own normal turns
+    /// with its shear, and a roller held along that would push the body
+    /// sideways by the tilt times its sliding, tilting it further (a
+    /// self-weight column with sliding sides collapsed that way).
+    normal: [f64; 2],
+    /// Prescribed displacement and rotation at load factor 1.
+    prescribed: [f64; 2],
+    rotation: Option<Rotation>,
+    /// Reference position and the displacement since.
+    reference: [f64; 2],
+    moved: [f64; 2],
+}
+
+impl Anchor {
+    /// The prescribed displacement at load factor `lambda`:
+    /// `lambda d + (R(lambda theta) - I)(X - c)`.
+    fn prescribed_at(&self, lambda: f64) -> [f64; 2] {
+        let mut u = [lambda * self.prescribed[0], lambda * self.prescribed[1]];
+        if let Some(r) = self.rotation {
+            let (sin, cos) = (lambda * r.angle.to_radians()).sin_cos();
+            let x = [
+                self.reference[0] - r.center[0],
+                self.reference[1] - r.center[1],
+            ];
+            u[0] += (cos - 1.0) * x[0] - sin * x[1];
+            u[1] += sin * x[0] + (cos - 1.0) * x[1];
+        }
+        u
+    }
+
+    /// Current position.
+    pub fn position(&self) -> [f64; 2] {
+        [
+            self.reference[0] + self.moved[0],
+            self.reference[1] + self.moved[1],
+        ]
+    }
+}
+
+/// The anchors of the case's implicit-boundary supports: Gauss points of
+/// the reference-curve segments each support selects.
+pub fn anchors(
+    supports: &[Support],
+    loops: &[BoundaryLoop],
+    points: &MaterialPoints,
+    grid: &Grid,
+) -> Vec<Anchor> {
+    let mut out = Vec::new();
+    for (i, s) in supports.iter().enumerate() {
+        if s.method != SupportMethod::Ibm {
+            continue;
+        }
+        for (loop_index, segments) in selected_segments(&s.on, loops, points, grid.h) {
+            let l = &loops[loop_index];
+            let n = l.points.len();
+            let ring = reference_ring(l, points);
+            for k in segments {
+                let segment = local_segment(&ring, k);
+                for (t, weight) in gauss_points(&segment, grid) {
+                    let d = bezier_derivative(&segment, t);
+                    let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
+                    out.push(Anchor {
+                        normal: [d[1] / length, -d[0] / length],
+                        support: i,
+                        loop_index,
+                        segment: k,
+                        t,
+                        weight,
+                        point: l.points[if t < 0.5 { k } else { (k + 1) % n }],
+                        fix: s.fix,
+                        prescribed: s.displacement.unwrap_or([0.0, 0.0]),
+                        rotation: s.rotation,
+                        reference: bezier(&segment, t),
+                        moved: [0.0, 0.0],
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// A loop's data points in the reference configuration.
+fn reference_ring(l: &BoundaryLoop, points: &MaterialPoints) -> Vec<[f64; 2]> {
+    l.points
+        .iter()
+        .zip(&l.offset)
+        .map(|(&p, d)| {
+            let x = points.reference[p];
+            [x[0] + d[0], x[1] + d[1]]
+        })
+        .collect()
+}
+
+/// One anchor's band term in a load step.
+#[derive(Debug, Clone)]
+struct BandPoint {
+    anchor: usize,
+    /// Its shares of the active nodes are `shares[first..last]`.
+    first: usize,
+    last: usize,
+    /// `dGamma * 4 / (3 delta) * P A_nn P`.
+    stiffness: Matrix2<f64>,
+    /// Displacement increment the boundary should make in this step.
+    target: [f64; 2],
+}
+
+/// Weight of the ghost ties against the band's material stiffness.
+const GHOST: f64 = 0.1;
+
+/// The band terms of one load step.
+#[derive(Debug, Clone, Default)]
+pub struct BandTerms {
+    points: Vec<BandPoint>,
+    shares: Vec<(usize, f64)>,
+    /// Ghost ties `([I, J, K], stiffness)`: active nodes beyond a supported
+    /// boundary (`I`) and the next two inward (`J`, `K`), whose second
+    /// difference `u_I - 2 u_J + u_K` is penalised. See [`BandTerms::new`].
+    ghosts: Vec<([usize; 3], Matrix2<f64>)>,
+}
+
+impl BandTerms {
+    pub fn new(
+        anchors: &[Anchor],
+        loops: &[BoundaryLoop],
+        points: &MaterialPoints,
+        conn: &Connectivity,
+        grid: &Grid,
+        band_width: f64,
+        load_factor: f64,
+    ) -> Self {
+        let mut terms = BandTerms::default();
+        let mut weights = Vec::with_capacity(4);
+        // Nodes just beyond a supported boundary, with the stiffness and
+        // normal of the first anchor that sees them.
+        let mut beyond: BTreeMap<NodeKey, (Matrix2<f64>, [f64; 2])> = BTreeMap::new();
+        // The current curve of the loop last seen.
+        let mut ring: Option<(usize, Vec<[f64; 2]>)> = None;
+        for (i, a) in anchors.iter().enumerate() {
+            if ring.as_ref().is_none_or(|r| r.0 != a.loop_index) {
+                let l = &loops[a.loop_index];
+                let current = (0..l.points.len())
+                    .map(|k| data_point(l, k, points))
+                    .collect();
+                ring = Some((a.loop_index, current));
+            }
+            let (_, current) = ring.as_ref().expect("set above");
+            let first = terms.shares.len();
+            if !hat_shares(
+                grid,
+                a.position(),
+                &conn.nodes,
+                &mut weights,
+                &mut terms.shares,
+            ) {
+                continue;
+            }
+            let d = bezier_derivative(&local_segment(current, a.segment), a.t);
+            let length = a.weight * (d[0] * d[0] + d[1] * d[1]).sqrt();
+            let a_nn = acoustic_tensor(points, a.point, a.normal);
+            for key in nodes_beyond(grid, a.position(), a.normal) {
+                if conn.nodes.binary_search(&key).is_ok() {
+                    beyond.entry(key).or_insert((a_nn, a.normal));
+                }
+            }
+            let held = projection(a.fix, a.normal);
+            let stiffness = held * a_nn * held * (length * 4.0 / (3.0 * band_width));
+            terms.points.push(BandPoint {
+                anchor: i,
+                first,
+                last: terms.shares.len(),
+                stiffness,
+                target: {
+                    let u = a.prescribed_at(load_factor);
+                    [u[0] - a.moved[0], u[1] - a.moved[1]]
+                },
+            });
+        }
+        for (key, (a_nn, normal)) in beyond {
+            let (i, j) = node_indices(key);
+            // Inward along the grid axis closest to the normal.
+            let (di, dj) = if normal[0].abs() >= normal[1].abs() {
+                (-normal[0].signum() as i64, 0)
+            } else {
+                (0, -normal[1].signum() as i64)
+            };
+            let index = |k: i64| {
+                conn.nodes
+                    .binary_search(&node_key(i + k * di, j + k * dj))
+                    .ok()
+            };
+            if let (Some(a), Some(b), Some(c)) = (index(0), index(1), index(2)) {
+                terms.ghosts.push(([a, b, c], a_nn * GHOST));
+            }
+        }
+        terms
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Node groups the band and the ghost ties couple (for the stiffness
+    /// pattern).
+    pub fn coupling_groups(&self) -> Vec<Vec<u32>> {
+        self.points
+            .iter()
+            .map(|b| {
+                self.shares[b.first..b.last]
+                    .iter()
+                    .map(|&(a, _)| a as u32)
+                    .collect()
+            })
+            .chain(
+                self.ghosts
+                    .iter()
+                    .map(|(n, _)| n.iter().map(|&a| a as u32).collect()),
+            )
+            .collect()
+    }
+
+    /// The grid's displacement increment `u` at a band point.
+    fn increment(&self, b: &BandPoint, u: &[f64]) -> [f64; 2] {
+        let mut v = [0.0; 2];
+        for &(a, n) in &self.shares[b.first..b.last] {
+            v[0] += n * u[2 * a];
+            v[1] += n * u[2 * a + 1];
+        }
+        v
+    }
+
+    /// `K (u_h - target)` at a band point: the force the band exerts on the
+    /// grid (minus the force on the body).
+    fn force(&self, b: &BandPoint, u: &[f64]) -> Vector2<f64> {
+        let v = self.increment(b, u);
+        b.stiffness * Vector2::new(v[0] - b.target[0], v[1] - b.target[1])
+    }
+
+    /// Adds the band's internal force `N_a K (u_h - target)` and the ghost
+    /// ties' `c_a K (u_I - 2 u_J + u_K)` to `f`.
+    pub fn add_forces(&self, u: &[f64], f: &mut [f64]) {
+        for b in &self.points {
+            let force = self.force(b, u);
+            for &(a, n) in &self.shares[b.first..b.last] {
+                f[2 * a] += n * force[0];
+                f[2 * a + 1] += n * force[1];
+            }
+        }
+        for (nodes, k) in &self.ghosts {
+            let mut g = Vector2::zeros();
+            for (&a, c) in nodes.iter().zip(GHOST_STENCIL) {
+                g += c * Vector2::new(u[2 * a], u[2 * a + 1]);
+            }
+            let force = k * g;
+            for (&a, c) in nodes.iter().zip(GHOST_STENCIL) {
+                f[2 * a] += c * force[0];
+                f[2 * a + 1] += c * force[1];
+            }
+        }
+    }
+
+    /// Norm of the band forces at zero increment, `|N_a K target|`: what a
+    /// prescribed displacement asks of the step, a yardstick for residuals
+    /// when nothing else loads the body.
+    pub fn load_norm(&self, n_dofs: usize) -> f64 {
+        let mut f = vec![0.0; n_dofs];
+        self.add_forces(&vec![0.0; n_dofs], &mut f);
+        f.iter().map(|v| v * v).sum::<f64>().sqrt()
+    }
+
+    /// Adds the band's stiffness `N_a N_b K` to tangent values.
+    pub fn add_stiffness(&self, pattern: &Pattern, values: &mut [f64]) {
+        for b in &self.points {
+            let shares = &self.shares[b.first..b.last];
+            for &(a, na) in shares {
+                for &(c, nc) in shares {
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            let added = pattern.add(
+                                values,
+                                2 * a + i,
+                                2 * c + j,
+                                na * nc * b.stiffness[(i, j)],
+                            );
+                            debug_assert!(added, "band couplings are in the pattern");
+                        }
+                    }
+                }
+            }
+        }
+        for (nodes, k) in &self.ghosts {
+            for (&a, ca) in nodes.iter().zip(GHOST_STENCIL) {
+                for (&b, cb) in nodes.iter().zip(GHOST_STENCIL) {
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            let added =
+                                pattern.add(values, 2 * a + i, 2 * b + j, ca * cb * k[(i, j)]);
+                            debug_assert!(added, "ghost couplings are in the pattern");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Per support of the case (`n` of them), the force the band terms exert
+    /// on the body at increment `u`.
+    pub fn reactions(&self, anchors: &[Anchor], u: &[f64], n: usize) -> Vec<[f64; 2]> {
+        let mut out = vec![[0.0; 2]; n];
+        for b in &self.points {
+            let force = self.force(b, u);
+            let r = &mut out[anchors[b.anchor].support];
+            r[0] -= force[0];
+            r[1] -= force[1];
+        }
+        out
+    }
+
+    /// Moves the anchors with the converged increment `u`.
+    pub fn advance(&self, anchors: &mut [Anchor], u: &[f64]) {
+        for b in &self.points {
+            let v = self.increment(b, u);
+            let a = &mut anchors[b.anchor];
+            a.moved[0] += v[0];
+            a.moved[1] += v[1];
+        }
+    }
+}
+
+/// `A_nn[i][j] = A[(2i+K),(2j+L)] n_K n_L` of point `p`'s material tangent
+/// at the start of the step.
+fn acoustic_tensor(points: &MaterialPoints, p: usize, n: [f64; 2]) -> Matrix2<f64> {
+    let material = &points.materials[points.material[p] as usize];
+    let j = points.deformation[p].determinant();
+    let tangent = material
+        .respond(&points.history[p], &Matrix2::zeros(), j)
+        .tangent;
+    Matrix2::from_fn(|i, jj| {
+        let mut sum = 0.0;
+        for k in 0..2 {
+            for l in 0..2 {
+                sum += n[k] * tangent[(2 * i + k, 2 * jj + l)] * n[l];
+            }
+        }
+        sum
+    })
+}
+
+/// The second difference's weights along `[I, J, K]`.
+const GHOST_STENCIL: [f64; 3] = [1.0, -2.0, 1.0];
+
+/// Grid nodes that GIMP domains reaching just past a supported boundary at
+/// `x` (outward normal `n`) can touch: beyond it by at most one cell, and
+/// within one cell of `x` along it.
+fn nodes_beyond(grid: &Grid, x: [f64; 2], n: [f64; 2]) -> impl Iterator<Item = NodeKey> + '_ {
+    let cell = |d: usize| ((x[d] - grid.origin[d]) / grid.h).floor() as i64;
+    let (ci, cj) = (cell(0), cell(1));
+    let tol = 1e-9 * grid.h;
+    (cj - 1..=cj + 2)
+        .flat_map(move |j| (ci - 1..=ci + 2).map(move |i| node_key(i, j)))
+        .filter(move |&key| {
+            let p = grid.node_position(key);
+            let r = [p[0] - x[0], p[1] - x[1]];
+            let out = r[0] * n[0] + r[1] * n[1];
+            let along = (r[0] * n[1] - r[1] * n[0]).abs();
+            out > tol && out <= grid.h + tol && along <= grid.h + tol
+        })
+}
+
+/// The components a support holds, as a projection.
+fn projection(fix: Fix, n: [f64; 2]) -> Matrix2<f64> {
+    match fix {
+        Fix::Xy => Matrix2::identity(),
+        Fix::X => Matrix2::new(1.0, 0.0, 0.0, 0.0),
+        Fix::Y => Matrix2::new(0.0, 0.0, 0.0, 1.0),
+        Fix::Normal => Matrix2::new(n[0] * n[0], n[0] * n[1], n[1] * n[0], n[1] * n[1]),
+    }
+}
