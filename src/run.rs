@@ -103,6 +103,7 @@ struct StepSummary<'a> {
     timings: &'a mpm::output::StepTimings,
     probes: std::collections::BTreeMap<&'a str, ProbeSummary>,
     reactions: &'a [[f64; 2]],
+    applied_load: [f64; 2],
 }
 
 #[derive(Serialize)]
@@ -145,6 +146,7 @@ impl<'a> Summary<'a> {
                         })
                         .collect(),
                     reactions: &s.reactions,
+                    applied_load: s.applied_load,
                 })
                 .collect(),
         }

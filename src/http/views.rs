@@ -110,6 +110,8 @@ pub struct StepReactions {
     pub step: usize,
     pub load_factor: f64,
     pub supports: Vec<[f64; 2]>,
+    /// Resultant of the applied loads; the supports balance it.
+    pub applied_load: [f64; 2],
 }
 
 #[derive(Debug, Serialize)]
@@ -144,6 +146,7 @@ impl ResultView {
                     step: s.step,
                     load_factor: s.load_factor,
                     supports: s.reactions.clone(),
+                    applied_load: s.applied_load,
                 })
                 .collect(),
             newton: steps

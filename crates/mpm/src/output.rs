@@ -61,6 +61,12 @@ pub struct StepReport {
     /// Force each support exerts on the body, in the order of the case's
     /// `supports`.
     pub reactions: Vec<[f64; 2]>,
+    /// Resultant of the loads applied to the grid in this step (gravity,
+    /// point loads and boundary loads on the converged boundary): at
+    /// equilibrium the reactions add up to minus this. (Zero in steps
+    /// stored before it was reported.)
+    #[serde(default)]
+    pub applied_load: [f64; 2],
 }
 
 /// Summary of a whole run.

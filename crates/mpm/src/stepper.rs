@@ -203,6 +203,7 @@ impl Simulation {
         }
         let mut timings = eq.timings;
         timings.grid = grid_seconds;
+        let applied_load = [0, 1].map(|c| eq.f_ext.iter().skip(c).step_by(2).sum());
         let responses = std::mem::take(&mut eq.responses);
         let band = std::mem::take(&mut eq.band);
         self.update_points(&conn, &u, &responses);
@@ -220,6 +221,7 @@ impl Simulation {
             active_dofs: conn.n_dofs() - fixed.iter().filter(|f| **f).count(),
             probes: self.probe_reports(),
             reactions,
+            applied_load,
         })
     }
 
