@@ -7,8 +7,10 @@
 //! - `mpm serve` runs the HTTP job service (see the README and openapi.yaml).
 
 mod bench;
+mod plot;
 mod run;
 mod serve;
+mod study;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -60,6 +62,18 @@ enum Command {
         #[arg(long, default_value_t = 21)]
         repeats: usize,
     },
+    /// Convergence studies written as tables (CSV, markdown) and SVG plots.
+    Study {
+        /// Which study: `cantilever` (the paper's Figure 3, both support
+        /// methods, and the IBM band width).
+        name: String,
+        /// Output directory.
+        #[arg(long, default_value = "study")]
+        out: PathBuf,
+        /// A small sweep (two cell sizes, three point counts) in seconds.
+        #[arg(long)]
+        quick: bool,
+    },
     /// Run the HTTP job service (every flag also reads an environment variable).
     Serve(serve::ServeArgs),
     /// One row of `mpm bench`, printed as JSON (used by `mpm bench`).
@@ -83,6 +97,12 @@ fn main() -> ExitCode {
             repeats,
         } => bench::bench(max_points, &out, repeats),
         Command::BenchRow { scene, points } => bench::bench_row(scene, points),
+        Command::Study { name, out, quick } => match name.as_str() {
+            "cantilever" => study::cantilever(&out, quick),
+            other => Err(CliError::input(format!(
+                "no study {other:?}; available: cantilever"
+            ))),
+        },
         Command::Serve(args) => serve::serve(args),
     };
     match result {

@@ -102,7 +102,10 @@ impl Simulation {
             },
             boundary_loads: select(&case.loads.boundary, &loops, &points, grid.h),
             anchors: ibm::anchors(&case.supports, &loops, &points, &grid),
-            band_width: case.boundary.band_width.unwrap_or(0.01 * grid.h),
+            band_width: case
+                .boundary
+                .band_width
+                .unwrap_or(ibm::DEFAULT_BAND_WIDTH * grid.h),
             loops,
             points,
             gravity: case.loads.gravity.unwrap_or([0.0, 0.0]),

@@ -66,31 +66,38 @@ pub fn set_offsets(
 
 /// The segments of each loop that `selector` picks in the reference
 /// configuration, as `(loop index, segments)` for loops with any: a segment
-/// is picked when both its end points are within one point spacing (twice
-/// the domain's half width, 1% more for round-off) of the selection. The
-/// outer points of a grid-aligned edge sit half a spacing inside it; those
-/// of a curved edge filled on a Cartesian lattice, up to about one spacing.
-/// Only loop points are candidates, so on a rectangle the tolerance cannot
-/// reach round a corner: the second point along the neighbouring side is
-/// one and a half spacings from the selected edge.
+/// is picked when both its end data points (reference positions, offsets
+/// set) are within one and a half domain half-widths of the selection
+/// (plus round-off). Data points on the material edge lie on a straight
+/// selected side; through the points they sit one half-width inside it;
+/// on a curved edge filled on a Cartesian lattice, up to about that. Round
+/// a corner the next data point is two half-widths (edge) or three (points)
+/// from the selected side, so the selection stops at the corner. (Testing
+/// the material points with a wider tolerance, as before, caught the first
+/// segment of a polar sector's inner arc next to a radial edge: a roller
+/// there with the arc's normal held the arc and stiffened a Lame cylinder
+/// by 8%.)
 pub fn selected_segments(
     selector: &crate::case::Selector,
     loops: &[BoundaryLoop],
     points: &MaterialPoints,
     h: f64,
 ) -> Vec<(usize, Vec<usize>)> {
-    let on = |p: usize| {
-        let hw = points.domain[p].half_width;
-        selector.contains(points.reference[p], 2.02 * hw[0].max(hw[1]) + 1e-9 * h)
-    };
     loops
         .iter()
         .enumerate()
         .filter_map(|(l, lp)| {
             let n = lp.points.len();
-            let segments: Vec<usize> = (0..n)
-                .filter(|&k| on(lp.points[k]) && on(lp.points[(k + 1) % n]))
-                .collect();
+            let on = |k: usize| {
+                let (p, d) = (lp.points[k], lp.offset[k]);
+                let hw = points.domain[p].half_width;
+                let x = points.reference[p];
+                selector.contains(
+                    [x[0] + d[0], x[1] + d[1]],
+                    1.5 * hw[0].max(hw[1]) + 1e-9 * h,
+                )
+            };
+            let segments: Vec<usize> = (0..n).filter(|&k| on(k) && on((k + 1) % n)).collect();
             (!segments.is_empty()).then_some((l, segments))
         })
         .collect()
