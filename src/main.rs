@@ -73,6 +73,9 @@ enum Command {
         /// A small sweep (two cell sizes, three point counts) in seconds.
         #[arg(long)]
         quick: bool,
+        /// Shape functions: linear (the paper's) or gimp.
+        #[arg(long, default_value = "linear")]
+        basis: String,
     },
     /// Run the HTTP job service (every flag also reads an environment variable).
     Serve(serve::ServeArgs),
@@ -97,8 +100,13 @@ fn main() -> ExitCode {
             repeats,
         } => bench::bench(max_points, &out, repeats),
         Command::BenchRow { scene, points } => bench::bench_row(scene, points),
-        Command::Study { name, out, quick } => match name.as_str() {
-            "cantilever" => study::cantilever(&out, quick),
+        Command::Study {
+            name,
+            out,
+            quick,
+            basis,
+        } => match name.as_str() {
+            "cantilever" => study::cantilever(&out, quick, &basis),
             other => Err(CliError::input(format!(
                 "no study {other:?}; available: cantilever"
             ))),

@@ -74,9 +74,10 @@ struct Measured {
 }
 
 /// The paper's case at cell size `h` with `3.5 rows x rows` points.
-fn case(method: Method, h: f64, rows: usize, band_width: Option<f64>) -> Value {
+fn case(method: Method, h: f64, rows: usize, band_width: Option<f64>, basis: &str) -> Value {
     let mut case: Value = serde_json::from_str(mpm::examples::get("cantilever").expect("built in"))
         .expect("valid JSON");
+    case["basis"] = basis.into();
     case["grid"]["cell_size"] = h.into();
     case["bodies"][0]["points"] = json!({ "count": [rows * 7 / 2, rows] });
     let mut probes = vec![json!({ "name": "tip", "at": [10.0, 1.0] })];
@@ -103,8 +104,14 @@ fn solve(case: &Case) -> Result<RunReport, String> {
     sim.run(&mut NoObserver).map_err(|e| e.to_string())
 }
 
-fn measure(method: Method, h: f64, rows: usize, band_width: Option<f64>) -> Result<Run, CliError> {
-    let json = case(method, h, rows, band_width);
+fn measure(
+    method: Method,
+    h: f64,
+    rows: usize,
+    band_width: Option<f64>,
+    basis: &str,
+) -> Result<Run, CliError> {
+    let json = case(method, h, rows, band_width, basis);
     let case = Case::from_json(&json.to_string())
         .map_err(|e| CliError::failed(format!("study case: {e}")))?;
     let mut times = Vec::new();
@@ -146,8 +153,14 @@ fn summarise(report: &RunReport) -> Measured {
 }
 
 /// Runs the study and writes `cantilever.{csv,md}` and three SVG plots to
-/// `out`. `quick` sweeps the two coarsest cells and three point counts.
-pub fn cantilever(out: &Path, quick: bool) -> Result<(), CliError> {
+/// `out`. `quick` sweeps the two coarsest cells and three point counts;
+/// `basis` is `linear` (the paper's) or `gimp`.
+pub fn cantilever(out: &Path, quick: bool, basis: &str) -> Result<(), CliError> {
+    if !matches!(basis, "linear" | "gimp") {
+        return Err(CliError::input(format!(
+            "--basis must be linear or gimp, got {basis:?}"
+        )));
+    }
     fs::create_dir_all(out)?;
     let cells = if quick { &CELLS[..2] } else { &CELLS[..] };
     let rows = if quick { &ROWS[..3] } else { &ROWS[..] };
@@ -157,22 +170,22 @@ pub fn cantilever(out: &Path, quick: bool) -> Result<(), CliError> {
             // At least one point per cell through the depth: with fewer,
             // whole cells inside the beam are empty.
             for &n in rows.iter().filter(|&&n| 2.0 / n as f64 <= h) {
-                let run = measure(method, h, n, None)?;
+                let run = measure(method, h, n, None, basis)?;
                 eprintln!("{}", progress_line(&run));
                 runs.push(run);
             }
         }
     }
-    let delta_runs = band_width_study(quick)?;
+    let delta_runs = band_width_study(quick, basis)?;
     let (paper_ibm, paper_grid) = (
-        paper_case_time(Method::Ibm)?,
-        paper_case_time(Method::Grid)?,
+        paper_case_time(Method::Ibm, basis)?,
+        paper_case_time(Method::Grid, basis)?,
     );
 
     fs::write(out.join("cantilever.csv"), csv(&runs, &delta_runs))?;
     fs::write(
         out.join("cantilever.md"),
-        markdown(&runs, &delta_runs, paper_ibm, paper_grid, quick),
+        markdown(&runs, &delta_runs, paper_ibm, paper_grid, quick, basis),
     )?;
     write_plots(out, &runs, cells)?;
     eprintln!("wrote {}", out.display());
@@ -200,11 +213,11 @@ fn progress_line(run: &Run) -> String {
 
 /// The IBM band width from h / 10 to h / 10^5 on the paper's point count
 /// at h = 0.375 m (three points per cell each way).
-fn band_width_study(quick: bool) -> Result<Vec<Run>, CliError> {
+fn band_width_study(quick: bool, basis: &str) -> Result<Vec<Run>, CliError> {
     let h = if quick { 0.75 } else { 0.375 };
     (1..=5)
         .map(|k| {
-            let run = measure(Method::Ibm, h, 16, Some(h / 10f64.powi(k)))?;
+            let run = measure(Method::Ibm, h, 16, Some(h / 10f64.powi(k)), basis)?;
             eprintln!("{}", progress_line(&run));
             Ok(run)
         })
@@ -213,8 +226,8 @@ fn band_width_study(quick: bool) -> Result<Vec<Run>, CliError> {
 
 /// Median wall time of the paper's case itself (896 points, 1.5 m cells)
 /// over 21 runs.
-fn paper_case_time(method: Method) -> Result<f64, CliError> {
-    let case = Case::from_json(&case(method, 1.5, 16, None).to_string())
+fn paper_case_time(method: Method, basis: &str) -> Result<f64, CliError> {
+    let case = Case::from_json(&case(method, 1.5, 16, None, basis).to_string())
         .map_err(|e| CliError::failed(format!("study case: {e}")))?;
     let mut times = Vec::new();
     for _ in 0..21 {
@@ -285,14 +298,15 @@ fn markdown(
     paper_ibm: f64,
     paper_grid: f64,
     quick: bool,
+    basis: &str,
 ) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Cantilever convergence study\n");
     let _ = writeln!(
         s,
-        "Written by `mpm study cantilever{}`: the paper's case (10 m x 2 m, Hencky, \
-         E = 1 MPa, nu = 0.25, 1500 Pa follower pressure on the top in 5 steps, linear \
-         basis) with `3.5n x n` points and cells of h. `ibm`: supports by the implicit \
+        "Written by `mpm study cantilever --basis {basis}{}`: the paper's case (10 m x 2 m, \
+         Hencky, E = 1 MPa, nu = 0.25, 1500 Pa follower pressure on the top in 5 steps, \
+         {basis} basis) with `3.5n x n` points and cells of h. `ibm`: supports by the implicit \
          boundary method (rollers on x = 0, the boundary stretch at (0, 1) fixed, \
          delta = h/100), grid origin (0, 0). `grid`: rollers on the nodes of x = 0 and \
          the node (0, 1) pinned, grid origin (0, 1). Errors are relative, against the \
@@ -404,11 +418,12 @@ fn write_plots(out: &Path, runs: &[Run], cells: &[f64]) -> Result<(), CliError> 
         let mut all = Vec::new();
         for method in [Method::Ibm, Method::Grid] {
             for (k, &h) in cells.iter().enumerate() {
-                let points: Vec<(f64, f64)> = runs
+                let mut points: Vec<(f64, f64)> = runs
                     .iter()
                     .filter(|r| r.method == method && r.h == h)
                     .filter_map(|r| r.outcome.as_ref().ok().and_then(|m| value(r, m)))
                     .collect();
+                points.sort_by(|a, b| a.0.total_cmp(&b.0));
                 if !points.is_empty() {
                     all.push(Series {
                         label: format!("{} h = {h} m", method.name()),
