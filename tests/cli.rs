@@ -99,3 +99,58 @@ fn failed_solve_exits_1_and_says_where() {
         "{err}"
     );
 }
+
+/// `mpm study cantilever --quick`: every sweep row is in the CSV with a
+/// number or a failure reason, the markdown has both support methods and
+/// the band width table, and the three plots are SVG.
+#[test]
+fn quick_study_writes_tables_and_plots() {
+    let out = temp_dir("study");
+    let status = mpm()
+        .args(["study", "cantilever", "--quick", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let csv = std::fs::read_to_string(out.join("cantilever.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    // Two methods x (h = 1.5: 3 point counts; h = 0.75: 3) + 5 band widths.
+    assert_eq!(rows.len(), 2 * 6 + 5, "{csv}");
+    for row in &rows {
+        let fields: Vec<&str> = row.split(',').collect();
+        let converged = fields[6].parse::<f64>().is_ok_and(|v| v < 0.0);
+        let failed = !fields.last().unwrap().is_empty();
+        assert!(converged != failed, "{row}");
+    }
+    // The paper's case itself (IBM, 1.5 m cells, 896 points) converges.
+    assert!(
+        rows.iter()
+            .any(|r| r.starts_with("sweep,ibm,1.5,896,,") && r.ends_with(',')),
+        "{csv}"
+    );
+    let md = std::fs::read_to_string(out.join("cantilever.md")).unwrap();
+    for heading in [
+        "## Supports: ibm",
+        "## Supports: grid",
+        "## Band width (IBM)",
+    ] {
+        assert!(md.contains(heading), "{md}");
+    }
+    for plot in ["tip", "relative", "error"] {
+        let svg = std::fs::read_to_string(out.join(format!("cantilever-{plot}.svg"))).unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.contains("<polyline"),
+            "{plot}"
+        );
+    }
+    let bad = mpm()
+        .args(["study", "cantilever", "--basis", "quadratic", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+}
