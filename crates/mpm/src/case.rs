@@ -532,6 +532,21 @@ impl Case {
                         "prescribed displacements need \"method\": \"ibm\"",
                     ));
                 }
+                let free = match s.fix {
+                    Fix::X => Some((1, "y")),
+                    Fix::Y => Some((0, "x")),
+                    Fix::Xy | Fix::Normal => None,
+                };
+                if let Some((c, name)) = free
+                    && d[c] != 0.0
+                {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].displacement"),
+                        format!(
+                            "the {name} component is not held (fix is not {name} or xy), so it cannot be prescribed"
+                        ),
+                    ));
+                }
             }
             if let Some(r) = s.rotation {
                 if !r.angle.is_finite() {
@@ -547,10 +562,25 @@ impl Case {
                         "prescribed rotations need \"method\": \"ibm\"",
                     ));
                 }
+                if s.fix != Fix::Xy {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].rotation"),
+                        "a prescribed rotation needs \"fix\": \"xy\" (a roller's wall does not turn)",
+                    ));
+                }
             }
         }
         if let Some(b) = self.boundary.band_width {
             positive("boundary.band_width", b)?;
+            if b >= self.grid.cell_size {
+                return Err(CaseError::new(
+                    "boundary.band_width",
+                    format!(
+                        "must be smaller than the cell size ({}): the band is a thin layer along the boundary",
+                        self.grid.cell_size
+                    ),
+                ));
+            }
         }
         for (i, p) in self.probes.iter().enumerate() {
             if p.name.trim().is_empty() {
@@ -857,5 +887,46 @@ mod tests {
         assert!(s.contains([1e-12, 2.0], 1e-9));
         assert!(!s.contains([0.0, 2.1], 1e-9));
         assert!(!s.contains([0.1, 1.0], 1e-9));
+    }
+
+    #[test]
+    fn segment_selector_measures_distance_to_the_segment() {
+        let s = Selector {
+            segment: Some([[0.0, 0.0], [1.0, 1.0]]),
+            ..Default::default()
+        };
+        assert!(s.contains([0.5, 0.5], 1e-9));
+        assert!(s.contains([0.5, 0.6], 0.08)); // 0.0707 from the line
+        assert!(!s.contains([0.5, 0.6], 0.06));
+        assert!(!s.contains([1.1, 1.1], 0.1)); // beyond the end: 0.141
+    }
+
+    #[test]
+    fn ibm_only_options_and_unheld_components_are_rejected_with_paths() {
+        let set = |f: &dyn Fn(&mut serde_json::Value)| {
+            let mut v = column_json();
+            f(&mut v);
+            error_for(v)
+        };
+        let e = set(&|v| v["supports"][0]["fix"] = "normal".into());
+        assert_eq!(e.path, "supports[0].fix");
+        let e = set(&|v| v["supports"][0]["displacement"] = serde_json::json!([0.1, 0.0]));
+        assert_eq!(e.path, "supports[0].displacement");
+        assert!(e.message.contains("ibm"), "{e}");
+        // fix x: a y displacement is not held.
+        let e = set(&|v| {
+            v["supports"][0]["method"] = "ibm".into();
+            v["supports"][0]["displacement"] = serde_json::json!([0.0, 0.1]);
+        });
+        assert_eq!(e.path, "supports[0].displacement");
+        assert!(e.message.contains("y component"), "{e}");
+        let e = set(&|v| {
+            v["supports"][0]["method"] = "ibm".into();
+            v["supports"][0]["rotation"] = serde_json::json!({"angle": 5.0, "center": [0, 0]});
+        });
+        assert_eq!(e.path, "supports[0].rotation");
+        let e = set(&|v| v["boundary"] = serde_json::json!({"band_width": 10.0}));
+        assert_eq!(e.path, "boundary.band_width");
+        assert!(e.message.contains("cell size"), "{e}");
     }
 }

@@ -63,8 +63,9 @@ pub struct StepReport {
     pub reactions: Vec<[f64; 2]>,
     /// Resultant of the loads applied to the grid in this step (gravity,
     /// point loads and boundary loads on the converged boundary): at
-    /// equilibrium the reactions add up to minus this. (Zero in steps
-    /// stored before it was reported.)
+    /// equilibrium the reactions add up to minus this, unless two grid
+    /// supports hold the same component of a node (both then report its
+    /// force). Zero in steps stored before it was reported.
     #[serde(default)]
     pub applied_load: [f64; 2],
 }

@@ -282,3 +282,37 @@ fn curved_rollers_hold_the_normal_component() {
         assert!(outer.abs() < 2e-3, "turned {turn}: {outer:e}");
     }
 }
+
+/// An IBM support whose selector misses the boundary is an error naming it
+/// (otherwise the body would float on the soft background).
+#[test]
+fn an_ibm_support_that_selects_nothing_is_an_error() {
+    let mut case = patch([0.0, 0.0], "gimp", None, 0.01);
+    case["supports"][1]["on"] = json!({ "y": -0.5 });
+    let case = mpm::Case::from_json(&case.to_string()).unwrap();
+    match mpm::Simulation::new(&case) {
+        Err(e) => assert_eq!(e.path, "supports[1].on"),
+        Ok(_) => panic!("accepted a support that selects nothing"),
+    }
+}
+
+/// Grid-node and IBM supports together: the block's left side on grid-node
+/// rollers (aligned grid), its bottom on IBM rollers, the stretch by the
+/// IBM. Each support reports the force on the body: the two x reactions
+/// balance, and the band's force on the grid-held corner nodes is not
+/// counted twice.
+#[test]
+fn grid_and_ibm_supports_split_the_reactions() {
+    let mut case = patch([0.0, 0.0], "gimp", None, 0.01);
+    case["supports"][0] = json!({ "on": { "x": 0.0 }, "fix": "x" });
+    let (_, report) = run(&case);
+    let r = &report.steps[0].reactions;
+    let sxx = E / (1.0 - NU * NU) * 0.01;
+    eprintln!("reactions {r:?}, sigma_xx {sxx}");
+    assert!((r[0][0] + r[2][0]).abs() < 1e-9 * sxx, "{r:?}");
+    assert!((r[2][0] - sxx).abs() < 0.5 * 0.01 * sxx, "{r:?}");
+    assert!(
+        r[1][0].abs() < 1e-9 * sxx && r[1][1].abs() < 1e-9 * sxx,
+        "{r:?}"
+    );
+}

@@ -67,16 +67,17 @@ pub fn set_offsets(
 /// The segments of each loop that `selector` picks in the reference
 /// configuration, as `(loop index, segments)` for loops with any: a segment
 /// is picked when both its end data points (reference positions, offsets
-/// set) are within one and a half domain half-widths of the selection
-/// (plus round-off). Data points on the material edge lie on a straight
-/// selected side; through the points they sit one half-width inside it;
-/// on a curved edge filled on a Cartesian lattice, up to about that. Round
-/// a corner the next data point is two half-widths (edge) or three (points)
-/// from the selected side, so the selection stops at the corner. (Testing
-/// the material points with a wider tolerance, as before, caught the first
-/// segment of a polar sector's inner arc next to a radial edge: a roller
-/// there with the arc's normal held the arc and stiffened a Lame cylinder
-/// by 8%.)
+/// set) are near the selection: within 1.5 domain half-widths of it for the
+/// material edge (whose data points lie on a straight selected side, and
+/// within about a half-width of a curved edge filled on a Cartesian
+/// lattice), within 2.02 half-widths through the points (which sit a
+/// half-width inside a straight side and up to about two inside such a
+/// curved edge). Round a rectangle's corner the next data point is two
+/// half-widths (edge) or three (points) from the selected side, so the
+/// selection stops at the corner. (Testing the material points with the
+/// wider tolerance for both, as before, caught the first segment of a polar
+/// sector's inner arc next to a radial edge: a roller there with the arc's
+/// normal held the arc.)
 pub fn selected_segments(
     selector: &crate::case::Selector,
     loops: &[BoundaryLoop],
