@@ -86,7 +86,7 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), CliErr
     report.push_str("## Small case end to end\n\n");
     report.push_str(&format!(
         "The paper's cantilever (`mpm example cantilever`: {points} points, 1.5 m cells, 1500 Pa follower \
-         pressure on the B-spline boundary in 5 load steps, grid-node supports), `Simulation::new` + `run`, no \
+         pressure on the B-spline boundary in 5 load steps, supports by the implicit boundary method), `Simulation::new` + `run`, no \
          file output: median **{:.1} ms** over {repeats} runs (min {:.1}, max {:.1}).\n\n",
         median * 1e3,
         min * 1e3,
