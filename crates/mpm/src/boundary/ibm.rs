@@ -580,3 +580,43 @@ fn projection(fix: Fix, n: [f64; 2]) -> Matrix2<f64> {
         Fix::Normal => Matrix2::new(n[0] * n[0], n[0] * n[1], n[1] * n[0], n[1] * n[1]),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn winding_number_tells_inside_from_outside_either_way_round() {
+        let ccw = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        assert_eq!(winding_number([0.5, 0.5], &ccw), 1);
+        assert_eq!(winding_number([1.5, 0.5], &ccw), 0);
+        let cw: Vec<[f64; 2]> = ccw.iter().rev().copied().collect();
+        assert_eq!(winding_number([0.5, 0.5], &cw), -1);
+        assert_eq!(winding_number([-0.5, 0.5], &cw), 0);
+    }
+
+    #[test]
+    fn nodes_beyond_a_grid_aligned_side_are_the_next_column_out() {
+        let grid = Grid {
+            h: 1.0,
+            origin: [0.0, 0.0],
+        };
+        // An anchor on x = 0 that has moved a hair left: the nodes on x = 0
+        // are not beyond it, those on x = -1 within a cell along it are.
+        let found: Vec<[f64; 2]> = nodes_beyond(&grid, [-1e-4, 2.3], [-1.0, 0.0])
+            .map(|k| grid.node_position(k))
+            .collect();
+        assert_eq!(found, vec![[-1.0, 2.0], [-1.0, 3.0]]);
+    }
+
+    #[test]
+    fn projections_hold_the_right_components() {
+        let n = [0.6, 0.8];
+        let p = projection(Fix::Normal, n);
+        let v = p * Vector2::new(0.8, -0.6); // tangential
+        assert!(v.norm() < 1e-15);
+        let v = p * Vector2::new(0.6, 0.8);
+        assert!((v - Vector2::new(0.6, 0.8)).norm() < 1e-15);
+        assert_eq!(projection(Fix::X, n), Matrix2::new(1.0, 0.0, 0.0, 0.0));
+    }
+}
