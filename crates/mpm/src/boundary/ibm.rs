@@ -99,7 +99,8 @@ pub struct Anchor {
     t: f64,
     weight: f64,
     /// The material point next to it (the nearer end of the segment): its
-    /// tangent stiffness and deformation gradient stand for the band's.
+    /// tangent stiffness stands for the band's, and it carries the anchor
+    /// in a step where the anchor touches no active node.
     point: usize,
     fix: Fix,
     /// Outward unit normal of the reference curve: the wall a roller slides
