@@ -57,15 +57,7 @@ fn with_supports(h: f64, representation: &str, supports: serde_json::Value) -> s
 /// `(tip horizontal, tip deflection relative to the left edge's mean, seconds)`
 /// at p = 1500 Pa.
 fn measure(h: f64, representation: &str) -> (f64, f64, f64) {
-    let start = Instant::now();
-    let (_, report) = run(&cantilever(h, representation));
-    let seconds = start.elapsed().as_secs_f64();
-    let probes = &report.steps[0].probes;
-    let tip = probes[0].displacement;
-    // Trapezoidal mean of the left edge's vertical displacement.
-    let left: Vec<f64> = probes[1..].iter().map(|p| p.displacement[1]).collect();
-    let mean = (left[1..8].iter().sum::<f64>() + 0.5 * (left[0] + left[8])) / 8.0;
-    (SCALE * tip[0], SCALE * (tip[1] - mean), seconds)
+    measure_case(cantilever(h, representation), h, [0.0, 0.0])
 }
 
 #[test]
@@ -138,7 +130,8 @@ fn ibm_supports() -> serde_json::Value {
     ])
 }
 
-/// `measure` for a case with the grid's origin moved by `shift` cells.
+/// `measure` for any of these cases, with the grid's origin moved by `shift`
+/// cells.
 fn measure_case(mut case: serde_json::Value, h: f64, shift: [f64; 2]) -> (f64, f64, f64) {
     case["grid"]["origin"] = json!([shift[0] * h, shift[1] * h]);
     let start = Instant::now();
@@ -146,6 +139,7 @@ fn measure_case(mut case: serde_json::Value, h: f64, shift: [f64; 2]) -> (f64, f
     let seconds = start.elapsed().as_secs_f64();
     let probes = &report.steps[0].probes;
     let tip = probes[0].displacement;
+    // Trapezoidal mean of the left edge's vertical displacement.
     let left: Vec<f64> = probes[1..].iter().map(|p| p.displacement[1]).collect();
     let mean = (left[1..8].iter().sum::<f64>() + 0.5 * (left[0] + left[8])) / 8.0;
     (SCALE * tip[0], SCALE * (tip[1] - mean), seconds)

@@ -13,28 +13,39 @@ const E: f64 = 1.0e6;
 const NU: f64 = 0.3;
 const H: f64 = 0.25;
 
-/// Unit block of small-strain material, 8 x 8 points, cells of 0.25 m
-/// with the grid's origin at `origin`: rollers by the IBM on x = 0 and
-/// y = 0, the right side pulled by a prescribed x displacement `stretch`,
-/// the top free.
-fn patch(origin: [f64; 2], basis: &str, band_width: Option<f64>, stretch: f64) -> Value {
-    let mut case = json!({
+/// Unit block of `model` material, 8 x 8 points, GIMP, cells of 0.25 m with
+/// the grid's origin at `origin`, on `supports`, in `steps` load steps,
+/// with a probe at its top right corner.
+fn block(origin: [f64; 2], model: &str, steps: usize, supports: Value) -> Value {
+    json!({
         "version": 1,
-        "analysis": { "load_steps": 1 },
+        "analysis": { "load_steps": steps },
         "grid": { "cell_size": H, "origin": origin },
-        "basis": basis,
+        "basis": "gimp",
         "bodies": [{
             "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [1.0, 1.0] } },
             "points": { "count": [8, 8] },
-            "material": { "model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": NU, "density": 0.0 }
+            "material": { "model": model, "youngs_modulus": E, "poisson_ratio": NU, "density": 0.0 }
         }],
-        "supports": [
+        "supports": supports,
+        "probes": [ { "name": "corner", "at": [1.0, 1.0] } ]
+    })
+}
+
+/// The small-strain block with rollers by the IBM on x = 0 and y = 0, the
+/// right side pulled by a prescribed x displacement `stretch`, the top free.
+fn patch(origin: [f64; 2], basis: &str, band_width: Option<f64>, stretch: f64) -> Value {
+    let mut case = block(
+        origin,
+        "linear_elastic",
+        1,
+        json!([
             { "on": { "x": 0.0 }, "fix": "normal", "method": "ibm" },
             { "on": { "y": 0.0 }, "fix": "normal", "method": "ibm" },
             { "on": { "x": 1.0 }, "fix": "x", "method": "ibm", "displacement": [stretch, 0.0] }
-        ],
-        "probes": [ { "name": "corner", "at": [1.0, 1.0] } ]
-    });
+        ]),
+    );
+    case["basis"] = basis.into();
     if let Some(d) = band_width {
         case["boundary"] = json!({ "band_width": d });
     }
@@ -129,21 +140,15 @@ fn patch_test_error_is_linear_in_the_band_width() {
 fn prescribed_rigid_rotation_leaves_the_block_unstressed() {
     let angle = 30.0f64;
     let center = [0.0, 0.5];
-    let case = json!({
-        "version": 1,
-        "analysis": { "load_steps": 6 },
-        "grid": { "cell_size": H, "origin": [0.1, 0.07] },
-        "basis": "gimp",
-        "bodies": [{
-            "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [1.0, 1.0] } },
-            "points": { "count": [8, 8] },
-            "material": { "model": "hencky", "youngs_modulus": E, "poisson_ratio": NU, "density": 0.0 }
-        }],
-        "supports": [
+    let case = block(
+        [0.1, 0.07],
+        "hencky",
+        6,
+        json!([
             { "on": { "x": 0.0 }, "fix": "xy", "method": "ibm",
               "rotation": { "angle": angle, "center": center } }
-        ]
-    });
+        ]),
+    );
     let (sim, report) = run(&case);
     let (s, c) = angle.to_radians().sin_cos();
     let mp = &sim.points;
@@ -329,23 +334,16 @@ fn grid_and_ibm_supports_split_the_reactions() {
 /// row of points crosses into the next cell row.)
 #[test]
 fn block_squeezed_to_half_its_height_on_a_cut_grid() {
-    let case = json!({
-        "version": 1,
-        "analysis": { "load_steps": 10 },
-        "grid": { "cell_size": H, "origin": [0.1, 0.07] },
-        "basis": "gimp",
-        "bodies": [{
-            "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [1.0, 1.0] } },
-            "points": { "count": [8, 8] },
-            "material": { "model": "hencky", "youngs_modulus": E, "poisson_ratio": NU, "density": 0.0 }
-        }],
-        "supports": [
+    let case = block(
+        [0.1, 0.07],
+        "hencky",
+        10,
+        json!([
             { "on": { "x": 0.0 }, "fix": "normal", "method": "ibm" },
             { "on": { "y": 0.0 }, "fix": "normal", "method": "ibm" },
             { "on": { "y": 1.0 }, "fix": "y", "method": "ibm", "displacement": [0.0, -0.5] }
-        ],
-        "probes": [ { "name": "corner", "at": [1.0, 1.0] } ]
-    });
+        ]),
+    );
     let (sim, report) = run(&case);
     let (lambda, mu) = (
         E * NU / ((1.0 + NU) * (1.0 - 2.0 * NU)),
