@@ -14,19 +14,20 @@ fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
-#[test]
-fn run_writes_summary_step_files_and_a_series() {
-    let out = temp_dir("run");
-    let status = mpm()
-        .args(["run", "--example", "cantilever-grid", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
+/// Runs `mpm ARGS OUT` and requires success.
+fn run_ok(args: &[&str], out: &std::path::Path) {
+    let status = mpm().args(args).arg(out).output().unwrap();
     assert!(
         status.status.success(),
         "{}",
         String::from_utf8_lossy(&status.stderr)
     );
+}
+
+#[test]
+fn run_writes_summary_step_files_and_a_series() {
+    let out = temp_dir("run");
+    run_ok(&["run", "--example", "cantilever-grid", "--out"], &out);
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let steps = summary["steps"].as_array().unwrap();
@@ -106,16 +107,7 @@ fn failed_solve_exits_1_and_says_where() {
 #[test]
 fn quick_study_writes_tables_and_plots() {
     let out = temp_dir("study");
-    let status = mpm()
-        .args(["study", "cantilever", "--quick", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
+    run_ok(&["study", "cantilever", "--quick", "--out"], &out);
     let csv = std::fs::read_to_string(out.join("cantilever.csv")).unwrap();
     let rows: Vec<&str> = csv.lines().skip(1).collect();
     // Two methods x (h = 1.5: 3 point counts; h = 0.75: 3) + 5 band widths.

@@ -166,40 +166,14 @@ impl Simulation {
         let conn = Connectivity::build(&self.grid, self.basis, &self.points, |node| {
             self.node_in_grid(node)
         });
-        let loading = BoundaryLoading::new(
-            &self.grid,
-            &conn,
-            &self.points,
-            &self.loops,
-            &self.boundary_loads,
-            load_factor,
-        );
-        let band = BandTerms::new(
-            &self.anchors,
-            &self.loops,
-            &self.points,
-            &conn,
-            &self.grid,
-            self.band_width,
-            load_factor,
-        );
-        let mut groups = loading.coupling_groups();
-        groups.extend(band.coupling_groups());
-        let pattern = Pattern::build(&conn, &groups);
+        let (boundary, pattern) = self.boundary_terms(&conn, load_factor);
         let fixed = self.constrained_dofs(&conn);
         let f_ext = self.external_force(&conn, load_factor);
         let soft = self.soft_cells(&conn);
         let grid_seconds = started.elapsed().as_secs_f64();
 
-        let mut eq = StepEquilibrium::new(
-            &conn,
-            &pattern,
-            &self.points,
-            &fixed,
-            f_ext,
-            soft,
-            BoundaryTerms { loading, band },
-        );
+        let mut eq =
+            StepEquilibrium::new(&conn, &pattern, &self.points, &fixed, f_ext, soft, boundary);
         let (u, newton) = newton::solve(&mut eq, &self.settings, step, observer)?;
 
         let update_start = Instant::now();
@@ -235,6 +209,36 @@ impl Simulation {
             reactions,
             applied_load,
         })
+    }
+
+    /// The boundary curves' loads and IBM supports in a step, and the
+    /// stiffness pattern with the couplings they add.
+    fn boundary_terms<'a>(
+        &'a self,
+        conn: &'a Connectivity,
+        load_factor: f64,
+    ) -> (BoundaryTerms<'a>, Pattern) {
+        let loading = BoundaryLoading::new(
+            &self.grid,
+            conn,
+            &self.points,
+            &self.loops,
+            &self.boundary_loads,
+            load_factor,
+        );
+        let band = BandTerms::new(
+            &self.anchors,
+            &self.loops,
+            &self.points,
+            conn,
+            &self.grid,
+            self.band_width,
+            load_factor,
+        );
+        let mut groups = loading.coupling_groups();
+        groups.extend(band.coupling_groups());
+        let pattern = Pattern::build(conn, &groups);
+        (BoundaryTerms { loading, band }, pattern)
     }
 
     /// Whether a node lies in the grid's extent (with a tolerance of 1e-9 h).
@@ -607,26 +611,7 @@ mod tests {
         let sim = Simulation::new(case).unwrap();
         let load_factor = 1.0 / sim.load_steps as f64;
         let conn = Connectivity::build(&sim.grid, sim.basis, &sim.points, |n| sim.node_in_grid(n));
-        let loading = BoundaryLoading::new(
-            &sim.grid,
-            &conn,
-            &sim.points,
-            &sim.loops,
-            &sim.boundary_loads,
-            load_factor,
-        );
-        let band = BandTerms::new(
-            &sim.anchors,
-            &sim.loops,
-            &sim.points,
-            &conn,
-            &sim.grid,
-            sim.band_width,
-            load_factor,
-        );
-        let mut groups = loading.coupling_groups();
-        groups.extend(band.coupling_groups());
-        let pattern = Pattern::build(&conn, &groups);
+        let (boundary, pattern) = sim.boundary_terms(&conn, load_factor);
         let fixed = sim.constrained_dofs(&conn);
         let f_ext = sim.external_force(&conn, load_factor);
         let mut eq = StepEquilibrium::new(
@@ -636,13 +621,12 @@ mod tests {
             &fixed,
             f_ext,
             sim.soft_cells(&conn),
-            BoundaryTerms { loading, band },
+            boundary,
         );
         let n = conn.n_dofs();
         eq.out_of_balance(&vec![0.0; n]).unwrap();
         let free: Vec<usize> = (0..n).filter(|&i| !fixed[i]).collect();
-        let inverse = nalgebra::DMatrix::from_fn(free.len(), free.len(), |_, _| 0.0);
-        let mut inverse = inverse;
+        let mut inverse = nalgebra::DMatrix::zeros(free.len(), free.len());
         for (j, &dof) in free.iter().enumerate() {
             let mut e = vec![0.0; n];
             e[dof] = 1.0;
