@@ -11,7 +11,7 @@ use std::fs;
 use std::path::Path;
 use std::time::Instant;
 
-use mpm::output::StepTimings;
+use mpm::report::StepTimings;
 use mpm::{Case, NoObserver, Simulation};
 use serde_json::{Value, json};
 
@@ -41,7 +41,8 @@ fn cells_across(points: usize) -> usize {
 }
 
 fn example(name: &str) -> Value {
-    serde_json::from_str(mpm::examples::get(name).expect("built-in example")).expect("valid JSON")
+    serde_json::from_str(mpm::case::builtin::get(name).expect("built-in example"))
+        .expect("valid JSON")
 }
 
 fn wide_column(points: usize) -> Value {

@@ -154,16 +154,16 @@ impl From<std::io::Error> for CliError {
 fn example(name: Option<String>) -> Result<(), CliError> {
     match name {
         None => {
-            for n in mpm::examples::NAMES {
+            for n in mpm::case::builtin::NAMES {
                 println!("{n}");
             }
             Ok(())
         }
         Some(n) => {
-            let text = mpm::examples::get(&n).ok_or_else(|| {
+            let text = mpm::case::builtin::get(&n).ok_or_else(|| {
                 CliError::input(format!(
                     "no built-in example {n:?}; available: {}",
-                    mpm::examples::NAMES.join(", ")
+                    mpm::case::builtin::NAMES.join(", ")
                 ))
             })?;
             print!("{text}");

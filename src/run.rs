@@ -6,7 +6,8 @@ use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
 use mpm::boundary::BoundaryOutput;
-use mpm::output::{PointColumns, write_pvd, write_vtp, write_vtu};
+use mpm::report::PointColumns;
+use mpm::vtk::{write_pvd, write_vtp, write_vtu};
 use mpm::{Case, Observer, RunReport, Simulation, StepReport, StepState};
 use serde::Serialize;
 
@@ -26,7 +27,7 @@ pub fn run(
         }
         None => {
             let name = example.as_deref().unwrap_or(DEFAULT_EXAMPLE);
-            let text = mpm::examples::get(name)
+            let text = mpm::case::builtin::get(name)
                 .ok_or_else(|| CliError::input(format!("no built-in example {name:?}")))?;
             (format!("built-in example {name}"), text.to_string())
         }
@@ -100,7 +101,7 @@ struct StepSummary<'a> {
     residuals: &'a [f64],
     wall_seconds: f64,
     active_dofs: usize,
-    timings: &'a mpm::output::StepTimings,
+    timings: &'a mpm::report::StepTimings,
     probes: std::collections::BTreeMap<&'a str, ProbeSummary>,
     reactions: &'a [[f64; 2]],
     applied_load: [f64; 2],

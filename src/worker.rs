@@ -10,7 +10,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use mpm::output::PointColumns;
+use mpm::report::PointColumns;
 use mpm::{Case, Observer, Simulation, SolveError, StepReport, StepState};
 use tokio::runtime::Handle;
 use tokio::sync::Notify;

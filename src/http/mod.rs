@@ -14,7 +14,8 @@ use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
-use mpm::output::{PointColumns, write_vtu};
+use mpm::report::PointColumns;
+use mpm::vtk::write_vtu;
 use mpm::{Case, Simulation};
 use serde::Deserialize;
 use serde_json::{Value, json};
@@ -125,7 +126,7 @@ async fn submit(
     let bound: f64 = case
         .bodies
         .iter()
-        .map(|b| mpm::fill::max_points(b, case.grid.cell_size))
+        .map(|b| mpm::model::max_points(b, case.grid.cell_size))
         .sum();
     if bound > 4.0 * limits.max_points as f64 {
         return Err(ApiError::LimitExceeded {

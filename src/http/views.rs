@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 
 use mpm::StepReport;
-use mpm::output::StepTimings;
+use mpm::report::StepTimings;
 use serde::Serialize;
 use serde_json::Value;
 

@@ -67,7 +67,7 @@ pub struct Claimed {
 pub struct StepJson {
     /// `mpm::StepReport`
     pub report: String,
-    /// `mpm::output::PointColumns`
+    /// `mpm::report::PointColumns`
     pub points: String,
     /// `[mpm::boundary::BoundaryOutput]`
     pub boundaries: String,

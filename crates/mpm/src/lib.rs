@@ -1,32 +1,46 @@
 //! Implicit, quasi-static, updated-Lagrangian material point method in 2D
 //! plane strain, after Bing, Cortis, Charlton, Coombs & Augarde (2017).
 //!
-//! A [`Case`] (JSON) becomes a [`Simulation`]; [`Simulation::run`] solves its
-//! load steps with Newton-Raphson on the active part of a background grid and
-//! reports each step to an [`Observer`]. The crate does no I/O of its own
-//! beyond the writers in [`output`].
+//! A [`Case`] (JSON, [`case`]) becomes a [`Simulation`] ([`model`]);
+//! [`Simulation::run`] solves its load steps ([`stepper`]) with
+//! Newton-Raphson ([`newton`], [`equilibrium`]) on the active part of a
+//! background grid ([`grid`]) and reports each step ([`report`]) to an
+//! [`Observer`]. The crate does no I/O of its own beyond the writers in
+//! [`vtk`].
+//!
+//! The stages of a load step, each in its own module: the grid reset
+//! ([`grid::connectivity`]), the material points and their seeding
+//! ([`particles`]), constitutive models ([`material`]), the boundary loops,
+//! their B-spline, tractions and the implicit boundary method
+//! ([`boundary`]), grid-node supports ([`supports`]), assembly
+//! ([`assembly`]), the sparse solve ([`linsolve`]) and probes ([`probes`]).
 
 // Index loops mirror the tensor notation of the formulas (i, j, a, b), which
 // reads better in numerical code than iterator chains.
 #![allow(clippy::needless_range_loop)]
 
 pub mod assembly;
-pub mod basis;
 pub mod boundary;
 pub mod case;
-pub mod examples;
-pub mod fill;
+pub mod configuration;
+pub mod equilibrium;
+pub mod geometry;
+pub mod grid;
 pub mod linsolve;
 pub mod material;
+pub mod model;
 pub mod newton;
 pub mod observer;
-pub mod output;
-pub mod points;
+pub mod particles;
+pub mod probes;
+pub mod report;
 pub mod stepper;
+pub mod supports;
+pub mod vtk;
 
 pub use case::{Case, CaseError};
 pub use newton::{NewtonSettings, SolveError};
 pub use observer::{NoObserver, Observer, StepState};
-pub use output::{RunReport, StepReport};
-pub use points::MaterialPoints;
+pub use particles::MaterialPoints;
+pub use report::{RunReport, StepReport};
 pub use stepper::Simulation;

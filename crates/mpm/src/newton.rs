@@ -5,7 +5,7 @@
 //! (zero on constrained DOFs), stops when `|r| / scale <= tolerance`, and
 //! otherwise solves `K du = r` with the consistent tangent `K = df_int/du`.
 
-use serde::Serialize;
+use crate::report::NewtonInfo;
 
 use crate::linsolve::Factorisation;
 use crate::observer::Observer;
@@ -20,7 +20,7 @@ pub struct NewtonSettings {
     /// A relative residual above this (or not finite) is divergence (1e8).
     pub divergence_limit: f64,
     /// Soft-background stiffness in the tangent, relative to the stiffest
-    /// material (1e-6); see [`crate::assembly::SoftCells`].
+    /// material (1e-6); see [`crate::grid::SoftCells`].
     pub tangent_regularisation: f64,
 }
 
@@ -33,17 +33,6 @@ impl Default for NewtonSettings {
             tangent_regularisation: 1e-6,
         }
     }
-}
-
-/// How a load step's Newton solve went.
-#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
-pub struct NewtonInfo {
-    /// Linear solves performed.
-    pub iterations: usize,
-    /// Relative out-of-balance force before each solve and at convergence.
-    pub residuals: Vec<f64>,
-    /// Factorisation of the last solve (`None` if no solve was needed).
-    pub factorisation: Option<Factorisation>,
 }
 
 /// A point whose trial state is not admissible.

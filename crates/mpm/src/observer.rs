@@ -2,8 +2,8 @@
 //! runner and the job service implement [`Observer`].
 
 use crate::boundary::{self, BoundaryLoop, BoundaryOutput};
-use crate::output::StepReport;
-use crate::points::MaterialPoints;
+use crate::particles::MaterialPoints;
+use crate::report::StepReport;
 
 /// The state after a converged step, as observers see it.
 pub struct StepState<'a> {

@@ -13,7 +13,7 @@
 
 use std::collections::HashMap;
 
-use crate::fill::signed_area;
+use crate::geometry::signed_area;
 
 /// One closed loop of boundary points of a body.
 #[derive(Debug, Clone, PartialEq)]

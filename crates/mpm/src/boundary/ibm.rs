@@ -80,12 +80,27 @@ use nalgebra::{Matrix2, Vector2};
 
 use super::bspline::{bezier, bezier_derivative, local_segment};
 use super::detection::BoundaryLoop;
-use super::traction::{gauss_points, hat_shares};
-use super::{data_point, selected_segments};
-use crate::assembly::{Connectivity, Pattern};
-use crate::basis::{Grid, NodeKey, node_indices, node_key};
-use crate::case::{Fix, Rotation, Support, SupportMethod};
-use crate::points::MaterialPoints;
+use super::quadrature::{gauss_points, hat_shares};
+use super::{current_ring, reference_ring};
+use crate::assembly::Pattern;
+use crate::configuration::Configuration;
+use crate::geometry::winding_number;
+use crate::grid::{Grid, NodeKey, node_indices, node_key};
+use crate::particles::MaterialPoints;
+use crate::supports::{Fix, Rotation};
+
+/// A support imposed on the boundary curve by the implicit boundary method.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IbmSupport {
+    /// Its index among the case's supports (for reactions).
+    pub index: usize,
+    /// The segments of each loop it holds, `(loop index, segments)`.
+    pub segments: Vec<(usize, Vec<usize>)>,
+    pub fix: Fix,
+    /// Prescribed displacement at load factor 1.
+    pub displacement: [f64; 2],
+    pub rotation: Option<Rotation>,
+}
 
 /// A quadrature point of an implicit-boundary support, Lagrangian: fixed on
 /// the reference curve, carried by the grid's displacement.
@@ -143,41 +158,38 @@ impl Anchor {
     }
 }
 
-/// The anchors of the case's implicit-boundary supports: Gauss points of
-/// the reference-curve segments each support selects.
+/// The anchors of the implicit-boundary supports: Gauss points of the
+/// reference-curve segments each support holds.
 pub fn anchors(
-    supports: &[Support],
+    supports: &[IbmSupport],
     loops: &[BoundaryLoop],
     points: &MaterialPoints,
     grid: &Grid,
 ) -> Vec<Anchor> {
     let mut out = Vec::new();
-    for (i, s) in supports.iter().enumerate() {
-        if s.method != SupportMethod::Ibm {
-            continue;
-        }
-        for (loop_index, segments) in selected_segments(&s.on, loops, points, grid.h) {
-            let l = &loops[loop_index];
+    for s in supports {
+        for (loop_index, segments) in &s.segments {
+            let (loop_index, l) = (*loop_index, &loops[*loop_index]);
             if l.points.len() < 3 {
                 continue; // no curve through one or two points
             }
             let n = l.points.len();
             let ring = reference_ring(l, points);
-            for k in segments {
+            for &k in segments {
                 let segment = local_segment(&ring, k);
                 for (t, weight) in gauss_points(&segment, grid) {
                     let d = bezier_derivative(&segment, t);
                     let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
                     out.push(Anchor {
                         normal: [d[1] / length, -d[0] / length],
-                        support: i,
+                        support: s.index,
                         loop_index,
                         segment: k,
                         t,
                         weight,
                         point: l.points[if t < 0.5 { k } else { (k + 1) % n }],
                         fix: s.fix,
-                        prescribed: s.displacement.unwrap_or([0.0, 0.0]),
+                        prescribed: s.displacement,
                         rotation: s.rotation,
                         reference: bezier(&segment, t),
                         moved: [0.0, 0.0],
@@ -187,18 +199,6 @@ pub fn anchors(
         }
     }
     out
-}
-
-/// A loop's data points in the reference configuration.
-fn reference_ring(l: &BoundaryLoop, points: &MaterialPoints) -> Vec<[f64; 2]> {
-    l.points
-        .iter()
-        .zip(&l.offset)
-        .map(|(&p, d)| {
-            let x = points.reference[p];
-            [x[0] + d[0], x[1] + d[1]]
-        })
-        .collect()
 }
 
 /// One anchor's band term in a load step.
@@ -255,14 +255,17 @@ pub struct BandTerms {
 
 impl BandTerms {
     pub fn new(
+        start: &Configuration,
         anchors: &[Anchor],
-        loops: &[BoundaryLoop],
-        points: &MaterialPoints,
-        conn: &Connectivity,
-        grid: &Grid,
         band_width: f64,
         load_factor: f64,
     ) -> Self {
+        let Configuration {
+            grid,
+            conn,
+            points,
+            loops,
+        } = *start;
         let mut terms = BandTerms {
             material_scale: 0.75 * band_width / grid.h,
             ..Default::default()
@@ -274,12 +277,9 @@ impl BandTerms {
         // The current data points of the loops with anchors.
         let mut rings: BTreeMap<usize, Vec<[f64; 2]>> = BTreeMap::new();
         for (i, a) in anchors.iter().enumerate() {
-            let current = rings.entry(a.loop_index).or_insert_with(|| {
-                let l = &loops[a.loop_index];
-                (0..l.points.len())
-                    .map(|k| data_point(l, k, points))
-                    .collect()
-            });
+            let current = rings
+                .entry(a.loop_index)
+                .or_insert_with(|| current_ring(&loops[a.loop_index], points));
             let first = terms.shares.len();
             if !hat_shares(
                 grid,
@@ -531,24 +531,6 @@ fn acoustic_tensor(points: &MaterialPoints, p: usize, n: [f64; 2]) -> Matrix2<f6
     })
 }
 
-/// Winding number of the closed polygon `ring` about `x` (counter-clockwise
-/// positive).
-fn winding_number(x: [f64; 2], ring: &[[f64; 2]]) -> i32 {
-    let mut w = 0;
-    for (k, a) in ring.iter().enumerate() {
-        let b = ring[(k + 1) % ring.len()];
-        let cross = (b[0] - a[0]) * (x[1] - a[1]) - (x[0] - a[0]) * (b[1] - a[1]);
-        if a[1] <= x[1] {
-            if b[1] > x[1] && cross > 0.0 {
-                w += 1;
-            }
-        } else if b[1] <= x[1] && cross < 0.0 {
-            w -= 1;
-        }
-    }
-    w
-}
-
 /// The second difference's weights along `[I, J, K]`.
 const GHOST_STENCIL: [f64; 3] = [1.0, -2.0, 1.0];
 
@@ -558,8 +540,7 @@ const GHOST_STENCIL: [f64; 3] = [1.0, -2.0, 1.0];
 /// node on a grid-aligned boundary that has moved a hair is not beyond it)
 /// and at most one cell, and within one cell of `x` along it.
 fn nodes_beyond(grid: &Grid, x: [f64; 2], n: [f64; 2]) -> impl Iterator<Item = NodeKey> + '_ {
-    let cell = |d: usize| ((x[d] - grid.origin[d]) / grid.h).floor() as i64;
-    let (ci, cj) = (cell(0), cell(1));
+    let [ci, cj] = grid.cell_of(x);
     let tol = 1e-9 * grid.h;
     (cj - 1..=cj + 2)
         .flat_map(move |j| (ci - 1..=ci + 2).map(move |i| node_key(i, j)))

@@ -13,13 +13,12 @@
 //! w_b I` (see [`BoundaryLoading::ring`]).
 
 use super::bspline::{Point, local_segment};
-use super::data_point;
+use super::current_ring;
 use super::detection::BoundaryLoop;
 use super::traction::{SegmentQuadrature, Traction};
-use crate::assembly::Connectivity;
-use crate::basis::{Grid, node_key};
-use crate::case::BoundaryLoad;
-use crate::points::MaterialPoints;
+use crate::configuration::Configuration;
+use crate::grid::{Connectivity, Grid, node_key};
+use crate::particles::MaterialPoints;
 
 /// The segments of one loop that a boundary load acts on.
 #[derive(Debug, Clone, PartialEq)]
@@ -28,33 +27,6 @@ pub struct LoadedStretch {
     /// Segment `k` runs from the loop's data point `k` to `k + 1`.
     pub segments: Vec<usize>,
     pub traction: Traction,
-}
-
-/// Resolves the case's boundary loads to loop segments: a segment is loaded
-/// when both its end points lie on the selection, within the point's half
-/// width (the outer points sit half a spacing inside the material's edge).
-pub fn select(
-    loads: &[BoundaryLoad],
-    loops: &[BoundaryLoop],
-    points: &MaterialPoints,
-    h: f64,
-) -> Vec<LoadedStretch> {
-    let mut out = Vec::new();
-    for load in loads {
-        let traction = match (load.traction, load.pressure) {
-            (Some(t), _) => Traction::Dead(t),
-            (None, Some(p)) => Traction::Pressure(p),
-            (None, None) => continue, // rejected by validation
-        };
-        for (loop_index, segments) in super::selected_segments(&load.on, loops, points, h) {
-            out.push(LoadedStretch {
-                loop_index,
-                segments,
-                traction,
-            });
-        }
-    }
-    out
 }
 
 /// The boundary loads of one load step.
@@ -79,13 +51,16 @@ impl<'a> BoundaryLoading<'a> {
     /// Prepares the loads of a step: the loaded segments' quadrature in the
     /// step's start configuration.
     pub fn new(
-        grid: &'a Grid,
-        conn: &'a Connectivity,
-        points: &'a MaterialPoints,
-        loops: &'a [BoundaryLoop],
+        start: &Configuration<'a>,
         stretches: &'a [LoadedStretch],
         load_factor: f64,
     ) -> Self {
+        let Configuration {
+            grid,
+            conn,
+            points,
+            loops,
+        } = *start;
         let mut loading = Self {
             grid,
             conn,
@@ -125,16 +100,14 @@ impl<'a> BoundaryLoading<'a> {
     /// `Q_k = x_p + dF F_n d = x_p + F_n d + sum_b w_b u_b`, linear in `u`
     /// with weights `w_b = N_b(x_p) + g_b . (F_n d)`.
     fn ring(&self, l: &BoundaryLoop, u: &[f64]) -> Vec<Point> {
-        (0..l.points.len())
-            .map(|k| {
-                let mut x = data_point(l, k, self.points);
-                for (node, w) in self.weights(l, k) {
-                    x[0] += w * u[2 * node];
-                    x[1] += w * u[2 * node + 1];
-                }
-                x
-            })
-            .collect()
+        let mut ring = current_ring(l, self.points);
+        for (k, x) in ring.iter_mut().enumerate() {
+            for (node, w) in self.weights(l, k) {
+                x[0] += w * u[2 * node];
+                x[1] += w * u[2 * node + 1];
+            }
+        }
+        ring
     }
 
     /// `(node, w_b)`: how data point `k` of loop `l` moves with each node.
@@ -280,8 +253,8 @@ impl<'a> BoundaryLoading<'a> {
                         }
                     }
                 }
+                let first = self.grid.cell_of(lo).map(|c| c - 1);
                 let (g, h) = (self.grid, self.grid.h);
-                let first = |d: usize| ((lo[d] - g.origin[d]) / h).floor() as i64 - 1;
                 let last = |d: usize| ((hi[d] - g.origin[d]) / h).ceil() as i64 + 1;
                 let mut group: Vec<u32> = self
                     .conn
@@ -289,8 +262,8 @@ impl<'a> BoundaryLoading<'a> {
                     .iter()
                     .map(|link| link.node)
                     .collect();
-                for i in first(0)..=last(0) {
-                    for j in first(1)..=last(1) {
+                for i in first[0]..=last(0) {
+                    for j in first[1]..=last(1) {
                         if let Ok(a) = self.conn.nodes.binary_search(&node_key(i, j)) {
                             group.push(a as u32);
                         }

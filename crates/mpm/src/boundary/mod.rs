@@ -6,15 +6,29 @@ pub mod bspline;
 pub mod detection;
 pub mod ibm;
 pub mod loading;
+pub mod quadrature;
 pub mod traction;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 pub use bspline::{BSplineData, ClosedCurve};
 pub use detection::{BoundaryLoop, find_loops};
 
-use crate::case::Representation;
-use crate::points::MaterialPoints;
+use crate::geometry::Selector;
+use crate::particles::MaterialPoints;
+
+/// Where the boundary curve's data points are.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Representation {
+    /// On the material's edge: each outer point pushed out to the edge of
+    /// its domain (half a spacing), mapped by its deformation gradient.
+    #[default]
+    Edge,
+    /// Through the outer material points themselves (the paper's choice),
+    /// half a point spacing inside the material's edge.
+    Points,
+}
 
 /// Sets each loop's data-point offsets for the chosen representation: zero
 /// through the points; for the material edge, out along the reference
@@ -79,7 +93,7 @@ pub fn set_offsets(
 /// sector's inner arc next to a radial edge: a roller there with the arc's
 /// normal held the arc.)
 pub fn selected_segments(
-    selector: &crate::case::Selector,
+    selector: &Selector,
     loops: &[BoundaryLoop],
     points: &MaterialPoints,
     h: f64,
@@ -117,6 +131,25 @@ pub fn data_point(l: &BoundaryLoop, k: usize, points: &MaterialPoints) -> [f64; 
     ]
 }
 
+/// A loop's data points in the reference configuration.
+pub fn reference_ring(l: &BoundaryLoop, points: &MaterialPoints) -> Vec<[f64; 2]> {
+    l.points
+        .iter()
+        .zip(&l.offset)
+        .map(|(&p, d)| {
+            let x = points.reference[p];
+            [x[0] + d[0], x[1] + d[1]]
+        })
+        .collect()
+}
+
+/// A loop's data points in the current configuration ([`data_point`]).
+pub fn current_ring(l: &BoundaryLoop, points: &MaterialPoints) -> Vec<[f64; 2]> {
+    (0..l.points.len())
+        .map(|k| data_point(l, k, points))
+        .collect()
+}
+
 /// Polyline samples per curve segment in the outputs.
 const POLYLINE_SAMPLES_PER_SEGMENT: usize = 8;
 
@@ -140,12 +173,7 @@ pub fn curves(loops: &[BoundaryLoop], points: &MaterialPoints) -> Vec<(usize, Cl
         .iter()
         .enumerate()
         .filter(|(_, l)| l.points.len() >= 3)
-        .map(|(i, l)| {
-            let ring: Vec<[f64; 2]> = (0..l.points.len())
-                .map(|k| data_point(l, k, points))
-                .collect();
-            (i, ClosedCurve::interpolate(&ring))
-        })
+        .map(|(i, l)| (i, ClosedCurve::interpolate(&current_ring(l, points))))
         .collect()
 }
 

@@ -3,9 +3,10 @@
 
 use nalgebra::Matrix2;
 
-use crate::case::Case;
-use crate::fill::fill_body;
-use crate::material::{CauchyStress, Elastic, Material};
+pub mod seeding;
+
+use crate::material::{CauchyStress, Material};
+use seeding::{Domain, SeedPoint};
 
 #[derive(Debug, Clone, Default)]
 pub struct MaterialPoints {
@@ -21,10 +22,10 @@ pub struct MaterialPoints {
     /// Index into [`MaterialPoints::materials`] (one material per body, so
     /// this is also the body index).
     pub material: Vec<u32>,
-    /// Place in the body's generation lattice (see [`crate::fill::SeedPoint`]).
+    /// Place in the body's generation lattice (see [`seeding::SeedPoint`]).
     pub lattice: Vec<[i64; 2]>,
     /// The point's domain in its own frame, in the reference configuration.
-    pub domain: Vec<crate::fill::Domain>,
+    pub domain: Vec<Domain>,
     /// Total deformation gradient `F` (in-plane block).
     pub deformation: Vec<Matrix2<f64>>,
     /// Constitutive history (see [`Material::respond`]).
@@ -35,34 +36,24 @@ pub struct MaterialPoints {
 }
 
 impl MaterialPoints {
-    /// Fills every body of the case with points in its reference state.
-    pub fn from_case(case: &Case) -> Self {
-        let mut mp = MaterialPoints::default();
-        for (b, body) in case.bodies.iter().enumerate() {
-            let (e, nu, rho) = body.material.constants();
-            let constants = Elastic::from_young_poisson(e, nu);
-            let material = match body.material {
-                crate::case::MaterialSpec::Hencky { .. } => Material::Hencky(constants),
-                crate::case::MaterialSpec::LinearElastic { .. } => {
-                    Material::LinearElastic(constants)
-                }
-            };
-            mp.materials.push(material);
-            for seed in fill_body(body, case.grid.cell_size, case.grid.origin) {
-                mp.position.push(seed.position);
-                mp.reference.push(seed.position);
-                mp.volume0.push(seed.volume);
-                mp.mass.push(rho * seed.volume);
-                mp.half_width0.push(seed.half_width);
-                mp.material.push(b as u32);
-                mp.lattice.push(seed.lattice);
-                mp.domain.push(seed.domain);
-                mp.deformation.push(Matrix2::identity());
-                mp.history.push(material.initial_history());
-                mp.stress.push(CauchyStress::default());
-            }
+    /// Adds a body's points, seeded in its reference state, with their
+    /// material and density; the body's index is the material's.
+    pub fn add_body(&mut self, material: Material, density: f64, seeds: &[SeedPoint]) {
+        let body = self.materials.len() as u32;
+        self.materials.push(material);
+        for seed in seeds {
+            self.position.push(seed.position);
+            self.reference.push(seed.position);
+            self.volume0.push(seed.volume);
+            self.mass.push(density * seed.volume);
+            self.half_width0.push(seed.half_width);
+            self.material.push(body);
+            self.lattice.push(seed.lattice);
+            self.domain.push(seed.domain);
+            self.deformation.push(Matrix2::identity());
+            self.history.push(material.initial_history());
+            self.stress.push(CauchyStress::default());
         }
-        mp
     }
 
     pub fn len(&self) -> usize {

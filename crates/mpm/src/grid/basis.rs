@@ -1,48 +1,11 @@
-//! Background grid and its shape functions.
-//!
-//! The grid is an unbounded lattice of square cells; a node is named by its
-//! integer coordinates `(i, j)` and sits at `origin + h (i, j)`. Nothing is
-//! allocated per cell: the nodes a step uses are the ones the material's
-//! shape functions touch (see `assembly`).
-//!
-//! Shape functions are tensor products of 1D functions:
+//! Shape functions of the background grid, tensor products of 1D functions:
 //! - `Linear`: the bilinear finite-element hat `max(0, 1 - |d|/h)`.
 //! - `Gimp`: the hat convolved with the point's characteristic function of
 //!   half-width `lp` (generalised interpolation MPM). The convolution is
 //!   written with the hat's antiderivative `H`, `S(d) = (H(d+lp) - H(d-lp)) /
 //!   2lp`, which is valid for any `lp` (not only `lp <= h/2`).
 
-use crate::case::BasisKind;
-
-/// A lattice node packed into one integer; ordering is by `i`, then `j`.
-pub type NodeKey = u64;
-
-const BIAS: i64 = 1 << 31;
-
-pub fn node_key(i: i64, j: i64) -> NodeKey {
-    (((i + BIAS) as u64) << 32) | ((j + BIAS) as u64 & 0xffff_ffff)
-}
-
-pub fn node_indices(key: NodeKey) -> (i64, i64) {
-    ((key >> 32) as i64 - BIAS, (key & 0xffff_ffff) as i64 - BIAS)
-}
-
-/// Cell size and the position of node (0, 0).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Grid {
-    pub h: f64,
-    pub origin: [f64; 2],
-}
-
-impl Grid {
-    pub fn node_position(&self, key: NodeKey) -> [f64; 2] {
-        let (i, j) = node_indices(key);
-        [
-            self.origin[0] + self.h * i as f64,
-            self.origin[1] + self.h * j as f64,
-        ]
-    }
-}
+use super::{Grid, NodeKey, node_key};
 
 /// One node's contribution at a point: `N` and its gradient.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,15 +23,6 @@ type Weights1d = smallvec1d::Small;
 pub enum Basis {
     Linear,
     Gimp,
-}
-
-impl From<BasisKind> for Basis {
-    fn from(k: BasisKind) -> Self {
-        match k {
-            BasisKind::Linear => Basis::Linear,
-            BasisKind::Gimp => Basis::Gimp,
-        }
-    }
 }
 
 impl Basis {
@@ -224,14 +178,5 @@ mod tests {
         for nw in w {
             assert!((nw.n - 0.25).abs() < 1e-14);
         }
-    }
-
-    #[test]
-    fn node_keys_round_trip_and_sort_by_i_then_j() {
-        for (i, j) in [(0, 0), (-3, 7), (12345, -678), (-1, -1)] {
-            assert_eq!(node_indices(node_key(i, j)), (i, j));
-        }
-        assert!(node_key(-1, 5) < node_key(0, -5));
-        assert!(node_key(0, -5) < node_key(0, 4));
     }
 }

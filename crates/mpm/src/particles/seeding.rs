@@ -7,7 +7,7 @@
 //! point has the volume of its lattice square, so the total volume differs
 //! from the area by the staircase error along curved edges.
 
-use crate::case::{Body, Geometry};
+use crate::geometry::Geometry;
 
 /// One material point as generated: position, volume, the half-widths of
 /// its (rectangular) domain, and its place `(i, j)` in the body's lattice
@@ -31,20 +31,26 @@ pub struct Domain {
     pub angle: f64,
 }
 
-/// The material points of `body` for a grid of `cell_size` with a node at
-/// `origin`.
-pub fn fill_body(body: &Body, cell_size: f64, origin: [f64; 2]) -> Vec<SeedPoint> {
-    let spacing = match (body.points.per_cell, body.points.spacing) {
-        (Some(n), _) => cell_size / n as f64,
-        (_, Some(s)) => s,
-        _ => f64::NAN, // `count`: rectangles only, handled below
+/// How densely a region is filled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Density {
+    /// Points this far apart (metres).
+    Spacing(f64),
+    /// `[nx, ny]` points; rectangles only.
+    Count([u32; 2]),
+}
+
+/// The material points of `geometry` at `density`, on a lattice through
+/// the grid's `origin`.
+pub fn fill(geometry: &Geometry, density: Density, origin: [f64; 2]) -> Vec<SeedPoint> {
+    let (spacing, count) = match density {
+        Density::Spacing(s) => (s, None),
+        Density::Count(c) => (f64::NAN, Some(c)), // rectangles only
     };
-    match &body.geometry {
+    match geometry {
         Geometry::Rectangle { min, max } => {
             let size = [max[0] - min[0], max[1] - min[1]];
-            let n = body
-                .points
-                .count
+            let n = count
                 .map(|c| [c[0] as usize, c[1] as usize])
                 .unwrap_or_else(|| size.map(|l| ((l / spacing).round() as usize).max(1)));
             let step = [size[0] / n[0] as f64, size[1] / n[1] as f64];
@@ -83,8 +89,8 @@ pub fn fill_body(body: &Body, cell_size: f64, origin: [f64; 2]) -> Vec<SeedPoint
             spacing,
         ),
         geometry => {
-            let (lo, hi) = bounding_box(geometry);
-            let inside = |p: [f64; 2]| contains(geometry, p);
+            let (lo, hi) = geometry.bounding_box();
+            let inside = |p: [f64; 2]| geometry.contains(p);
             lattice_inside(lo, hi, spacing, origin, inside)
         }
     }
@@ -155,148 +161,31 @@ fn lattice_inside(
     out
 }
 
-/// An upper bound on the number of points `fill_body` makes, without
-/// making them: the bounding box's area over a point's area (exact for
+/// An upper bound on the number of points [`fill`] makes, without making
+/// them: the bounding box's area over a point's area (exact for
 /// rectangles). Lets a service refuse a huge case before allocating it.
-pub fn max_points(body: &Body, cell_size: f64) -> f64 {
-    let (lo, hi) = bounding_box(&body.geometry);
-    let area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
-    match (body.points.count, body.points.per_cell, body.points.spacing) {
-        (Some([nx, ny]), _, _) => nx as f64 * ny as f64,
-        (_, Some(n), _) => area / (cell_size / n as f64).powi(2) + 1.0,
-        (_, _, Some(s)) => area / (s * s) + 1.0,
-        _ => 0.0,
-    }
-}
-
-/// Axis-aligned bounding box of a geometry.
-pub fn bounding_box(geometry: &Geometry) -> ([f64; 2], [f64; 2]) {
-    match geometry {
-        Geometry::Rectangle { min, max } => (*min, *max),
-        Geometry::Polygon { vertices, .. } => {
-            let mut lo = [f64::INFINITY; 2];
-            let mut hi = [f64::NEG_INFINITY; 2];
-            for v in vertices {
-                for d in 0..2 {
-                    lo[d] = lo[d].min(v[d]);
-                    hi[d] = hi[d].max(v[d]);
-                }
-            }
-            (lo, hi)
-        }
-        Geometry::Circle { center, radius: r }
-        | Geometry::Annulus {
-            center,
-            outer_radius: r,
-            ..
-        }
-        | Geometry::AnnulusSector {
-            center,
-            outer_radius: r,
-            ..
-        } => (
-            [center[0] - r, center[1] - r],
-            [center[0] + r, center[1] + r],
-        ),
-    }
-}
-
-/// Whether `p` lies inside the geometry (holes excluded).
-pub fn contains(geometry: &Geometry, p: [f64; 2]) -> bool {
-    let dist = |c: &[f64; 2]| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)).sqrt();
-    match geometry {
-        Geometry::Rectangle { min, max } => {
-            p[0] > min[0] && p[0] < max[0] && p[1] > min[1] && p[1] < max[1]
-        }
-        Geometry::Polygon { vertices, holes } => {
-            point_in_ring(vertices, p) && !holes.iter().any(|h| point_in_ring(h, p))
-        }
-        Geometry::Circle { center, radius } => dist(center) < *radius,
-        Geometry::Annulus {
-            center,
-            inner_radius,
-            outer_radius,
-        } => {
-            let d = dist(center);
-            d > *inner_radius && d < *outer_radius
-        }
-        Geometry::AnnulusSector {
-            center,
-            inner_radius,
-            outer_radius,
-            start_angle,
-            end_angle,
-        } => {
-            let d = dist(center);
-            let t = (p[1] - center[1]).atan2(p[0] - center[0]).to_degrees();
-            let t = start_angle + (t - start_angle).rem_euclid(360.0);
-            d > *inner_radius && d < *outer_radius && t < *end_angle
+pub fn max_points(geometry: &Geometry, density: Density) -> f64 {
+    match density {
+        Density::Count([nx, ny]) => nx as f64 * ny as f64,
+        Density::Spacing(s) => {
+            let (lo, hi) = geometry.bounding_box();
+            (hi[0] - lo[0]) * (hi[1] - lo[1]) / (s * s) + 1.0
         }
     }
-}
-
-/// Even-odd crossing test against a closed ring of vertices.
-fn point_in_ring(ring: &[[f64; 2]], p: [f64; 2]) -> bool {
-    let mut inside = false;
-    let n = ring.len();
-    for i in 0..n {
-        let a = ring[i];
-        let b = ring[(i + 1) % n];
-        if (a[1] > p[1]) != (b[1] > p[1]) {
-            let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
-            if p[0] < x {
-                inside = !inside;
-            }
-        }
-    }
-    inside
-}
-
-/// Shoelace area, positive for counter-clockwise rings.
-pub fn signed_area(ring: &[[f64; 2]]) -> f64 {
-    let n = ring.len();
-    (0..n)
-        .map(|i| {
-            let a = ring[i];
-            let b = ring[(i + 1) % n];
-            a[0] * b[1] - b[0] * a[1]
-        })
-        .sum::<f64>()
-        / 2.0
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::case::{MaterialSpec, PointFill};
-
-    fn body(geometry: Geometry, points: PointFill) -> Body {
-        Body {
-            name: None,
-            geometry,
-            points,
-            material: MaterialSpec::Hencky {
-                youngs_modulus: 1.0,
-                poisson_ratio: 0.0,
-                density: 1.0,
-            },
-        }
-    }
 
     #[test]
     fn rectangle_by_count_matches_the_paper_layout() {
         // The paper's cantilever: 10 m x 2 m with 56 x 16 = 896 points.
-        let b = body(
-            Geometry::Rectangle {
-                min: [0.0, 0.0],
-                max: [10.0, 2.0],
-            },
-            PointFill {
-                count: Some([56, 16]),
-                ..Default::default()
-            },
-        );
-        let pts = fill_body(&b, 1.5, [0.0, 0.0]);
+        let b = Geometry::Rectangle {
+            min: [0.0, 0.0],
+            max: [10.0, 2.0],
+        };
+        let pts = fill(&b, Density::Count([56, 16]), [0.0, 0.0]);
         assert_eq!(pts.len(), 896);
         let area: f64 = pts.iter().map(|p| p.volume).sum();
         assert!((area - 20.0).abs() < 1e-12);
@@ -306,18 +195,12 @@ mod tests {
     fn annulus_volume_approaches_its_area() {
         // Area of an annulus: pi (ro^2 - ri^2). Lattice staircase error is
         // O(spacing * perimeter); with spacing 0.01 it is well under 1%.
-        let b = body(
-            Geometry::Annulus {
-                center: [0.0, 0.0],
-                inner_radius: 0.5,
-                outer_radius: 1.0,
-            },
-            PointFill {
-                spacing: Some(0.01),
-                ..Default::default()
-            },
-        );
-        let area: f64 = fill_body(&b, 0.1, [0.0, 0.0])
+        let b = Geometry::Annulus {
+            center: [0.0, 0.0],
+            inner_radius: 0.5,
+            outer_radius: 1.0,
+        };
+        let area: f64 = fill(&b, Density::Spacing(0.01), [0.0, 0.0])
             .iter()
             .map(|p| p.volume)
             .sum();
@@ -329,17 +212,12 @@ mod tests {
     fn polygon_holes_are_empty() {
         let square = vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
         let hole = vec![[0.25, 0.25], [0.75, 0.25], [0.75, 0.75], [0.25, 0.75]];
-        let b = body(
-            Geometry::Polygon {
-                vertices: square,
-                holes: vec![hole],
-            },
-            PointFill {
-                per_cell: Some(4),
-                ..Default::default()
-            },
-        );
-        let pts = fill_body(&b, 0.25, [0.0, 0.0]);
+        let b = Geometry::Polygon {
+            vertices: square,
+            holes: vec![hole],
+        };
+        // Four points per 0.25 m cell.
+        let pts = fill(&b, Density::Spacing(0.25 / 4.0), [0.0, 0.0]);
         // 16 x 16 lattice minus the 8 x 8 hole.
         assert_eq!(pts.len(), 256 - 64);
     }

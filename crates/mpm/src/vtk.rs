@@ -1,116 +1,10 @@
-//! What a run reports: per-step summaries (serialisable), the material-point
-//! state as JSON columns, and VTK XML files for ParaView.
+//! VTK XML files for ParaView: the points as an unstructured grid, the
+//! boundary curves as polylines, and the `.pvd` series that steps through
+//! them.
 
 use std::io::{self, Write};
 
-use serde::Serialize;
-
-use crate::newton::NewtonInfo;
-use crate::points::MaterialPoints;
-
-/// Wall-clock seconds spent in each stage of a load step.
-#[derive(Debug, Clone, Copy, Default, Serialize, serde::Deserialize, PartialEq)]
-pub struct StepTimings {
-    /// Grid reset: shape functions, active nodes, stiffness pattern, loads.
-    pub grid: f64,
-    /// Point loop: trial stress and tangent of every point, internal force.
-    pub point_loop: f64,
-    /// Tangent stiffness assembly (with constraints).
-    pub assembly: f64,
-    /// Sparse factorisation (symbolic analysis included on first use).
-    pub factorisation: f64,
-    /// Triangular solves.
-    pub solve: f64,
-    /// Moving points and probes, committing state.
-    pub update: f64,
-    pub total: f64,
-}
-
-impl std::ops::AddAssign<&StepTimings> for StepTimings {
-    /// Sums stage by stage (timings of several steps).
-    fn add_assign(&mut self, t: &StepTimings) {
-        self.grid += t.grid;
-        self.point_loop += t.point_loop;
-        self.assembly += t.assembly;
-        self.factorisation += t.factorisation;
-        self.solve += t.solve;
-        self.update += t.update;
-        self.total += t.total;
-    }
-}
-
-#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
-pub struct ProbeReport {
-    pub name: String,
-    pub position: [f64; 2],
-    pub displacement: [f64; 2],
-}
-
-/// Summary of one converged load step.
-#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
-pub struct StepReport {
-    /// Counts from 1.
-    pub step: usize,
-    pub load_factor: f64,
-    pub newton: NewtonInfo,
-    pub timings: StepTimings,
-    pub active_nodes: usize,
-    /// Unconstrained degrees of freedom in the system.
-    pub active_dofs: usize,
-    pub probes: Vec<ProbeReport>,
-    /// Force each support exerts on the body, in the order of the case's
-    /// `supports`.
-    pub reactions: Vec<[f64; 2]>,
-    /// Resultant of the loads applied to the grid in this step (gravity,
-    /// point loads and boundary loads on the converged boundary): at
-    /// equilibrium the reactions add up to minus this, unless two grid
-    /// supports hold the same component of a node (both then report its
-    /// force). Zero in steps stored before it was reported.
-    #[serde(default)]
-    pub applied_load: [f64; 2],
-}
-
-/// Summary of a whole run.
-#[derive(Debug, Clone, Serialize, PartialEq)]
-pub struct RunReport {
-    pub points: usize,
-    pub load_steps: usize,
-    pub wall_seconds: f64,
-    pub steps: Vec<StepReport>,
-}
-
-/// The material-point state as columns, for JSON.
-#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
-pub struct PointColumns {
-    pub position: Vec<[f64; 2]>,
-    pub displacement: Vec<[f64; 2]>,
-    /// Cauchy stress `[xx, yy, xy, zz]`.
-    pub stress: Vec<[f64; 4]>,
-    /// Current volume `J V0`.
-    pub volume: Vec<f64>,
-    /// Volume ratio `J = det F`.
-    pub jacobian: Vec<f64>,
-    /// Index of the body the point belongs to.
-    pub body: Vec<u32>,
-}
-
-impl PointColumns {
-    pub fn new(mp: &MaterialPoints) -> Self {
-        let n = mp.len();
-        Self {
-            position: mp.position.clone(),
-            displacement: (0..n).map(|p| mp.displacement(p)).collect(),
-            stress: mp
-                .stress
-                .iter()
-                .map(|s| [s.plane[0], s.plane[1], s.plane[2], s.zz])
-                .collect(),
-            volume: (0..n).map(|p| mp.volume(p)).collect(),
-            jacobian: (0..n).map(|p| mp.jacobian(p)).collect(),
-            body: mp.material.clone(),
-        }
-    }
-}
+use crate::report::PointColumns;
 
 /// Writes the points as a VTK XML unstructured grid of vertex cells, with
 /// raw appended binary data (little-endian, 64-bit block headers).
@@ -270,8 +164,8 @@ mod tests {
 
     #[test]
     fn vtu_blocks_sit_at_their_declared_offsets() {
-        let case = crate::Case::from_json(crate::examples::get("column").unwrap()).unwrap();
-        let mp = MaterialPoints::from_case(&case);
+        let case = crate::Case::from_json(crate::case::builtin::get("column").unwrap()).unwrap();
+        let mp = crate::Simulation::new(&case).unwrap().points;
         let mut buf = Vec::new();
         write_vtu(&mut buf, &PointColumns::new(&mp)).unwrap();
         let start = buf.windows(3).position(|w| w == b"  _").unwrap() + 3;

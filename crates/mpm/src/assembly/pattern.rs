@@ -1,0 +1,147 @@
+//! The stiffness matrix's sparsity pattern (see the parent module for the
+//! layout) and the constraint of held DOFs.
+
+use rayon::prelude::*;
+
+use crate::grid::Connectivity;
+
+/// Sparsity of the stiffness matrix, in faer's compressed-column form.
+#[derive(Debug, Clone, Default)]
+pub struct Pattern {
+    /// Neighbours of node `b` are `neighbours[first[b]..first[b + 1]]`, sorted.
+    first: Vec<usize>,
+    neighbours: Vec<u32>,
+    pub col_ptr: Vec<usize>,
+    pub row_idx: Vec<usize>,
+}
+
+impl Pattern {
+    /// Two nodes are neighbours when some point links to both.
+    /// Two nodes are also neighbours when they share one of the `groups`
+    /// (couplings that do not come from points, e.g. boundary loads).
+    pub fn build(conn: &Connectivity, groups: &[Vec<u32>]) -> Self {
+        let n_nodes = conn.n_nodes();
+        let mut node_groups: Vec<Vec<u32>> =
+            vec![Vec::new(); if groups.is_empty() { 0 } else { n_nodes }];
+        for (g, members) in groups.iter().enumerate() {
+            for &a in members {
+                node_groups[a as usize].push(g as u32);
+            }
+        }
+        // Node -> points incidence, in compressed form.
+        let mut start = vec![0usize; n_nodes + 1];
+        for l in &conn.links {
+            start[l.node as usize + 1] += 1;
+        }
+        for i in 0..n_nodes {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut incident = vec![0u32; conn.links.len()];
+        for p in 0..conn.n_points() {
+            for l in conn.point_links(p) {
+                incident[fill[l.node as usize]] = p as u32;
+                fill[l.node as usize] += 1;
+            }
+        }
+        let lists: Vec<Vec<u32>> = (0..n_nodes)
+            .into_par_iter()
+            .map(|b| {
+                let mut nb: Vec<u32> = incident[start[b]..start[b + 1]]
+                    .iter()
+                    .flat_map(|&p| conn.point_links(p as usize).iter().map(|l| l.node))
+                    .collect();
+                if let Some(gs) = node_groups.get(b) {
+                    nb.extend(gs.iter().flat_map(|&g| groups[g as usize].iter().copied()));
+                }
+                nb.sort_unstable();
+                nb.dedup();
+                nb
+            })
+            .collect();
+        let mut first = Vec::with_capacity(n_nodes + 1);
+        first.push(0);
+        for l in &lists {
+            first.push(first.last().unwrap() + l.len());
+        }
+        let neighbours: Vec<u32> = lists.into_iter().flatten().collect();
+        let mut col_ptr = Vec::with_capacity(2 * n_nodes + 1);
+        let mut row_idx = Vec::with_capacity(4 * neighbours.len());
+        col_ptr.push(0);
+        for b in 0..n_nodes {
+            let nb = &neighbours[first[b]..first[b + 1]];
+            for _component in 0..2 {
+                row_idx.extend(
+                    nb.iter()
+                        .flat_map(|&a| [2 * a as usize, 2 * a as usize + 1]),
+                );
+                col_ptr.push(row_idx.len());
+            }
+        }
+        Self {
+            first,
+            neighbours,
+            col_ptr,
+            row_idx,
+        }
+    }
+
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// Index in the values array of the 2x2 block's entry `(0, 0)` for row
+    /// node `a` and column node `b`; entry `(r, c)` is at
+    /// `block(a, b) + r + c * 2 * degree(b)`.
+    #[inline]
+    pub(crate) fn block(&self, a: u32, b: u32) -> (usize, usize) {
+        self.try_block(a, b).expect("linked nodes are neighbours")
+    }
+
+    fn try_block(&self, a: u32, b: u32) -> Option<(usize, usize)> {
+        let nb = &self.neighbours[self.first[b as usize]..self.first[b as usize + 1]];
+        let k = nb.binary_search(&a).ok()?;
+        Some((self.col_ptr[2 * b as usize] + 2 * k, 2 * nb.len()))
+    }
+
+    /// Adds `value` at `(row, col)` (DOF indices); returns false, adding
+    /// nothing, if the entry is outside the pattern.
+    pub fn add(&self, values: &mut [f64], row: usize, col: usize, value: f64) -> bool {
+        match self.try_block((row / 2) as u32, (col / 2) as u32) {
+            Some((base, stride)) => {
+                values[base + row % 2 + (col % 2) * stride] += value;
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+/// Replaces the rows and columns of fixed DOFs by a scaled identity, so the
+/// solve returns zero increments there.
+pub fn constrain(pattern: &Pattern, values: &mut [f64], fixed: &[bool]) {
+    let n = fixed.len();
+    let mut diag_sum = 0.0;
+    let mut diag_count = 0usize;
+    for col in 0..n {
+        for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
+            if pattern.row_idx[k] == col && !fixed[col] {
+                diag_sum += values[k].abs();
+                diag_count += 1;
+            }
+        }
+    }
+    let scale = if diag_count > 0 {
+        diag_sum / diag_count as f64
+    } else {
+        1.0
+    };
+    for col in 0..n {
+        for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
+            let row = pattern.row_idx[k];
+            if fixed[row] || fixed[col] {
+                values[k] = if row == col { scale } else { 0.0 };
+            }
+        }
+    }
+}

@@ -1,0 +1,104 @@
+//! Quadrature along the boundary curve, shared by tractions and the
+//! implicit boundary method's band: each Bezier segment is split where it
+//! crosses a grid line, so every piece sees one cell and smooth (bilinear)
+//! shape functions, and each piece gets 4-point Gauss-Legendre quadrature in
+//! the segment parameter. The shape functions are the bilinear
+//! finite-element ones whatever the basis of the points.
+
+use super::bspline::{Point, bezier};
+use crate::grid::{Basis, Grid, NodeKey, NodeWeight};
+
+/// Gauss-Legendre nodes on [0, 1] and weights (summing to 1), 4 points.
+const GAUSS4: [(f64, f64); 4] = [
+    (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
+    (0.330_009_478_207_571_87, 0.326_072_577_431_273_07),
+    (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
+    (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
+];
+
+/// Samples per segment when looking for grid-line crossings; a cubic segment
+/// spanning about one point spacing crosses at most a few lines.
+const CROSSING_SAMPLES: usize = 16;
+
+/// Appends to `shares` the active nodes' bilinear shape functions at `x`
+/// as `(active node index, N)` and returns their sum, which is below one
+/// where some of the cell's corners are inactive. `weights` is scratch
+/// space.
+pub fn active_hats(
+    grid: &Grid,
+    x: Point,
+    nodes: &[NodeKey],
+    weights: &mut Vec<NodeWeight>,
+    shares: &mut Vec<(usize, f64)>,
+) -> f64 {
+    weights.clear();
+    Basis::Linear.eval(grid, x, [0.0, 0.0], weights);
+    let before = shares.len();
+    shares.extend(
+        weights
+            .iter()
+            .filter_map(|nw| nodes.binary_search(&nw.node).ok().map(|a| (a, nw.n))),
+    );
+    shares[before..].iter().map(|(_, n)| n).sum()
+}
+
+/// [`active_hats`] normalised to sum to one (a point on the edge of the
+/// active cells may touch an inactive node with a zero or round-off share).
+/// Returns false, appending nothing, when no active node has a share.
+pub fn hat_shares(
+    grid: &Grid,
+    x: Point,
+    nodes: &[NodeKey],
+    weights: &mut Vec<NodeWeight>,
+    shares: &mut Vec<(usize, f64)>,
+) -> bool {
+    let before = shares.len();
+    let total = active_hats(grid, x, nodes, weights, shares);
+    if total <= 0.0 {
+        shares.truncate(before);
+        return false;
+    }
+    for share in &mut shares[before..] {
+        share.1 /= total;
+    }
+    true
+}
+
+/// `(t, weight in t)` of four Gauss points on each piece of the segment
+/// between grid lines: the integrands (products of the cells' bilinear
+/// shape functions and the curve's smooth terms) are smooth on each piece.
+pub fn gauss_points(ctrl: &[Point; 4], grid: &Grid) -> impl Iterator<Item = (f64, f64)> {
+    let crossings = cell_crossings(ctrl, grid);
+    (1..crossings.len()).flat_map(move |i| {
+        let (t0, t1) = (crossings[i - 1], crossings[i]);
+        GAUSS4
+            .iter()
+            .map(move |&(xi, w)| (t0 + xi * (t1 - t0), w * (t1 - t0)))
+    })
+}
+
+/// Parameters `0 = t_0 < ... < t_m = 1` where the segment crosses grid
+/// lines, found by sampling and bisection.
+fn cell_crossings(ctrl: &[Point; 4], grid: &Grid) -> Vec<f64> {
+    let cell = |t: f64| grid.cell_of(bezier(ctrl, t));
+    let mut out = vec![0.0];
+    let mut prev = 0.0;
+    for i in 1..=CROSSING_SAMPLES {
+        let t = i as f64 / CROSSING_SAMPLES as f64;
+        if cell(t) != cell(prev) {
+            let (mut lo, mut hi) = (prev, t);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if cell(mid) == cell(lo) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            out.push(0.5 * (lo + hi));
+        }
+        prev = t;
+    }
+    out.push(1.0);
+    out
+}

@@ -1,0 +1,14 @@
+//! Built-in cases, shipped in `crates/mpm/cases/` and compiled in.
+
+/// Names accepted by [`get`].
+pub const NAMES: [&str; 3] = ["column", "cantilever-grid", "cantilever"];
+
+/// The JSON text of a built-in case.
+pub fn get(name: &str) -> Option<&'static str> {
+    match name {
+        "column" => Some(include_str!("../../cases/column.json")),
+        "cantilever-grid" => Some(include_str!("../../cases/cantilever-grid.json")),
+        "cantilever" => Some(include_str!("../../cases/cantilever.json")),
+        _ => None,
+    }
+}

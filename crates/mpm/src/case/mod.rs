@@ -1,0 +1,434 @@
+//! The case format (JSON, version 1): what a user submits.
+//!
+//! Parsing happens in two passes. `serde` with `deny_unknown_fields` catches
+//! shape errors (a missing field, a typo, a string where a number belongs) and
+//! `serde_path_to_error` names where they are; [`Case::validate`] then checks
+//! the values (positive moduli, Poisson's ratio in `[0, 0.5)`, non-empty
+//! geometry). Every error names the field path, e.g.
+//! `bodies[0].material.poisson_ratio: must be in [0, 0.5), got 0.5`.
+//!
+//! All quantities are SI: metres, pascals, kg/m^3, newtons per metre of
+//! out-of-plane thickness (plane strain).
+
+pub mod builtin;
+mod validate;
+
+use serde::{Deserialize, Serialize};
+
+pub use crate::boundary::Representation;
+pub use crate::geometry::{Geometry, Selector};
+use crate::newton::NewtonSettings;
+pub use crate::supports::{Fix, Rotation};
+
+/// The only case-format version this build reads.
+pub const CASE_VERSION: u32 = 1;
+
+/// A complete analysis: geometry, material, grid, loads, supports.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Case {
+    /// Case-format version; must be 1.
+    pub version: u32,
+    /// Free-text title shown in summaries.
+    #[serde(default)]
+    pub title: Option<String>,
+    pub analysis: Analysis,
+    pub grid: GridSpec,
+    /// Shape functions of the background grid.
+    #[serde(default)]
+    pub basis: BasisKind,
+    pub bodies: Vec<Body>,
+    #[serde(default)]
+    pub loads: Loads,
+    /// Supports: on the grid nodes or, by the implicit boundary method, on
+    /// the boundary curve that each selects.
+    #[serde(default)]
+    pub supports: Vec<Support>,
+    /// Named reference points advected with the grid displacement.
+    #[serde(default)]
+    pub probes: Vec<Probe>,
+    /// Where the boundary curve runs.
+    #[serde(default)]
+    pub boundary: BoundarySpec,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    #[serde(default)]
+    pub representation: Representation,
+    /// Width `delta` (m) of the band inside the boundary over which the
+    /// implicit boundary method's D-functions rise from 0 to 1. Default
+    /// 1% of the cell size (see `boundary::ibm`).
+    #[serde(default)]
+    pub band_width: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum AnalysisKind {
+    #[default]
+    PlaneStrain,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Analysis {
+    /// Only `plane_strain` for now.
+    #[serde(default, rename = "type")]
+    pub kind: AnalysisKind,
+    /// Number of equal load increments; every load is ramped linearly.
+    pub load_steps: u32,
+    #[serde(default)]
+    pub newton: NewtonSpec,
+}
+
+/// Newton-Raphson controls.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct NewtonSpec {
+    /// Converged when the out-of-balance force norm over the free degrees of
+    /// freedom, relative to the external (or internal, if larger) force norm,
+    /// falls below this. Default 1e-9.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// Iteration cap per load step; reaching it fails the job. Default 30.
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: u32,
+    /// Stiffness of the soft background added to the tangent over the
+    /// cells the material touches, relative to the stiffest material
+    /// (default 1e-6; 0 turns it off). It keeps the solve regular when a
+    /// point alone reaches new nodes; the converged answer does not depend on
+    /// it.
+    #[serde(default = "default_tangent_regularisation")]
+    pub tangent_regularisation: f64,
+}
+
+fn default_tolerance() -> f64 {
+    NewtonSettings::default().tolerance
+}
+fn default_max_iterations() -> u32 {
+    NewtonSettings::default().max_iterations as u32
+}
+fn default_tangent_regularisation() -> f64 {
+    NewtonSettings::default().tangent_regularisation
+}
+
+impl Default for NewtonSpec {
+    fn default() -> Self {
+        Self {
+            tolerance: default_tolerance(),
+            max_iterations: default_max_iterations(),
+            tangent_regularisation: default_tangent_regularisation(),
+        }
+    }
+}
+
+/// The background grid: square cells of side `cell_size` with a node at
+/// `origin`. The lattice is unbounded unless `extent` is given; either way
+/// only the nodes that the material touches enter the system, so a large
+/// extent costs nothing.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    pub cell_size: f64,
+    #[serde(default)]
+    pub origin: [f64; 2],
+    /// Where the mesh ends, as a finite mesh would: nodes outside do not
+    /// exist (shape functions are cut there) and material leaving it stops
+    /// the run. Default: unbounded.
+    #[serde(default)]
+    pub extent: Option<BoxSpec>,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    pub min: [f64; 2],
+    pub max: [f64; 2],
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum BasisKind {
+    /// Bilinear finite-element hat functions (the paper's choice).
+    #[default]
+    Linear,
+    /// Generalised interpolation MPM with the point domain following the
+    /// stretch of the point (cpGIMP-style, axis-aligned domain).
+    Gimp,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Body {
+    #[serde(default)]
+    pub name: Option<String>,
+    pub geometry: Geometry,
+    pub points: PointFill,
+    pub material: MaterialSpec,
+}
+
+/// How densely a body is filled with material points: exactly one of
+/// `per_cell` (points per cell per direction), `spacing` (metres) or `count`
+/// (`[nx, ny]`, rectangles only).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct PointFill {
+    #[serde(default)]
+    pub per_cell: Option<u32>,
+    #[serde(default)]
+    pub spacing: Option<f64>,
+    #[serde(default)]
+    pub count: Option<[u32; 2]>,
+}
+
+/// Constitutive model of a body.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MaterialSpec {
+    /// Finite-strain elasticity: Hencky strain of the elastic left
+    /// Cauchy-Green tensor, Kirchhoff stress linear in it.
+    Hencky {
+        youngs_modulus: f64,
+        poisson_ratio: f64,
+        density: f64,
+    },
+    /// Geometrically linear small-strain elasticity, for checks against
+    /// linear theory.
+    LinearElastic {
+        youngs_modulus: f64,
+        poisson_ratio: f64,
+        density: f64,
+    },
+}
+
+impl MaterialSpec {
+    /// `(youngs_modulus, poisson_ratio, density)`.
+    pub fn constants(&self) -> (f64, f64, f64) {
+        match *self {
+            MaterialSpec::Hencky {
+                youngs_modulus,
+                poisson_ratio,
+                density,
+            }
+            | MaterialSpec::LinearElastic {
+                youngs_modulus,
+                poisson_ratio,
+                density,
+            } => (youngs_modulus, poisson_ratio, density),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Loads {
+    /// Gravitational acceleration (m/s^2), e.g. `[0, -9.81]`.
+    #[serde(default)]
+    pub gravity: Option<[f64; 2]>,
+    #[serde(default)]
+    pub point_loads: Vec<PointLoad>,
+    /// Loads on the boundary curve, ramped with the load factor.
+    #[serde(default)]
+    pub boundary: Vec<BoundaryLoad>,
+}
+
+/// A load on the stretch of boundary that `on` selects in the reference
+/// configuration: exactly one of a dead `traction` `[tx, ty]` (Pa) or a
+/// follower `pressure` (Pa, positive pushes into the material, normal to
+/// the current boundary).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BoundaryLoad {
+    pub on: Selector,
+    #[serde(default)]
+    pub traction: Option<[f64; 2]>,
+    #[serde(default)]
+    pub pressure: Option<f64>,
+}
+
+/// A dead force (N per metre thickness) carried by the material point
+/// nearest to `at` in the reference configuration.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PointLoad {
+    pub at: [f64; 2],
+    pub force: [f64; 2],
+}
+
+/// Displacement held on what `on` selects (zero, or prescribed by the
+/// implicit boundary method): grid nodes or the boundary curve, by `method`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Support {
+    pub on: Selector,
+    pub fix: Fix,
+    /// How the condition is imposed (default `grid`).
+    #[serde(default)]
+    pub method: SupportMethod,
+    /// Prescribed displacement `[ux, uy]` (m) reached at the last load step,
+    /// ramped with the load factor; only its held components count.
+    /// Implicit boundary method only. Default zero.
+    #[serde(default)]
+    pub displacement: Option<[f64; 2]>,
+    /// Prescribed rotation of the selected boundary about a point, on top
+    /// of `displacement`, its angle ramped with the load factor. Implicit
+    /// boundary method only.
+    #[serde(default)]
+    pub rotation: Option<Rotation>,
+}
+
+/// Where a support acts.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SupportMethod {
+    /// On the grid nodes that the selector contains (AMPLE's way): exact
+    /// when the boundary lies on grid lines.
+    #[default]
+    Grid,
+    /// The implicit boundary method on the boundary curve the selector
+    /// picks: works for boundaries anywhere in the grid, at any angle.
+    Ibm,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Probe {
+    pub name: String,
+    pub at: [f64; 2],
+}
+
+/// A case that could not be read: where, and what was expected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{path}: {message}")]
+pub struct CaseError {
+    /// Field path such as `bodies[0].material.poisson_ratio`; `$` for the
+    /// document itself.
+    pub path: String,
+    pub message: String,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn column_json() -> serde_json::Value {
+        serde_json::from_str(builtin::get("column").unwrap()).unwrap()
+    }
+
+    fn error_for(v: serde_json::Value) -> CaseError {
+        Case::from_json(&v.to_string()).unwrap_err()
+    }
+
+    #[test]
+    fn built_in_examples_parse() {
+        for name in builtin::NAMES {
+            Case::from_json(builtin::get(name).unwrap()).unwrap();
+        }
+    }
+
+    #[test]
+    fn poisson_ratio_of_one_half_names_the_field() {
+        let mut v = column_json();
+        v["bodies"][0]["material"]["poisson_ratio"] = 0.5.into();
+        let e = error_for(v);
+        assert_eq!(e.path, "bodies[0].material.poisson_ratio");
+        assert!(e.message.contains("[0, 0.5)"), "{e}");
+    }
+
+    #[test]
+    fn unknown_field_names_its_parent() {
+        let mut v = column_json();
+        v["bodies"][0]["material"]["youngs_modulos"] = 1.0.into();
+        let e = error_for(v);
+        assert_eq!(e.path, "bodies[0].material");
+        assert!(e.message.contains("youngs_modulos"), "{e}");
+    }
+
+    #[test]
+    fn negative_modulus_and_wrong_types_are_rejected_with_paths() {
+        let mut v = column_json();
+        v["bodies"][0]["material"]["youngs_modulus"] = (-1.0).into();
+        assert_eq!(error_for(v).path, "bodies[0].material.youngs_modulus");
+        let mut v = column_json();
+        v["grid"]["cell_size"] = "big".into();
+        assert_eq!(error_for(v).path, "grid.cell_size");
+        let mut v = column_json();
+        v["bodies"] = serde_json::json!([]);
+        assert_eq!(error_for(v).path, "bodies");
+    }
+
+    #[test]
+    fn empty_geometry_is_rejected() {
+        let mut v = column_json();
+        v["bodies"][0]["geometry"] =
+            serde_json::json!({"rectangle": {"min": [0, 0], "max": [0, 1]}});
+        assert_eq!(error_for(v).path, "bodies[0].geometry.rectangle.max");
+    }
+
+    #[test]
+    fn a_radius_without_a_center_is_rejected() {
+        // Otherwise the circle condition would be ignored and the selector
+        // would pick everything.
+        let mut v = column_json();
+        v["supports"][0]["on"] = serde_json::json!({"radius": 1.0});
+        let e = error_for(v);
+        assert_eq!(e.path, "supports[0].on");
+        assert!(e.message.contains("center and radius"), "{e}");
+    }
+
+    #[test]
+    fn selector_matches_segments_and_lines() {
+        let s = Selector {
+            x: Some(0.0),
+            y_between: Some([0.0, 2.0]),
+            ..Default::default()
+        };
+        assert!(s.contains([0.0, 1.0], 1e-9));
+        assert!(s.contains([1e-12, 2.0], 1e-9));
+        assert!(!s.contains([0.0, 2.1], 1e-9));
+        assert!(!s.contains([0.1, 1.0], 1e-9));
+    }
+
+    #[test]
+    fn segment_selector_measures_distance_to_the_segment() {
+        let s = Selector {
+            segment: Some([[0.0, 0.0], [1.0, 1.0]]),
+            ..Default::default()
+        };
+        assert!(s.contains([0.5, 0.5], 1e-9));
+        assert!(s.contains([0.5, 0.6], 0.08)); // 0.0707 from the line
+        assert!(!s.contains([0.5, 0.6], 0.06));
+        assert!(!s.contains([1.1, 1.1], 0.1)); // beyond the end: 0.141
+    }
+
+    #[test]
+    fn ibm_only_options_and_unheld_components_are_rejected_with_paths() {
+        let set = |f: &dyn Fn(&mut serde_json::Value)| {
+            let mut v = column_json();
+            f(&mut v);
+            error_for(v)
+        };
+        let e = set(&|v| v["supports"][0]["fix"] = "normal".into());
+        assert_eq!(e.path, "supports[0].fix");
+        let e = set(&|v| v["supports"][0]["displacement"] = serde_json::json!([0.1, 0.0]));
+        assert_eq!(e.path, "supports[0].displacement");
+        assert!(e.message.contains("ibm"), "{e}");
+        // fix x: a y displacement is not held.
+        let e = set(&|v| {
+            v["supports"][0]["method"] = "ibm".into();
+            v["supports"][0]["displacement"] = serde_json::json!([0.0, 0.1]);
+        });
+        assert_eq!(e.path, "supports[0].displacement");
+        assert!(e.message.contains("y component"), "{e}");
+        let e = set(&|v| {
+            v["supports"][0]["method"] = "ibm".into();
+            v["supports"][0]["rotation"] = serde_json::json!({"angle": 5.0, "center": [0, 0]});
+        });
+        assert_eq!(e.path, "supports[0].rotation");
+        let e = set(&|v| v["boundary"] = serde_json::json!({"band_width": 10.0}));
+        assert_eq!(e.path, "boundary.band_width");
+        assert!(e.message.contains("cell size"), "{e}");
+    }
+}

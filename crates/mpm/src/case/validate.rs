@@ -1,0 +1,379 @@
+//! The second pass over a case: the values the types cannot check (signs,
+//! ranges, consistency), each error naming its field.
+
+use super::*;
+use crate::geometry::signed_area;
+
+impl CaseError {
+    pub(crate) fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+}
+
+impl Case {
+    /// Parses and validates a case from JSON text.
+    pub fn from_json(text: &str) -> Result<Case, CaseError> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let case: Case = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let path = if path == "." || path.is_empty() {
+                "$".to_string()
+            } else {
+                path
+            };
+            CaseError::new(path, e.into_inner().to_string())
+        })?;
+        case.validate()?;
+        Ok(case)
+    }
+
+    /// Checks values that the types cannot: signs, ranges, consistency.
+    pub fn validate(&self) -> Result<(), CaseError> {
+        if self.version != CASE_VERSION {
+            return Err(CaseError::new(
+                "version",
+                format!(
+                    "unsupported case version {}, this build reads {CASE_VERSION}",
+                    self.version
+                ),
+            ));
+        }
+        let a = &self.analysis;
+        if a.load_steps == 0 {
+            return Err(CaseError::new("analysis.load_steps", "must be at least 1"));
+        }
+        positive("analysis.newton.tolerance", a.newton.tolerance)?;
+        if a.newton.max_iterations == 0 {
+            return Err(CaseError::new(
+                "analysis.newton.max_iterations",
+                "must be at least 1",
+            ));
+        }
+        positive("grid.cell_size", self.grid.cell_size)?;
+        finite_pair("grid.origin", self.grid.origin)?;
+        if let Some(b) = &self.grid.extent {
+            check_box("grid.extent", b)?;
+        }
+        if self.bodies.is_empty() {
+            return Err(CaseError::new("bodies", "at least one body is required"));
+        }
+        for (i, body) in self.bodies.iter().enumerate() {
+            body.validate(&format!("bodies[{i}]"))?;
+        }
+        if let Some(g) = self.loads.gravity {
+            finite_pair("loads.gravity", g)?;
+        }
+        for (i, l) in self.loads.point_loads.iter().enumerate() {
+            finite_pair(&format!("loads.point_loads[{i}].at"), l.at)?;
+            finite_pair(&format!("loads.point_loads[{i}].force"), l.force)?;
+        }
+        for (i, l) in self.loads.boundary.iter().enumerate() {
+            let path = format!("loads.boundary[{i}]");
+            l.on.validate(&format!("{path}.on"))?;
+            match (l.traction, l.pressure) {
+                (Some(t), None) => finite_pair(&format!("{path}.traction"), t)?,
+                (None, Some(p)) if p.is_finite() => {}
+                (None, Some(_)) => {
+                    return Err(CaseError::new(format!("{path}.pressure"), "must be finite"));
+                }
+                _ => {
+                    return Err(CaseError::new(
+                        path,
+                        "give exactly one of traction, pressure",
+                    ));
+                }
+            }
+        }
+        for (i, s) in self.supports.iter().enumerate() {
+            s.on.validate(&format!("supports[{i}].on"))?;
+            if s.method == SupportMethod::Grid && s.fix == Fix::Normal {
+                return Err(CaseError::new(
+                    format!("supports[{i}].fix"),
+                    "normal needs \"method\": \"ibm\"",
+                ));
+            }
+            if let Some(d) = s.displacement {
+                finite_pair(&format!("supports[{i}].displacement"), d)?;
+                if s.method == SupportMethod::Grid {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].displacement"),
+                        "prescribed displacements need \"method\": \"ibm\"",
+                    ));
+                }
+                let free = match s.fix {
+                    Fix::X => Some((1, "y")),
+                    Fix::Y => Some((0, "x")),
+                    Fix::Xy | Fix::Normal => None,
+                };
+                if let Some((c, name)) = free
+                    && d[c] != 0.0
+                {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].displacement"),
+                        format!(
+                            "the {name} component is not held (fix is not {name} or xy), so it cannot be prescribed"
+                        ),
+                    ));
+                }
+            }
+            if let Some(r) = s.rotation {
+                if !r.angle.is_finite() {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].rotation.angle"),
+                        "must be finite",
+                    ));
+                }
+                finite_pair(&format!("supports[{i}].rotation.center"), r.center)?;
+                if s.method == SupportMethod::Grid {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].rotation"),
+                        "prescribed rotations need \"method\": \"ibm\"",
+                    ));
+                }
+                if s.fix != Fix::Xy {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].rotation"),
+                        "a prescribed rotation needs \"fix\": \"xy\" (a roller's wall does not turn)",
+                    ));
+                }
+            }
+        }
+        if let Some(b) = self.boundary.band_width {
+            positive("boundary.band_width", b)?;
+            if b >= self.grid.cell_size {
+                return Err(CaseError::new(
+                    "boundary.band_width",
+                    format!(
+                        "must be smaller than the cell size ({}): the band is a thin layer along the boundary",
+                        self.grid.cell_size
+                    ),
+                ));
+            }
+        }
+        for (i, p) in self.probes.iter().enumerate() {
+            if p.name.trim().is_empty() {
+                return Err(CaseError::new(
+                    format!("probes[{i}].name"),
+                    "must not be empty",
+                ));
+            }
+            if self.probes[..i].iter().any(|q| q.name == p.name) {
+                return Err(CaseError::new(
+                    format!("probes[{i}].name"),
+                    format!("duplicate probe name {:?}", p.name),
+                ));
+            }
+            finite_pair(&format!("probes[{i}].at"), p.at)?;
+        }
+        Ok(())
+    }
+}
+
+impl Body {
+    fn validate(&self, path: &str) -> Result<(), CaseError> {
+        let g = format!("{path}.geometry");
+        match &self.geometry {
+            Geometry::Rectangle { min, max } => check_box(
+                &format!("{g}.rectangle"),
+                &BoxSpec {
+                    min: *min,
+                    max: *max,
+                },
+            )?,
+            Geometry::Polygon { vertices, holes } => {
+                check_ring(&format!("{g}.polygon.vertices"), vertices)?;
+                for (k, h) in holes.iter().enumerate() {
+                    check_ring(&format!("{g}.polygon.holes[{k}]"), h)?;
+                }
+            }
+            Geometry::Circle { center, radius } => {
+                finite_pair(&format!("{g}.circle.center"), *center)?;
+                positive(&format!("{g}.circle.radius"), *radius)?;
+            }
+            Geometry::AnnulusSector {
+                center,
+                inner_radius,
+                outer_radius,
+                start_angle,
+                end_angle,
+            } => {
+                let g = format!("{g}.annulus_sector");
+                check_annulus(&g, *center, *inner_radius, *outer_radius)?;
+                let sweep = end_angle - start_angle;
+                if !(sweep > 0.0 && sweep < 360.0) {
+                    return Err(CaseError::new(
+                        format!("{g}.end_angle"),
+                        format!(
+                            "must exceed start_angle by less than 360 degrees, got a sweep of {sweep}"
+                        ),
+                    ));
+                }
+            }
+            Geometry::Annulus {
+                center,
+                inner_radius,
+                outer_radius,
+            } => check_annulus(
+                &format!("{g}.annulus"),
+                *center,
+                *inner_radius,
+                *outer_radius,
+            )?,
+        }
+        let p = &self.points;
+        let given = [p.per_cell.is_some(), p.spacing.is_some(), p.count.is_some()];
+        if given.iter().filter(|g| **g).count() != 1 {
+            return Err(CaseError::new(
+                format!("{path}.points"),
+                "give exactly one of per_cell, spacing, count",
+            ));
+        }
+        if p.per_cell == Some(0) {
+            return Err(CaseError::new(
+                format!("{path}.points.per_cell"),
+                "must be at least 1",
+            ));
+        }
+        if let Some(s) = p.spacing {
+            positive(&format!("{path}.points.spacing"), s)?;
+        }
+        if let Some(c) = p.count {
+            if !matches!(self.geometry, Geometry::Rectangle { .. }) {
+                return Err(CaseError::new(
+                    format!("{path}.points.count"),
+                    "only for rectangles; use per_cell or spacing",
+                ));
+            }
+            if c[0] == 0 || c[1] == 0 {
+                return Err(CaseError::new(
+                    format!("{path}.points.count"),
+                    "both counts must be at least 1",
+                ));
+            }
+        }
+        let m = format!("{path}.material");
+        let (e, nu, rho) = self.material.constants();
+        positive(&format!("{m}.youngs_modulus"), e)?;
+        if !(0.0..0.5).contains(&nu) {
+            return Err(CaseError::new(
+                format!("{m}.poisson_ratio"),
+                format!("must be in [0, 0.5), got {nu}"),
+            ));
+        }
+        if !(rho >= 0.0 && rho.is_finite()) {
+            return Err(CaseError::new(
+                format!("{m}.density"),
+                format!("must be zero or positive, got {rho}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Selector {
+    fn validate(&self, path: &str) -> Result<(), CaseError> {
+        if *self == Selector::default() {
+            return Err(CaseError::new(
+                path,
+                "select something: give x, y, x_between, y_between, segment or center with radius",
+            ));
+        }
+        for (name, v) in [("x", self.x), ("y", self.y)] {
+            if let Some(v) = v
+                && !v.is_finite()
+            {
+                return Err(CaseError::new(format!("{path}.{name}"), "must be finite"));
+            }
+        }
+        match (self.center, self.radius) {
+            (Some(c), Some(r)) => {
+                finite_pair(&format!("{path}.center"), c)?;
+                positive(&format!("{path}.radius"), r)?;
+            }
+            (None, None) => {}
+            _ => return Err(CaseError::new(path, "center and radius go together")),
+        }
+        for (name, r) in [("x_between", self.x_between), ("y_between", self.y_between)] {
+            if let Some(r) = r {
+                finite_pair(&format!("{path}.{name}"), r)?;
+            }
+        }
+        if let Some([a, b]) = self.segment {
+            finite_pair(&format!("{path}.segment[0]"), a)?;
+            finite_pair(&format!("{path}.segment[1]"), b)?;
+            if a == b {
+                return Err(CaseError::new(
+                    format!("{path}.segment"),
+                    "needs two different end points",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_annulus(path: &str, center: [f64; 2], inner: f64, outer: f64) -> Result<(), CaseError> {
+    finite_pair(&format!("{path}.center"), center)?;
+    positive(&format!("{path}.inner_radius"), inner)?;
+    if outer.partial_cmp(&inner) != Some(std::cmp::Ordering::Greater) || !outer.is_finite() {
+        return Err(CaseError::new(
+            format!("{path}.outer_radius"),
+            format!("must be greater than inner_radius ({inner}), got {outer}"),
+        ));
+    }
+    Ok(())
+}
+
+fn positive(path: &str, v: f64) -> Result<(), CaseError> {
+    if v > 0.0 && v.is_finite() {
+        Ok(())
+    } else {
+        Err(CaseError::new(
+            path,
+            format!("must be positive and finite, got {v}"),
+        ))
+    }
+}
+
+fn finite_pair(path: &str, v: [f64; 2]) -> Result<(), CaseError> {
+    if v.iter().all(|c| c.is_finite()) {
+        Ok(())
+    } else {
+        Err(CaseError::new(path, "must be two finite numbers"))
+    }
+}
+
+fn check_box(path: &str, b: &BoxSpec) -> Result<(), CaseError> {
+    finite_pair(&format!("{path}.min"), b.min)?;
+    finite_pair(&format!("{path}.max"), b.max)?;
+    if b.max[0] > b.min[0] && b.max[1] > b.min[1] {
+        Ok(())
+    } else {
+        Err(CaseError::new(
+            format!("{path}.max"),
+            format!(
+                "must exceed min in both directions (min {:?}, max {:?})",
+                b.min, b.max
+            ),
+        ))
+    }
+}
+
+fn check_ring(path: &str, ring: &[[f64; 2]]) -> Result<(), CaseError> {
+    if ring.len() < 3 {
+        return Err(CaseError::new(
+            path,
+            format!("needs at least 3 vertices, got {}", ring.len()),
+        ));
+    }
+    for (i, v) in ring.iter().enumerate() {
+        finite_pair(&format!("{path}[{i}]"), *v)?;
+    }
+    if signed_area(ring).abs() <= 0.0 {
+        return Err(CaseError::new(path, "encloses no area"));
+    }
+    Ok(())
+}

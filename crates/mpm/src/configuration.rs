@@ -1,0 +1,18 @@
+//! The configuration a load step starts from, which the updated-Lagrangian
+//! step measures its increment against: the grid and the step's active
+//! nodes, the material points and their boundary loops. The stages that
+//! build a step's terms (boundary loads, the IBM band, the soft background)
+//! take it as one bundle.
+
+use crate::boundary::BoundaryLoop;
+use crate::grid::{Connectivity, Grid};
+use crate::particles::MaterialPoints;
+
+#[derive(Clone, Copy)]
+pub struct Configuration<'a> {
+    pub grid: &'a Grid,
+    /// The grid reset of the step: shape functions on the active nodes.
+    pub conn: &'a Connectivity,
+    pub points: &'a MaterialPoints,
+    pub loops: &'a [BoundaryLoop],
+}

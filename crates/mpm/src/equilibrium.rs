@@ -1,0 +1,235 @@
+//! The equilibrium of one load step as Newton sees it: the out-of-balance
+//! force of a trial increment (the point loop: every point's trial stress
+//! and tangent, in parallel, then the internal force), the force scale it
+//! is measured against, and the consistent tangent's correction.
+
+use std::time::Instant;
+
+use nalgebra::Matrix2;
+use rayon::prelude::*;
+
+use crate::assembly::{self, Pattern};
+use crate::boundary::ibm::{Anchor, BandTerms};
+use crate::boundary::loading::BoundaryLoading;
+use crate::configuration::Configuration;
+use crate::grid::{Connectivity, Link, SoftCells};
+use crate::linsolve::{Factorisation, SparseSolver};
+use crate::material::Response;
+use crate::newton::{Equilibrium, InvertedPoint};
+use crate::particles::MaterialPoints;
+use crate::report::StepTimings;
+use crate::supports::HeldDofs;
+
+/// What a load step's system is made of besides the material: the grid
+/// supports' hold, the loads that do not move, the boundary loads and IBM
+/// band terms on the boundary curves, and the soft background.
+pub struct StepTerms<'a> {
+    pub held: HeldDofs,
+    /// Gravity and point loads.
+    pub f_ext: Vec<f64>,
+    pub loading: BoundaryLoading<'a>,
+    pub band: BandTerms,
+    pub soft: Option<SoftCells>,
+}
+
+/// The equilibrium equations of one load step, as Newton sees them.
+pub struct StepEquilibrium<'a> {
+    conn: &'a Connectivity,
+    pattern: Pattern,
+    points: &'a MaterialPoints,
+    /// DOFs the grid supports hold.
+    held: HeldDofs,
+    soft: Option<SoftCells>,
+    /// Boundary loads, evaluated on the trial boundary.
+    loading: BoundaryLoading<'a>,
+    /// Implicit-boundary supports.
+    band: BandTerms,
+    /// `BandTerms::load_norm`, once per step.
+    band_load: f64,
+    /// The band terms' forces at the last trial state (kept apart from
+    /// `f_int`, from which grid supports take their reactions).
+    f_band: Vec<f64>,
+    /// Loads that do not depend on the displacement (gravity, point loads).
+    f_ext_fixed: Vec<f64>,
+    /// All external forces at the last trial state.
+    f_ext: Vec<f64>,
+    /// The last trial increment.
+    u: Vec<f64>,
+    f_int: Vec<f64>,
+    responses: Vec<Response>,
+    solver: SparseSolver,
+    pub timings: StepTimings,
+}
+
+impl<'a> StepEquilibrium<'a> {
+    /// The system of a step on the configuration `start`, with the
+    /// stiffness pattern of every coupling its terms add.
+    pub fn new(start: &Configuration<'a>, terms: StepTerms<'a>) -> Self {
+        let conn = start.conn;
+        let StepTerms {
+            held,
+            f_ext,
+            loading,
+            band,
+            soft,
+        } = terms;
+        let mut groups = loading.coupling_groups();
+        groups.extend(band.coupling_groups());
+        Self {
+            conn,
+            pattern: Pattern::build(conn, &groups),
+            points: start.points,
+            held,
+            soft,
+            loading,
+            band_load: band.load_norm(conn.n_dofs()),
+            f_band: vec![0.0; conn.n_dofs()],
+            band,
+            f_ext: f_ext.clone(),
+            f_ext_fixed: f_ext,
+            u: Vec::new(),
+            f_int: Vec::new(),
+            responses: Vec::new(),
+            solver: SparseSolver::new(conn.n_dofs()),
+            timings: StepTimings::default(),
+        }
+    }
+
+    /// Whether a grid support holds DOF `dof`.
+    pub fn is_held(&self, dof: usize) -> bool {
+        self.held.fixed[dof]
+    }
+
+    /// The DOFs that are not held.
+    pub fn free_dofs(&self) -> usize {
+        self.conn.n_dofs() - self.held.count()
+    }
+
+    /// Per support of the case (`n` of them), the force it exerts on the
+    /// body at the converged increment `u`: grid supports' from the
+    /// material's forces on their DOFs, IBM supports' from the band terms.
+    pub fn reactions(&self, anchors: &[Anchor], u: &[f64], n: usize) -> Vec<[f64; 2]> {
+        let mut reactions = vec![[0.0; 2]; n];
+        self.held
+            .add_reactions(&self.f_int, &self.f_ext, &mut reactions);
+        let band = self.band.reactions(anchors, u, &self.held.fixed, n);
+        for (r, b) in reactions.iter_mut().zip(band) {
+            r[0] += b[0];
+            r[1] += b[1];
+        }
+        reactions
+    }
+
+    /// Resultant of the loads applied to the grid at the last trial state.
+    pub fn applied_load(&self) -> [f64; 2] {
+        [0, 1].map(|c| self.f_ext.iter().skip(c).step_by(2).sum())
+    }
+
+    /// What the step commits once converged: the points' responses and the
+    /// band terms that carry the anchors.
+    pub fn into_converged(self) -> (Vec<Response>, BandTerms, StepTimings) {
+        (self.responses, self.band, self.timings)
+    }
+}
+
+impl Equilibrium for StepEquilibrium<'_> {
+    fn n_dofs(&self) -> usize {
+        self.conn.n_dofs()
+    }
+
+    /// The point loop: trial stress and tangent of every point, in parallel,
+    /// then the internal force.
+    fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
+        let t = Instant::now();
+        self.u.clear();
+        self.u.extend_from_slice(u);
+        let (conn, mp) = (self.conn, self.points);
+        self.responses = (0..mp.len())
+            .into_par_iter()
+            .map(|p| {
+                let (_, grad_u) = increment(conn.point_links(p), u);
+                let j_start = mp.deformation[p].determinant();
+                let jacobian = j_start * (Matrix2::identity() + grad_u).determinant();
+                if jacobian.is_nan() || jacobian <= 0.0 {
+                    return Err(InvertedPoint { point: p, jacobian });
+                }
+                let material = &mp.materials[mp.material[p] as usize];
+                Ok(material.respond(&mp.history[p], &grad_u, j_start))
+            })
+            .collect::<Result<_, _>>()?;
+        self.f_int = assembly::internal_force(conn, mp, &self.responses);
+        // Forces are measured against the material's own internal force
+        // (which includes the reactions), the loads, and what prescribed
+        // displacements ask of the material (`BandTerms::load_norm`); the
+        // band forces themselves are a stiff penalty's and would loosen the
+        // balance by h / delta.
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let material_norm = norm(&self.f_int);
+        if !self.loading.is_empty() {
+            self.f_ext.clone_from(&self.f_ext_fixed);
+            self.loading.add_forces(u, &mut self.f_ext);
+        }
+        if let Some(soft) = &self.soft {
+            soft.add_force(u, &mut self.f_int);
+        }
+        self.f_band.fill(0.0);
+        self.band.add_forces(u, &mut self.f_band);
+        let scale = norm(&self.f_ext)
+            .max(material_norm)
+            .max(self.band_load)
+            .max(f64::MIN_POSITIVE);
+        let r = (0..u.len())
+            .map(|i| {
+                if self.held.fixed[i] {
+                    0.0
+                } else {
+                    self.f_ext[i] - self.f_int[i] - self.f_band[i]
+                }
+            })
+            .collect();
+        self.timings.point_loop += t.elapsed().as_secs_f64();
+        Ok((r, scale))
+    }
+
+    fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
+        let t = Instant::now();
+        let mut k = assembly::stiffness(self.conn, &self.pattern, self.points, &self.responses);
+        if let Some(soft) = &self.soft {
+            soft.add_to(&self.pattern, &mut k);
+        }
+        self.band.add_stiffness(&self.pattern, &mut k);
+        // Boundary loads move with the boundary: their load stiffness makes
+        // the tangent non-symmetric. Hyperelastic materials under loads that
+        // do not move have a symmetric tangent.
+        let symmetric = self.loading.is_empty();
+        for (row, col, value) in self.loading.stiffness(&self.u) {
+            self.pattern.add(&mut k, row, col, value);
+        }
+        assembly::constrain(&self.pattern, &mut k, &self.held.fixed);
+        self.timings.assembly += t.elapsed().as_secs_f64();
+        let (du, kind, timing) = self.solver.solve(&self.pattern, &k, r, symmetric)?;
+        self.timings.factorisation += timing.factorise;
+        self.timings.solve += timing.solve;
+        if du.iter().any(|v| !v.is_finite()) {
+            return Err("the solution has non-finite entries (singular tangent)".into());
+        }
+        Ok((du, kind))
+    }
+}
+
+/// Displacement `sum_a N_a u_a` and displacement gradient
+/// `grad_u = sum_a u_a (x) g_a` of a point (`dF = I + grad_u`).
+pub fn increment(links: &[Link], u: &[f64]) -> ([f64; 2], Matrix2<f64>) {
+    let mut dx = [0.0; 2];
+    let mut df = Matrix2::zeros();
+    for l in links {
+        let ua = [u[2 * l.node as usize], u[2 * l.node as usize + 1]];
+        for i in 0..2 {
+            dx[i] += l.n * ua[i];
+            for j in 0..2 {
+                df[(i, j)] += ua[i] * l.grad[j];
+            }
+        }
+    }
+    (dx, df)
+}

@@ -1,0 +1,196 @@
+//! Plane geometry shared by the case and the solver: the regions bodies
+//! fill, the selections supports and loads act on, and the polygon
+//! primitives (area, winding) used by seeding, validation and the boundary.
+//!
+//! The case schema re-exports [`Geometry`] and [`Selector`]: they are values
+//! the solver reads directly, so the solver never imports the schema.
+
+use serde::{Deserialize, Serialize};
+
+/// The region a body fills, in the reference configuration.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Geometry {
+    Rectangle {
+        min: [f64; 2],
+        max: [f64; 2],
+    },
+    /// A simple polygon (either orientation) with optional polygonal holes.
+    Polygon {
+        vertices: Vec<[f64; 2]>,
+        #[serde(default)]
+        holes: Vec<Vec<[f64; 2]>>,
+    },
+    Circle {
+        center: [f64; 2],
+        radius: f64,
+    },
+    Annulus {
+        center: [f64; 2],
+        inner_radius: f64,
+        outer_radius: f64,
+    },
+    /// The part of an annulus between two angles (degrees, counter-clockwise
+    /// from +x, less than a full turn apart), filled on a polar lattice so
+    /// that its arcs are rows of points.
+    AnnulusSector {
+        center: [f64; 2],
+        inner_radius: f64,
+        outer_radius: f64,
+        start_angle: f64,
+        end_angle: f64,
+    },
+}
+
+impl Geometry {
+    /// Axis-aligned bounding box of a geometry.
+    pub fn bounding_box(&self) -> ([f64; 2], [f64; 2]) {
+        match self {
+            Geometry::Rectangle { min, max } => (*min, *max),
+            Geometry::Polygon { vertices, .. } => {
+                let mut lo = [f64::INFINITY; 2];
+                let mut hi = [f64::NEG_INFINITY; 2];
+                for v in vertices {
+                    for d in 0..2 {
+                        lo[d] = lo[d].min(v[d]);
+                        hi[d] = hi[d].max(v[d]);
+                    }
+                }
+                (lo, hi)
+            }
+            Geometry::Circle { center, radius: r }
+            | Geometry::Annulus {
+                center,
+                outer_radius: r,
+                ..
+            }
+            | Geometry::AnnulusSector {
+                center,
+                outer_radius: r,
+                ..
+            } => (
+                [center[0] - r, center[1] - r],
+                [center[0] + r, center[1] + r],
+            ),
+        }
+    }
+
+    /// Whether `p` lies inside the geometry (holes excluded).
+    pub fn contains(&self, p: [f64; 2]) -> bool {
+        let dist = |c: &[f64; 2]| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)).sqrt();
+        match self {
+            Geometry::Rectangle { min, max } => {
+                p[0] > min[0] && p[0] < max[0] && p[1] > min[1] && p[1] < max[1]
+            }
+            Geometry::Polygon { vertices, holes } => {
+                winding_number(p, vertices) != 0 && !holes.iter().any(|h| winding_number(p, h) != 0)
+            }
+            Geometry::Circle { center, radius } => dist(center) < *radius,
+            Geometry::Annulus {
+                center,
+                inner_radius,
+                outer_radius,
+            } => {
+                let d = dist(center);
+                d > *inner_radius && d < *outer_radius
+            }
+            Geometry::AnnulusSector {
+                center,
+                inner_radius,
+                outer_radius,
+                start_angle,
+                end_angle,
+            } => {
+                let d = dist(center);
+                let t = (p[1] - center[1]).atan2(p[0] - center[0]).to_degrees();
+                let t = start_angle + (t - start_angle).rem_euclid(360.0);
+                d > *inner_radius && d < *outer_radius && t < *end_angle
+            }
+        }
+    }
+}
+
+/// A geometric selection in the reference configuration: every given
+/// condition must hold. `{"x": 0}` is the line x = 0; add
+/// `"y_between": [0, 2]` for a segment of it; `x_between` with `y_between`
+/// is a box.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Selector {
+    #[serde(default)]
+    pub x: Option<f64>,
+    #[serde(default)]
+    pub y: Option<f64>,
+    #[serde(default)]
+    pub x_between: Option<[f64; 2]>,
+    #[serde(default)]
+    pub y_between: Option<[f64; 2]>,
+    /// With `radius`: on the circle of that radius about `center`.
+    #[serde(default)]
+    pub center: Option<[f64; 2]>,
+    #[serde(default)]
+    pub radius: Option<f64>,
+    /// On the straight segment between these two points: a side at any
+    /// angle.
+    #[serde(default)]
+    pub segment: Option<[[f64; 2]; 2]>,
+}
+
+impl Selector {
+    /// Whether `p` is selected; `tol` is the distance that counts as "on" a
+    /// line or inside a range.
+    pub fn contains(&self, p: [f64; 2], tol: f64) -> bool {
+        let on = |v: Option<f64>, c: f64| v.is_none_or(|v| (c - v).abs() <= tol);
+        let within = |r: Option<[f64; 2]>, c: f64| {
+            r.is_none_or(|[a, b]| c >= a.min(b) - tol && c <= a.max(b) + tol)
+        };
+        let on_circle = match (self.center, self.radius) {
+            (Some(c), Some(r)) => {
+                (((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)).sqrt() - r).abs() <= tol
+            }
+            _ => true,
+        };
+        let on_segment = self.segment.is_none_or(|[a, b]| {
+            let (d, r) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
+            let t = ((r[0] * d[0] + r[1] * d[1]) / (d[0] * d[0] + d[1] * d[1])).clamp(0.0, 1.0);
+            (r[0] - t * d[0]).hypot(r[1] - t * d[1]) <= tol
+        });
+        on(self.x, p[0])
+            && on(self.y, p[1])
+            && within(self.x_between, p[0])
+            && within(self.y_between, p[1])
+            && on_circle
+            && on_segment
+    }
+}
+
+/// Shoelace area, positive for counter-clockwise rings.
+pub fn signed_area(ring: &[[f64; 2]]) -> f64 {
+    let n = ring.len();
+    (0..n)
+        .map(|i| {
+            let a = ring[i];
+            let b = ring[(i + 1) % n];
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum::<f64>()
+        / 2.0
+}
+
+/// Winding number of the closed polygon `ring` about `x` (counter-clockwise
+/// positive).
+pub fn winding_number(x: [f64; 2], ring: &[[f64; 2]]) -> i32 {
+    let mut w = 0;
+    for (k, a) in ring.iter().enumerate() {
+        let b = ring[(k + 1) % ring.len()];
+        let cross = (b[0] - a[0]) * (x[1] - a[1]) - (x[0] - a[0]) * (b[1] - a[1]);
+        if a[1] <= x[1] {
+            if b[1] > x[1] && cross > 0.0 {
+                w += 1;
+            }
+        } else if b[1] <= x[1] && cross < 0.0 {
+            w -= 1;
+        }
+    }
+    w
+}

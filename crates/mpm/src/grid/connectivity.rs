@@ -1,0 +1,110 @@
+//! The grid reset of a load step: every point's shape functions at its
+//! position, and the nodes they touch, which become the step's active nodes
+//! (numbered `0..n` in key order). Every Newton iteration of the step reuses
+//! it.
+
+use rayon::prelude::*;
+
+use super::{Basis, Grid, NodeKey, NodeWeight};
+use crate::particles::MaterialPoints;
+
+/// A point's view of one active node.
+#[derive(Debug, Clone, Copy)]
+pub struct Link {
+    /// Active node index.
+    pub node: u32,
+    /// Shape function value.
+    pub n: f64,
+    /// Shape function gradient in the step's start configuration.
+    pub grad: [f64; 2],
+}
+
+/// Shape functions of every point on the active nodes of one load step.
+#[derive(Debug, Clone, Default)]
+pub struct Connectivity {
+    /// Active node keys, sorted.
+    pub nodes: Vec<NodeKey>,
+    /// `links[offsets[p]..offsets[p + 1]]` are point `p`'s nodes.
+    pub offsets: Vec<usize>,
+    pub links: Vec<Link>,
+}
+
+const CHUNK: usize = 4096;
+
+impl Connectivity {
+    /// Evaluates every point's shape functions, keeping the nodes for which
+    /// `in_grid` holds: the grid ends there, as a finite mesh would.
+    pub fn build(
+        grid: &Grid,
+        basis: Basis,
+        points: &MaterialPoints,
+        in_grid: impl Fn(NodeKey) -> bool + Sync,
+    ) -> Self {
+        let n = points.len();
+        let chunks: Vec<(Vec<usize>, Vec<NodeWeight>)> = (0..n)
+            .into_par_iter()
+            .chunks(CHUNK)
+            .map(|idx| {
+                let mut counts = Vec::with_capacity(idx.len());
+                let mut weights = Vec::with_capacity(idx.len() * 9);
+                for p in idx {
+                    let before = weights.len();
+                    basis.eval(grid, points.position[p], points.half_width(p), &mut weights);
+                    let mut k = before;
+                    for i in before..weights.len() {
+                        if in_grid(weights[i].node) {
+                            weights[k] = weights[i];
+                            k += 1;
+                        }
+                    }
+                    weights.truncate(k);
+                    counts.push(weights.len() - before);
+                }
+                (counts, weights)
+            })
+            .collect();
+        let mut offsets = Vec::with_capacity(n + 1);
+        offsets.push(0);
+        let mut weights = Vec::with_capacity(chunks.iter().map(|c| c.1.len()).sum());
+        for (counts, w) in chunks {
+            for c in counts {
+                offsets.push(offsets.last().unwrap() + c);
+            }
+            weights.extend(w);
+        }
+        let mut nodes: Vec<NodeKey> = weights.par_iter().map(|w| w.node).collect();
+        nodes.par_sort_unstable();
+        nodes.dedup();
+        let links = weights
+            .par_iter()
+            .map(|w| Link {
+                node: nodes
+                    .binary_search(&w.node)
+                    .expect("every linked node is active") as u32,
+                n: w.n,
+                grad: w.grad,
+            })
+            .collect();
+        Self {
+            nodes,
+            offsets,
+            links,
+        }
+    }
+
+    pub fn n_nodes(&self) -> usize {
+        self.nodes.len()
+    }
+
+    pub fn n_dofs(&self) -> usize {
+        2 * self.nodes.len()
+    }
+
+    pub fn point_links(&self, p: usize) -> &[Link] {
+        &self.links[self.offsets[p]..self.offsets[p + 1]]
+    }
+
+    pub fn n_points(&self) -> usize {
+        self.offsets.len() - 1
+    }
+}

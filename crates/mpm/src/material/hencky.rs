@@ -1,0 +1,108 @@
+//! Finite-strain elasticity: Hencky strain of the elastic left
+//! Cauchy-Green tensor, Kirchhoff stress linear in it (as in AMPLE).
+
+use nalgebra::{Matrix2, Matrix4};
+
+use super::{CauchyStress, Elastic, Response};
+
+/// Hencky elasticity on the elastic left Cauchy-Green tensor:
+/// `b = dF b_n dF^T`, `e = ln(b) / 2`, `tau = lambda tr(e) I + 2 mu e`,
+/// `P = tau dF^-T`. The tangent is differentiated exactly: for each unit
+/// direction `E` of `dF`,
+/// `db = E b_n dF^T + dF b_n E^T`, `de = L[db] / 2` with `L` the derivative
+/// of the matrix logarithm, `dtau = lambda tr(de) I + 2 mu de`,
+/// `dP = dtau dF^-T - tau dF^-T E^T dF^-T`.
+pub(super) fn hencky(c: &Elastic, b_n: &Matrix2<f64>, df: &Matrix2<f64>, j_start: f64) -> Response {
+    let b = df * b_n * df.transpose();
+    let eig = SymEigen2::new(&b);
+    let e = eig.map(|l| 0.5 * l.ln());
+    let (tau, tau_zz) = c.stress(&e);
+    let df_inv_t = df
+        .try_inverse()
+        .map(|m| m.transpose())
+        .unwrap_or_else(|| Matrix2::from_element(f64::NAN));
+    let p = tau * df_inv_t;
+    let mut tangent = Matrix4::zeros();
+    for j in 0..2 {
+        for jj in 0..2 {
+            let mut dir = Matrix2::zeros();
+            dir[(j, jj)] = 1.0;
+            let db = dir * b_n * df.transpose() + df * b_n * dir.transpose();
+            let de = eig.log_derivative(&db) * 0.5;
+            let (dtau, _) = c.stress(&de);
+            let dp = dtau * df_inv_t - tau * df_inv_t * dir.transpose() * df_inv_t;
+            for i in 0..2 {
+                for ii in 0..2 {
+                    tangent[(2 * i + ii, 2 * j + jj)] = dp[(i, ii)];
+                }
+            }
+        }
+    }
+    let j = j_start * df.determinant();
+    Response {
+        p,
+        tangent,
+        history: b,
+        cauchy: CauchyStress {
+            plane: [tau[(0, 0)] / j, tau[(1, 1)] / j, tau[(0, 1)] / j],
+            zz: tau_zz / j,
+        },
+    }
+}
+
+/// Eigen-decomposition of a symmetric 2x2 matrix, `b = sum_a l_a n_a n_a^T`.
+struct SymEigen2 {
+    values: [f64; 2],
+    vectors: [nalgebra::Vector2<f64>; 2],
+}
+
+impl SymEigen2 {
+    fn new(b: &Matrix2<f64>) -> Self {
+        let (a, d, c) = (b[(0, 0)], b[(1, 1)], 0.5 * (b[(0, 1)] + b[(1, 0)]));
+        let mean = 0.5 * (a + d);
+        let radius = (0.25 * (a - d) * (a - d) + c * c).sqrt();
+        let theta = 0.5 * (2.0 * c).atan2(a - d);
+        let (s, co) = theta.sin_cos();
+        Self {
+            values: [mean + radius, mean - radius],
+            vectors: [
+                nalgebra::Vector2::new(co, s),
+                nalgebra::Vector2::new(-s, co),
+            ],
+        }
+    }
+
+    /// `sum_a f(l_a) n_a n_a^T`.
+    fn map(&self, f: impl Fn(f64) -> f64) -> Matrix2<f64> {
+        (0..2)
+            .map(|k| self.vectors[k] * self.vectors[k].transpose() * f(self.values[k]))
+            .sum()
+    }
+
+    /// Directional derivative of `ln(b)` along a symmetric `db`:
+    /// `sum_ab f_ab (n_a . db n_b) n_a n_b^T` with `f_aa = 1/l_a` and
+    /// `f_ab = (ln l_a - ln l_b)/(l_a - l_b)` (its limit `1/l_a` when the
+    /// eigenvalues coincide).
+    fn log_derivative(&self, db: &Matrix2<f64>) -> Matrix2<f64> {
+        let [l0, l1] = self.values;
+        let gap = l0 - l1;
+        let f01 = if gap.abs() > 1e-8 * l0.abs() {
+            (l0.ln() - l1.ln()) / gap
+        } else {
+            // Series of (ln l0 - ln l1)/(l0 - l1) about the mean m:
+            // 1/m + gap^2 / (12 m^3) + ...
+            let m = 0.5 * (l0 + l1);
+            1.0 / m + gap * gap / (12.0 * m * m * m)
+        };
+        let f = [[1.0 / l0, f01], [f01, 1.0 / l1]];
+        let mut out = Matrix2::zeros();
+        for a in 0..2 {
+            for b in 0..2 {
+                let na = &self.vectors[a];
+                let nb = &self.vectors[b];
+                out += na * nb.transpose() * (f[a][b] * na.dot(&(db * nb)));
+            }
+        }
+        out
+    }
+}

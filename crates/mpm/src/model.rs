@@ -1,0 +1,169 @@
+//! From the case (what a user submits) to the solver's own types: the only
+//! module that reads the case schema. It seeds the bodies with points,
+//! finds their boundary loops, resolves every boundary selector to loop
+//! segments once, and splits the supports by how they are imposed.
+
+use crate::boundary::ibm::{self, IbmSupport};
+use crate::boundary::loading::LoadedStretch;
+use crate::boundary::traction::Traction;
+use crate::boundary::{find_loops, selected_segments, set_offsets};
+use crate::case::{BasisKind, Body, Case, CaseError, MaterialSpec, SupportMethod};
+use crate::grid::{Basis, Grid};
+use crate::material::{Elastic, Material};
+use crate::newton::NewtonSettings;
+use crate::particles::MaterialPoints;
+use crate::particles::seeding::{self, Density};
+use crate::probes::Probes;
+use crate::stepper::Simulation;
+use crate::supports::GridSupport;
+
+impl Simulation {
+    /// Builds the initial state of a validated case. Fails, naming the
+    /// field, when a boundary load or an IBM support selects no stretch of
+    /// any body's boundary (which could not be told before the points were
+    /// generated).
+    pub fn new(case: &Case) -> Result<Self, CaseError> {
+        let grid = Grid {
+            h: case.grid.cell_size,
+            origin: case.grid.origin,
+        };
+        let points = material_points(case);
+        let mut loops = find_loops(&points.lattice, &points.material, &points.reference);
+        set_offsets(&mut loops, &points, case.boundary.representation);
+        let select = |path: String, on| {
+            let segments = selected_segments(on, &loops, &points, grid.h);
+            if segments.is_empty() {
+                return Err(CaseError {
+                    path,
+                    message:
+                        "selects no stretch of any body's boundary (it must pass within about \
+                         a point spacing of two neighbouring outer points)"
+                            .into(),
+                });
+            }
+            Ok(segments)
+        };
+        let mut boundary_loads = Vec::new();
+        for (i, load) in case.loads.boundary.iter().enumerate() {
+            let segments = select(format!("loads.boundary[{i}].on"), &load.on)?;
+            let traction = match (load.traction, load.pressure) {
+                (Some(t), _) => Traction::Dead(t),
+                (None, Some(p)) => Traction::Pressure(p),
+                (None, None) => continue, // rejected by validation
+            };
+            boundary_loads.extend(segments.into_iter().map(|(loop_index, segments)| {
+                LoadedStretch {
+                    loop_index,
+                    segments,
+                    traction,
+                }
+            }));
+        }
+        let (mut grid_supports, mut ibm_supports) = (Vec::new(), Vec::new());
+        for (index, s) in case.supports.iter().enumerate() {
+            match s.method {
+                SupportMethod::Grid => grid_supports.push(GridSupport {
+                    index,
+                    on: s.on,
+                    fix: s.fix,
+                }),
+                SupportMethod::Ibm => ibm_supports.push(IbmSupport {
+                    index,
+                    segments: select(format!("supports[{index}].on"), &s.on)?,
+                    fix: s.fix,
+                    displacement: s.displacement.unwrap_or([0.0, 0.0]),
+                    rotation: s.rotation,
+                }),
+            }
+        }
+        let point_loads = case
+            .loads
+            .point_loads
+            .iter()
+            .map(|l| (nearest_point(&points, l.at), l.force))
+            .collect();
+        let newton = &case.analysis.newton;
+        Ok(Self {
+            grid,
+            basis: basis(case.basis),
+            extent: case.grid.extent.map(|b| (b.min, b.max)),
+            probes: Probes::new(case.probes.iter().map(|p| (p.name.clone(), p.at))),
+            anchors: ibm::anchors(&ibm_supports, &loops, &points, &grid),
+            band_width: case
+                .boundary
+                .band_width
+                .unwrap_or(ibm::DEFAULT_BAND_WIDTH * grid.h),
+            loops,
+            points,
+            gravity: case.loads.gravity.unwrap_or([0.0, 0.0]),
+            point_loads,
+            boundary_loads,
+            grid_supports,
+            n_supports: case.supports.len(),
+            settings: NewtonSettings {
+                tolerance: newton.tolerance,
+                max_iterations: newton.max_iterations as usize,
+                tangent_regularisation: newton.tangent_regularisation,
+                ..Default::default()
+            },
+            load_steps: case.analysis.load_steps as usize,
+        })
+    }
+}
+
+/// Every body of the case filled with points in its reference state.
+fn material_points(case: &Case) -> MaterialPoints {
+    let mut mp = MaterialPoints::default();
+    for body in &case.bodies {
+        let seeds = seeding::fill(
+            &body.geometry,
+            density(body, case.grid.cell_size),
+            case.grid.origin,
+        );
+        let (_, _, rho) = body.material.constants();
+        mp.add_body(material(&body.material), rho, &seeds);
+    }
+    mp
+}
+
+/// The constitutive model of a material spec.
+pub fn material(spec: &MaterialSpec) -> Material {
+    let (e, nu, _) = spec.constants();
+    let constants = Elastic::from_young_poisson(e, nu);
+    match spec {
+        MaterialSpec::Hencky { .. } => Material::Hencky(constants),
+        MaterialSpec::LinearElastic { .. } => Material::LinearElastic(constants),
+    }
+}
+
+/// How densely a body is seeded, on a grid of `cell_size`.
+fn density(body: &Body, cell_size: f64) -> Density {
+    let p = &body.points;
+    match (p.count, p.per_cell, p.spacing) {
+        (Some(c), _, _) => Density::Count(c),
+        (_, Some(n), _) => Density::Spacing(cell_size / n as f64),
+        (_, _, Some(s)) => Density::Spacing(s),
+        _ => Density::Spacing(f64::NAN), // rejected by validation
+    }
+}
+
+/// An upper bound on the number of points a body makes, without making
+/// them (see [`seeding::max_points`]).
+pub fn max_points(body: &Body, cell_size: f64) -> f64 {
+    seeding::max_points(&body.geometry, density(body, cell_size))
+}
+
+fn basis(kind: BasisKind) -> Basis {
+    match kind {
+        BasisKind::Linear => Basis::Linear,
+        BasisKind::Gimp => Basis::Gimp,
+    }
+}
+
+/// Index of the point nearest to `x`.
+fn nearest_point(points: &MaterialPoints, x: [f64; 2]) -> usize {
+    let d2 = |p: &[f64; 2]| (p[0] - x[0]).powi(2) + (p[1] - x[1]).powi(2);
+    (0..points.len())
+        .min_by(|&a, &b| d2(&points.position[a]).total_cmp(&d2(&points.position[b])))
+        .unwrap_or(0)
+}
