@@ -1,7 +1,9 @@
-//! The job queue: statuses and the SQLite store.
+//! The job queue: statuses, failures and the SQLite store.
 
+mod failure;
 mod status;
 pub mod store;
 
+pub use failure::{Failure, FailureKind};
 pub use status::JobStatus;
 pub use store::{CancelOutcome, Claimed, JobRow, StepJson, Store};

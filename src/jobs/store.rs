@@ -18,7 +18,7 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
 use sqlx::{AssertSqlSafe, FromRow, SqlitePool};
 
-use super::JobStatus;
+use super::{Failure, FailureKind, JobStatus};
 
 /// Unix time in seconds.
 pub fn now() -> f64 {
@@ -183,11 +183,13 @@ impl Store {
     /// Fails running jobs whose lease has expired and that have used all
     /// their attempts. Returns how many.
     pub async fn fail_exhausted(&self, max_attempts: i64) -> Result<u64, sqlx::Error> {
-        let error = serde_json::json!({
-            "kind": "attempts_exhausted",
-            "message": format!("the worker running this job stopped (crashed or was killed) {max_attempts} times"),
-        })
-        .to_string();
+        let error = Failure::new(
+            FailureKind::AttemptsExhausted,
+            format!(
+                "the worker running this job stopped (crashed or was killed) {max_attempts} times"
+            ),
+        )
+        .json();
         let t = now();
         let done = sqlx::query(
             "UPDATE jobs SET status = ?, error = ?, finished_at = ?, lease_owner = NULL, lease_expires_at = NULL \
