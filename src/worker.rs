@@ -41,9 +41,25 @@ pub struct RunningJobs(Mutex<HashMap<i64, Arc<StopFlags>>>);
 impl RunningJobs {
     /// Flags job `id` for cancellation if it runs here.
     pub fn cancel(&self, id: i64) {
-        if let Some(flags) = self.0.lock().expect("not poisoned").get(&id) {
+        if let Some(flags) = self.jobs().get(&id) {
             flags.cancel_requested.store(true, Ordering::SeqCst);
         }
+    }
+
+    /// Fresh stop flags for job `id`, which starts running here.
+    fn register(&self, id: i64) -> Arc<StopFlags> {
+        let flags = Arc::new(StopFlags::default());
+        self.jobs().insert(id, flags.clone());
+        flags
+    }
+
+    /// Job `id` no longer runs here.
+    fn remove(&self, id: i64) {
+        self.jobs().remove(&id);
+    }
+
+    fn jobs(&self) -> std::sync::MutexGuard<'_, HashMap<i64, Arc<StopFlags>>> {
+        self.0.lock().expect("not poisoned")
     }
 }
 
@@ -136,13 +152,7 @@ pub struct StopFlags {
 fn run_job(shared: &Shared, owner: &str, job: Claimed) {
     let started = Instant::now();
     tracing::info!(job = job.id, attempt = job.attempts, "job started");
-    let flags = Arc::new(StopFlags::default());
-    shared
-        .running
-        .0
-        .lock()
-        .expect("not poisoned")
-        .insert(job.id, flags.clone());
+    let flags = shared.running.register(job.id);
     let renewal = shared.runtime.spawn(renew_lease(
         shared.store.clone(),
         job.id,
@@ -170,12 +180,7 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
         sim.run(&mut observer).map_err(Failure::from)
     }));
     renewal.abort();
-    shared
-        .running
-        .0
-        .lock()
-        .expect("not poisoned")
-        .remove(&job.id);
+    shared.running.remove(job.id);
     let seconds = started.elapsed().as_secs_f64();
     let outcome = outcome.unwrap_or_else(|panic| {
         let what = panic
