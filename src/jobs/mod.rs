@@ -1,5 +1,7 @@
-//! The job queue: statuses, failures and the SQLite store.
+//! The job queue: what may be queued, statuses, failures and the SQLite
+//! store.
 
+pub mod admission;
 mod failure;
 mod status;
 pub mod store;
