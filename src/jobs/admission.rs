@@ -2,6 +2,7 @@
 //! the service's limits. Each check names the field that fails it.
 
 use mpm::{Case, Simulation};
+use serde_json::error::Category;
 
 use crate::config::Limits;
 
@@ -24,11 +25,37 @@ pub struct Admitted {
 }
 
 /// Reads a body as a case: the text and the case it holds.
+///
+/// The text is parsed once, straight into a case. A body that is not JSON
+/// (including text after the case) is `MalformedJson`; JSON that is not a
+/// valid case is `InvalidCase` with the field path and message of
+/// `Case::from_json`.
 pub fn read(body: &[u8]) -> Result<(&str, Case), Rejection> {
     let malformed = |e: &dyn std::fmt::Display| Rejection::MalformedJson(e.to_string());
     let text = std::str::from_utf8(body).map_err(|e| malformed(&e))?;
-    serde_json::from_str::<serde_json::Value>(text).map_err(|e| malformed(&e))?;
-    let case = Case::from_json(text).map_err(|e| Rejection::InvalidCase {
+    let mut de = serde_json::Deserializer::from_str(text);
+    let case: Case = match serde_path_to_error::deserialize(&mut de) {
+        Ok(case) => case,
+        Err(e) if e.inner().classify() != Category::Data => return Err(malformed(e.inner())),
+        Err(e) => {
+            // A wrong field can come before a fault that makes the body not
+            // JSON at all; that body is malformed, whatever its start says.
+            // Only on this path is the whole text read again, as a Value,
+            // which also refuses numbers out of range anywhere in it.
+            serde_json::from_str::<serde_json::Value>(text).map_err(|e| malformed(&e))?;
+            // As `Case::from_json` names the field: `$` for the document.
+            let path = match e.path().to_string() {
+                p if p.is_empty() || p == "." => "$".to_string(),
+                p => p,
+            };
+            return Err(Rejection::InvalidCase {
+                path,
+                message: e.into_inner().to_string(),
+            });
+        }
+    };
+    de.end().map_err(|e| malformed(&e))?;
+    case.validate().map_err(|e| Rejection::InvalidCase {
         path: e.path,
         message: e.message,
     })?;
