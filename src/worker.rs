@@ -10,13 +10,13 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use mpm::output::PointColumns;
 use mpm::{Case, Observer, Simulation, StepReport, StepState};
 use tokio::runtime::Handle;
 use tokio::sync::Notify;
 
 use crate::config::Config;
-use crate::jobs::{Claimed, Failure, FailureKind, JobStatus, StepJson, Store};
+use crate::jobs::{Claimed, Failure, FailureKind, JobStatus, Store};
+use crate::step::StoredStep;
 
 /// What the workers share.
 struct Shared {
@@ -296,18 +296,13 @@ struct JobObserver<'a> {
 
 impl Observer for JobObserver<'_> {
     fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
-        let json = StepJson {
-            report: serde_json::to_string(report).expect("reports serialise"),
-            points: serde_json::to_string(&PointColumns::new(state.points))
-                .expect("points serialise"),
-            boundaries: serde_json::to_string(&state.boundaries()).expect("boundaries serialise"),
-        };
+        let document = StoredStep::new(report, state);
         let saved = self.shared.runtime.block_on(self.shared.store.save_step(
             self.job,
             self.owner,
             report.step as i64,
             report.newton.iterations as i64,
-            &json,
+            &document,
         ));
         match saved {
             Ok(true) => {}

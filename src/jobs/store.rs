@@ -19,6 +19,7 @@ use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, S
 use sqlx::{AssertSqlSafe, FromRow, SqlitePool};
 
 use super::{Failure, FailureKind, JobStatus};
+use crate::step::StoredStep;
 
 /// Unix time in seconds.
 pub fn now() -> f64 {
@@ -60,17 +61,6 @@ pub struct Claimed {
     pub id: i64,
     pub case_json: String,
     pub attempts: i64,
-}
-
-/// A step's stored JSON documents.
-#[derive(Debug, Clone, FromRow)]
-pub struct StepJson {
-    /// `mpm::StepReport`
-    pub report: String,
-    /// `mpm::output::PointColumns`
-    pub points: String,
-    /// `[mpm::boundary::BoundaryOutput]`
-    pub boundaries: String,
 }
 
 /// What `POST /jobs/{id}/cancel` did.
@@ -267,7 +257,7 @@ impl Store {
         owner: &str,
         step: i64,
         iterations: i64,
-        json: &StepJson,
+        document: &StoredStep,
     ) -> Result<bool, sqlx::Error> {
         let mut tx = self.pool.begin().await?;
         let held = sqlx::query(AssertSqlSafe(format!(
@@ -288,9 +278,9 @@ impl Store {
             )
             .bind(id)
             .bind(step)
-            .bind(&json.report)
-            .bind(&json.points)
-            .bind(&json.boundaries)
+            .bind(document.report.get())
+            .bind(document.points.get())
+            .bind(document.boundaries.get())
             .execute(&mut *tx)
             .await?;
         }
@@ -383,12 +373,19 @@ impl Store {
             .await
     }
 
-    /// One step's report, points and boundaries (JSON text).
-    pub async fn step(&self, id: i64, step: i64) -> Result<Option<StepJson>, sqlx::Error> {
-        sqlx::query_as("SELECT report, points, boundaries FROM steps WHERE job_id = ? AND step = ?")
-            .bind(id)
-            .bind(step)
-            .fetch_optional(&self.pool)
-            .await
+    /// One step's report, points and boundaries.
+    pub async fn step(&self, id: i64, step: i64) -> Result<Option<StoredStep>, sqlx::Error> {
+        let row: Option<(String, String, String)> = sqlx::query_as(
+            "SELECT report, points, boundaries FROM steps WHERE job_id = ? AND step = ?",
+        )
+        .bind(id)
+        .bind(step)
+        .fetch_optional(&self.pool)
+        .await?;
+        row.map(|(report, points, boundaries)| {
+            StoredStep::from_text(report, points, boundaries)
+                .map_err(|e| sqlx::Error::Decode(Box::new(e)))
+        })
+        .transpose()
     }
 }
