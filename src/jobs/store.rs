@@ -15,8 +15,11 @@ use std::path::Path;
 use std::str::FromStr;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
-use sqlx::{AssertSqlSafe, FromRow, SqlitePool};
+use sqlx::query::Query;
+use sqlx::sqlite::{
+    SqliteArguments, SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous,
+};
+use sqlx::{AssertSqlSafe, FromRow, Sqlite, SqliteExecutor, SqlitePool};
 
 use super::{Failure, FailureKind, JobStatus};
 use crate::step::StoredStep;
@@ -260,18 +263,14 @@ impl Store {
         document: &StoredStep,
     ) -> Result<bool, sqlx::Error> {
         let mut tx = self.pool.begin().await?;
-        let held = sqlx::query(AssertSqlSafe(format!(
-            "UPDATE jobs SET steps_done = ?, newton_iterations = newton_iterations + ? \
-             WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
-        )))
-        .bind(step)
-        .bind(iterations)
-        .bind(id)
-        .bind(owner)
-        .execute(&mut *tx)
-        .await?
-        .rows_affected()
-            == 1;
+        let held = update_held(
+            &mut *tx,
+            "steps_done = ?, newton_iterations = newton_iterations + ?",
+            |q| q.bind(step).bind(iterations),
+            id,
+            owner,
+        )
+        .await?;
         if held {
             sqlx::query(
                 "INSERT OR REPLACE INTO steps (job_id, step, report, points, boundaries) VALUES (?, ?, ?, ?, ?)",
@@ -297,37 +296,32 @@ impl Store {
         solve_seconds: f64,
         error: Option<&str>,
     ) -> Result<bool, sqlx::Error> {
-        let done = sqlx::query(AssertSqlSafe(format!(
-            "UPDATE jobs SET status = ?, finished_at = ?, solve_seconds = ?, error = ?, lease_owner = NULL, \
-                 lease_expires_at = NULL \
-             WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
-        )))
-        .bind(status)
-        .bind(now())
-        .bind(solve_seconds)
-        .bind(error)
-        .bind(id)
-        .bind(owner)
-        .execute(&self.pool)
-        .await?;
-        Ok(done.rows_affected() == 1)
+        update_held(
+            &self.pool,
+            "status = ?, finished_at = ?, solve_seconds = ?, error = ?, lease_owner = NULL, \
+             lease_expires_at = NULL",
+            |q| q.bind(status).bind(now()).bind(solve_seconds).bind(error),
+            id,
+            owner,
+        )
+        .await
     }
 
     /// Puts a job `owner` was running back in the queue (shutdown): the
     /// attempt does not count and its partial steps are dropped.
     pub async fn requeue(&self, id: i64, owner: &str) -> Result<(), sqlx::Error> {
         let mut tx = self.pool.begin().await?;
-        let held = sqlx::query(AssertSqlSafe(format!(
-            "UPDATE jobs SET status = '{QUEUED}', attempts = MAX(attempts - 1, 0), lease_owner = NULL, \
-                 lease_expires_at = NULL, started_at = NULL, steps_done = 0, newton_iterations = 0 \
-             WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
-        )))
-        .bind(id)
-        .bind(owner)
-        .execute(&mut *tx)
-        .await?
-        .rows_affected()
-            == 1;
+        let held = update_held(
+            &mut *tx,
+            &format!(
+                "status = '{QUEUED}', attempts = MAX(attempts - 1, 0), lease_owner = NULL, \
+                 lease_expires_at = NULL, started_at = NULL, steps_done = 0, newton_iterations = 0"
+            ),
+            |q| q,
+            id,
+            owner,
+        )
+        .await?;
         if held {
             sqlx::query("DELETE FROM steps WHERE job_id = ?")
                 .bind(id)
@@ -388,4 +382,23 @@ impl Store {
         })
         .transpose()
     }
+}
+
+type SqliteQuery = Query<'static, Sqlite, SqliteArguments>;
+
+/// `UPDATE jobs SET {set}` on job `id` if `owner` still holds it (it runs
+/// under `owner`'s lease); `bind` binds the values `set` asks for. `set` is
+/// a constant of this module. Returns whether `owner` held the job.
+async fn update_held<'c>(
+    executor: impl SqliteExecutor<'c>,
+    set: &str,
+    bind: impl FnOnce(SqliteQuery) -> SqliteQuery,
+    id: i64,
+    owner: &str,
+) -> Result<bool, sqlx::Error> {
+    let update = sqlx::query(AssertSqlSafe(format!(
+        "UPDATE jobs SET {set} WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
+    )));
+    let done = bind(update).bind(id).bind(owner).execute(executor).await?;
+    Ok(done.rows_affected() == 1)
 }
