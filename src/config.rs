@@ -4,6 +4,20 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+// The defaults, shared by `Config::new` and the flags of `mpm serve`.
+/// Where `mpm serve` listens.
+pub const DEFAULT_ADDR: &str = "127.0.0.1:8080";
+/// The database file of `mpm serve`.
+pub const DEFAULT_DATABASE: &str = "mpm.sqlite";
+pub const DEFAULT_WORKERS: usize = 1;
+pub const DEFAULT_LEASE: Duration = Duration::from_secs(30);
+pub const DEFAULT_MAX_ATTEMPTS: u32 = 3;
+pub const DEFAULT_POLL_INTERVAL: Duration = Duration::from_secs(1);
+pub const DEFAULT_MAX_BODY_BYTES: usize = 1 << 20;
+pub const DEFAULT_MAX_POINTS: usize = 1_000_000;
+pub const DEFAULT_MAX_LOAD_STEPS: usize = 10_000;
+pub const DEFAULT_JOB_TIME_LIMIT: Duration = Duration::from_secs(3600);
+
 #[derive(Debug, Clone)]
 pub struct Config {
     /// SQLite file, created on first start.
@@ -37,16 +51,16 @@ impl Config {
     pub fn new(database: PathBuf) -> Self {
         Self {
             database,
-            workers: 1,
-            lease: Duration::from_secs(30),
-            max_attempts: 3,
-            poll_interval: Duration::from_secs(1),
+            workers: DEFAULT_WORKERS,
+            lease: DEFAULT_LEASE,
+            max_attempts: DEFAULT_MAX_ATTEMPTS,
+            poll_interval: DEFAULT_POLL_INTERVAL,
             token: None,
             limits: Limits {
-                max_body_bytes: 1 << 20,
-                max_points: 1_000_000,
-                max_load_steps: 10_000,
-                job_time_limit: Duration::from_secs(3600),
+                max_body_bytes: DEFAULT_MAX_BODY_BYTES,
+                max_points: DEFAULT_MAX_POINTS,
+                max_load_steps: DEFAULT_MAX_LOAD_STEPS,
+                job_time_limit: DEFAULT_JOB_TIME_LIMIT,
             },
         }
     }

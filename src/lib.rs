@@ -8,6 +8,7 @@
 pub mod config;
 pub mod http;
 pub mod jobs;
+pub mod step;
 pub mod worker;
 
 use std::net::SocketAddr;

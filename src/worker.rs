@@ -10,13 +10,13 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use mpm::report::PointColumns;
-use mpm::{Case, Observer, Simulation, SolveError, StepReport, StepState};
+use mpm::{Case, Observer, Simulation, StepReport, StepState};
 use tokio::runtime::Handle;
 use tokio::sync::Notify;
 
 use crate::config::Config;
-use crate::jobs::{Claimed, JobStatus, StepJson, Store};
+use crate::jobs::{Claimed, Failure, FailureKind, JobStatus, Store};
+use crate::step::StoredStep;
 
 /// What the workers share.
 struct Shared {
@@ -41,9 +41,25 @@ pub struct RunningJobs(Mutex<HashMap<i64, Arc<StopFlags>>>);
 impl RunningJobs {
     /// Flags job `id` for cancellation if it runs here.
     pub fn cancel(&self, id: i64) {
-        if let Some(flags) = self.0.lock().expect("not poisoned").get(&id) {
+        if let Some(flags) = self.jobs().get(&id) {
             flags.cancel_requested.store(true, Ordering::SeqCst);
         }
+    }
+
+    /// Fresh stop flags for job `id`, which starts running here.
+    fn register(&self, id: i64) -> Arc<StopFlags> {
+        let flags = Arc::new(StopFlags::default());
+        self.jobs().insert(id, flags.clone());
+        flags
+    }
+
+    /// Job `id` no longer runs here.
+    fn remove(&self, id: i64) {
+        self.jobs().remove(&id);
+    }
+
+    fn jobs(&self) -> std::sync::MutexGuard<'_, HashMap<i64, Arc<StopFlags>>> {
+        self.0.lock().expect("not poisoned")
     }
 }
 
@@ -136,13 +152,7 @@ pub struct StopFlags {
 fn run_job(shared: &Shared, owner: &str, job: Claimed) {
     let started = Instant::now();
     tracing::info!(job = job.id, attempt = job.attempts, "job started");
-    let flags = Arc::new(StopFlags::default());
-    shared
-        .running
-        .0
-        .lock()
-        .expect("not poisoned")
-        .insert(job.id, flags.clone());
+    let flags = shared.running.register(job.id);
     let renewal = shared.runtime.spawn(renew_lease(
         shared.store.clone(),
         job.id,
@@ -164,18 +174,13 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
         // The case was validated on submission; a failure here means the
         // stored text was altered or the format changed under it.
         let case = Case::from_json(&job.case_json)
-            .map_err(|e| Failure::new("invalid_case", e.to_string()))?;
-        let mut sim =
-            Simulation::new(&case).map_err(|e| Failure::new("invalid_case", e.to_string()))?;
+            .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
+        let mut sim = Simulation::new(&case)
+            .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
         sim.run(&mut observer).map_err(Failure::from)
     }));
     renewal.abort();
-    shared
-        .running
-        .0
-        .lock()
-        .expect("not poisoned")
-        .remove(&job.id);
+    shared.running.remove(job.id);
     let seconds = started.elapsed().as_secs_f64();
     let outcome = outcome.unwrap_or_else(|panic| {
         let what = panic
@@ -185,59 +190,71 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
             .unwrap_or_default();
         tracing::error!(job = job.id, panic = %what, "solver panicked");
         Err(Failure::new(
-            "internal",
-            "the solver stopped on an internal error".into(),
+            FailureKind::Internal,
+            "the solver stopped on an internal error",
         ))
     });
+    let end = match outcome {
+        Ok(_) => End::Final(JobStatus::Succeeded, None),
+        Err(f) if f.kind == FailureKind::Cancelled => stopped(shared, &observer, &flags, f),
+        Err(f) => End::Final(JobStatus::Failed, Some(f)),
+    };
     let store = &shared.store;
     let result = shared.runtime.block_on(async {
-        match outcome {
-            Ok(_) => store
-                .finish(job.id, owner, JobStatus::Succeeded, seconds, None)
-                .await
-                .map(|_| ()),
-            Err(f) if f.kind == "cancelled" => {
-                if observer.timed_out {
-                    let f = Failure::new(
-                        "time_limit",
-                        format!(
-                            "the per-job wall-time limit of {} s was reached ({})",
-                            shared.config.limits.job_time_limit.as_secs(),
-                            f.message
-                        ),
-                    );
-                    store
-                        .finish(job.id, owner, JobStatus::Failed, seconds, Some(&f.json()))
-                        .await
-                        .map(|_| ())
-                } else if let Some(e) = &observer.store_error {
-                    let f = Failure::new("internal", format!("storing results failed: {e}"));
-                    store
-                        .finish(job.id, owner, JobStatus::Failed, seconds, Some(&f.json()))
-                        .await
-                        .map(|_| ())
-                } else if flags.cancel_requested.load(Ordering::SeqCst) {
-                    store
-                        .finish(job.id, owner, JobStatus::Cancelled, seconds, None)
-                        .await
-                        .map(|_| ())
-                } else if shared.stopping.load(Ordering::SeqCst) {
-                    store.requeue(job.id, owner).await
-                } else {
-                    // The lease was lost: another worker owns the job now.
-                    Ok(())
-                }
+        match end {
+            End::Final(status, failure) => {
+                let error = failure.as_ref().map(Failure::json);
+                store
+                    .finish(job.id, owner, status, seconds, error.as_deref())
+                    .await
+                    .map(|_| ())
             }
-            Err(f) => store
-                .finish(job.id, owner, JobStatus::Failed, seconds, Some(&f.json()))
-                .await
-                .map(|_| ()),
+            End::Requeue => store.requeue(job.id, owner).await,
+            End::LeaseLost => Ok(()),
         }
     });
     if let Err(e) = result {
         tracing::error!(job = job.id, error = %e, "recording the job's end failed; its lease will expire and it will be retried");
     }
     tracing::info!(job = job.id, seconds, "job ended");
+}
+
+/// How a run ends in the store.
+enum End {
+    /// A final status, with the failure of a failed job.
+    Final(JobStatus, Option<Failure>),
+    /// Back to the queue (shutdown): the attempt does not count.
+    Requeue,
+    /// Nothing to record: the lease was lost and another worker owns the job.
+    LeaseLost,
+}
+
+/// The end of a run that the solver stopped on request (`cancelled`): the
+/// first reason to stop that holds, in order of precedence.
+fn stopped(shared: &Shared, observer: &JobObserver<'_>, flags: &StopFlags, f: Failure) -> End {
+    if observer.timed_out {
+        let f = Failure::new(
+            FailureKind::TimeLimit,
+            format!(
+                "the per-job wall-time limit of {} s was reached ({})",
+                shared.config.limits.job_time_limit.as_secs(),
+                f.message
+            ),
+        );
+        End::Final(JobStatus::Failed, Some(f))
+    } else if let Some(e) = &observer.store_error {
+        let f = Failure::new(
+            FailureKind::Internal,
+            format!("storing results failed: {e}"),
+        );
+        End::Final(JobStatus::Failed, Some(f))
+    } else if flags.cancel_requested.load(Ordering::SeqCst) {
+        End::Final(JobStatus::Cancelled, None)
+    } else if shared.stopping.load(Ordering::SeqCst) {
+        End::Requeue
+    } else {
+        End::LeaseLost
+    }
 }
 
 /// Renews the lease every third of its length; notes a cancel request or a
@@ -279,18 +296,13 @@ struct JobObserver<'a> {
 
 impl Observer for JobObserver<'_> {
     fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
-        let json = StepJson {
-            report: serde_json::to_string(report).expect("reports serialise"),
-            points: serde_json::to_string(&PointColumns::new(state.points))
-                .expect("points serialise"),
-            boundaries: serde_json::to_string(&state.boundaries()).expect("boundaries serialise"),
-        };
+        let document = StoredStep::new(report, state);
         let saved = self.shared.runtime.block_on(self.shared.store.save_step(
             self.job,
             self.owner,
             report.step as i64,
             report.newton.iterations as i64,
-            &json,
+            &document,
         ));
         match saved {
             Ok(true) => {}
@@ -308,55 +320,5 @@ impl Observer for JobObserver<'_> {
             || self.flags.cancel_requested.load(Ordering::SeqCst)
             || self.flags.lease_lost.load(Ordering::SeqCst)
             || self.shared.stopping.load(Ordering::SeqCst)
-    }
-}
-
-/// A job's failure as stored in `jobs.error` and served by the API.
-#[derive(Debug, serde::Serialize)]
-struct Failure {
-    kind: &'static str,
-    message: String,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    step: Option<usize>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    iteration: Option<usize>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    residual: Option<f64>,
-}
-
-impl Failure {
-    fn new(kind: &'static str, message: String) -> Self {
-        Self {
-            kind,
-            message,
-            step: None,
-            iteration: None,
-            residual: None,
-        }
-    }
-
-    fn json(&self) -> String {
-        serde_json::to_string(self).expect("failures serialise")
-    }
-}
-
-impl From<SolveError> for Failure {
-    fn from(e: SolveError) -> Self {
-        let kind = match e {
-            SolveError::NotConverged { .. } => "not_converged",
-            SolveError::Diverged { .. } => "diverged",
-            SolveError::Inverted { .. } => "inverted_point",
-            SolveError::LinearSolve { .. } => "linear_solve",
-            SolveError::LeftGrid { .. } => "left_grid",
-            SolveError::Cancelled { .. } => "cancelled",
-        };
-        let (step, iteration, residual) = e.location();
-        Failure {
-            kind,
-            message: e.to_string(),
-            step: Some(step),
-            iteration,
-            residual: residual.filter(|r| r.is_finite()),
-        }
     }
 }

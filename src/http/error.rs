@@ -7,6 +7,8 @@ use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
 use serde_json::{Value, json};
 
+use crate::jobs::admission::Rejection;
+
 #[derive(Debug, thiserror::Error)]
 pub enum ApiError {
     /// The body is not JSON at all.
@@ -30,6 +32,16 @@ pub enum ApiError {
     Unauthorized,
     #[error("internal error")]
     Internal(String),
+}
+
+impl From<Rejection> for ApiError {
+    fn from(r: Rejection) -> Self {
+        match r {
+            Rejection::MalformedJson(message) => ApiError::MalformedJson(message),
+            Rejection::InvalidCase { path, message } => ApiError::InvalidCase { path, message },
+            Rejection::LimitExceeded { path, message } => ApiError::LimitExceeded { path, message },
+        }
+    }
 }
 
 impl From<sqlx::Error> for ApiError {

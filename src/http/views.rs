@@ -6,6 +6,7 @@ use mpm::StepReport;
 use mpm::report::StepTimings;
 use serde::Serialize;
 use serde_json::Value;
+use serde_json::value::RawValue;
 
 use crate::jobs::{JobRow, JobStatus};
 
@@ -80,6 +81,14 @@ impl JobView {
             },
         }
     }
+}
+
+/// `GET /jobs/{id}/steps`: the stored report of every finished step.
+#[derive(Debug, Serialize)]
+pub struct StepsView {
+    pub job: i64,
+    /// `mpm::StepReport` of each finished step, in step order.
+    pub steps: Vec<Box<RawValue>>,
 }
 
 /// Everything but the point data: probe histories, reactions, Newton

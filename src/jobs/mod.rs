@@ -1,7 +1,11 @@
-//! The job queue: statuses and the SQLite store.
+//! The job queue: what may be queued, statuses, failures and the SQLite
+//! store.
 
+pub mod admission;
+mod failure;
 mod status;
 pub mod store;
 
+pub use failure::{Failure, FailureKind};
 pub use status::JobStatus;
-pub use store::{CancelOutcome, Claimed, JobRow, StepJson, Store};
+pub use store::{CancelOutcome, Claimed, JobRow, Store};

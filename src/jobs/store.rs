@@ -15,10 +15,14 @@ use std::path::Path;
 use std::str::FromStr;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
-use sqlx::{AssertSqlSafe, FromRow, SqlitePool};
+use sqlx::query::Query;
+use sqlx::sqlite::{
+    SqliteArguments, SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous,
+};
+use sqlx::{AssertSqlSafe, FromRow, Sqlite, SqliteExecutor, SqlitePool};
 
-use super::JobStatus;
+use super::{Failure, FailureKind, JobStatus};
+use crate::step::StoredStep;
 
 /// Unix time in seconds.
 pub fn now() -> f64 {
@@ -60,17 +64,6 @@ pub struct Claimed {
     pub id: i64,
     pub case_json: String,
     pub attempts: i64,
-}
-
-/// A step's stored JSON documents.
-#[derive(Debug, Clone, FromRow)]
-pub struct StepJson {
-    /// `mpm::StepReport`
-    pub report: String,
-    /// `mpm::report::PointColumns`
-    pub points: String,
-    /// `[mpm::boundary::BoundaryOutput]`
-    pub boundaries: String,
 }
 
 /// What `POST /jobs/{id}/cancel` did.
@@ -183,11 +176,13 @@ impl Store {
     /// Fails running jobs whose lease has expired and that have used all
     /// their attempts. Returns how many.
     pub async fn fail_exhausted(&self, max_attempts: i64) -> Result<u64, sqlx::Error> {
-        let error = serde_json::json!({
-            "kind": "attempts_exhausted",
-            "message": format!("the worker running this job stopped (crashed or was killed) {max_attempts} times"),
-        })
-        .to_string();
+        let error = Failure::new(
+            FailureKind::AttemptsExhausted,
+            format!(
+                "the worker running this job stopped (crashed or was killed) {max_attempts} times"
+            ),
+        )
+        .json();
         let t = now();
         let done = sqlx::query(
             "UPDATE jobs SET status = ?, error = ?, finished_at = ?, lease_owner = NULL, lease_expires_at = NULL \
@@ -265,30 +260,26 @@ impl Store {
         owner: &str,
         step: i64,
         iterations: i64,
-        json: &StepJson,
+        document: &StoredStep,
     ) -> Result<bool, sqlx::Error> {
         let mut tx = self.pool.begin().await?;
-        let held = sqlx::query(AssertSqlSafe(format!(
-            "UPDATE jobs SET steps_done = ?, newton_iterations = newton_iterations + ? \
-             WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
-        )))
-        .bind(step)
-        .bind(iterations)
-        .bind(id)
-        .bind(owner)
-        .execute(&mut *tx)
-        .await?
-        .rows_affected()
-            == 1;
+        let held = update_held(
+            &mut *tx,
+            "steps_done = ?, newton_iterations = newton_iterations + ?",
+            |q| q.bind(step).bind(iterations),
+            id,
+            owner,
+        )
+        .await?;
         if held {
             sqlx::query(
                 "INSERT OR REPLACE INTO steps (job_id, step, report, points, boundaries) VALUES (?, ?, ?, ?, ?)",
             )
             .bind(id)
             .bind(step)
-            .bind(&json.report)
-            .bind(&json.points)
-            .bind(&json.boundaries)
+            .bind(document.report.get())
+            .bind(document.points.get())
+            .bind(document.boundaries.get())
             .execute(&mut *tx)
             .await?;
         }
@@ -305,37 +296,32 @@ impl Store {
         solve_seconds: f64,
         error: Option<&str>,
     ) -> Result<bool, sqlx::Error> {
-        let done = sqlx::query(AssertSqlSafe(format!(
-            "UPDATE jobs SET status = ?, finished_at = ?, solve_seconds = ?, error = ?, lease_owner = NULL, \
-                 lease_expires_at = NULL \
-             WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
-        )))
-        .bind(status)
-        .bind(now())
-        .bind(solve_seconds)
-        .bind(error)
-        .bind(id)
-        .bind(owner)
-        .execute(&self.pool)
-        .await?;
-        Ok(done.rows_affected() == 1)
+        update_held(
+            &self.pool,
+            "status = ?, finished_at = ?, solve_seconds = ?, error = ?, lease_owner = NULL, \
+             lease_expires_at = NULL",
+            |q| q.bind(status).bind(now()).bind(solve_seconds).bind(error),
+            id,
+            owner,
+        )
+        .await
     }
 
     /// Puts a job `owner` was running back in the queue (shutdown): the
     /// attempt does not count and its partial steps are dropped.
     pub async fn requeue(&self, id: i64, owner: &str) -> Result<(), sqlx::Error> {
         let mut tx = self.pool.begin().await?;
-        let held = sqlx::query(AssertSqlSafe(format!(
-            "UPDATE jobs SET status = '{QUEUED}', attempts = MAX(attempts - 1, 0), lease_owner = NULL, \
-                 lease_expires_at = NULL, started_at = NULL, steps_done = 0, newton_iterations = 0 \
-             WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
-        )))
-        .bind(id)
-        .bind(owner)
-        .execute(&mut *tx)
-        .await?
-        .rows_affected()
-            == 1;
+        let held = update_held(
+            &mut *tx,
+            &format!(
+                "status = '{QUEUED}', attempts = MAX(attempts - 1, 0), lease_owner = NULL, \
+                 lease_expires_at = NULL, started_at = NULL, steps_done = 0, newton_iterations = 0"
+            ),
+            |q| q,
+            id,
+            owner,
+        )
+        .await?;
         if held {
             sqlx::query("DELETE FROM steps WHERE job_id = ?")
                 .bind(id)
@@ -381,12 +367,38 @@ impl Store {
             .await
     }
 
-    /// One step's report, points and boundaries (JSON text).
-    pub async fn step(&self, id: i64, step: i64) -> Result<Option<StepJson>, sqlx::Error> {
-        sqlx::query_as("SELECT report, points, boundaries FROM steps WHERE job_id = ? AND step = ?")
-            .bind(id)
-            .bind(step)
-            .fetch_optional(&self.pool)
-            .await
+    /// One step's report, points and boundaries.
+    pub async fn step(&self, id: i64, step: i64) -> Result<Option<StoredStep>, sqlx::Error> {
+        let row: Option<(String, String, String)> = sqlx::query_as(
+            "SELECT report, points, boundaries FROM steps WHERE job_id = ? AND step = ?",
+        )
+        .bind(id)
+        .bind(step)
+        .fetch_optional(&self.pool)
+        .await?;
+        row.map(|(report, points, boundaries)| {
+            StoredStep::from_text(report, points, boundaries)
+                .map_err(|e| sqlx::Error::Decode(Box::new(e)))
+        })
+        .transpose()
     }
+}
+
+type SqliteQuery = Query<'static, Sqlite, SqliteArguments>;
+
+/// `UPDATE jobs SET {set}` on job `id` if `owner` still holds it (it runs
+/// under `owner`'s lease); `bind` binds the values `set` asks for. `set` is
+/// a constant of this module. Returns whether `owner` held the job.
+async fn update_held<'c>(
+    executor: impl SqliteExecutor<'c>,
+    set: &str,
+    bind: impl FnOnce(SqliteQuery) -> SqliteQuery,
+    id: i64,
+    owner: &str,
+) -> Result<bool, sqlx::Error> {
+    let update = sqlx::query(AssertSqlSafe(format!(
+        "UPDATE jobs SET {set} WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
+    )));
+    let done = bind(update).bind(id).bind(owner).execute(executor).await?;
+    Ok(done.rows_affected() == 1)
 }

@@ -38,7 +38,7 @@ pub mod stepper;
 pub mod supports;
 pub mod vtk;
 
-pub use case::{Case, CaseError};
+pub use case::{Case, CaseError, CaseErrorKind};
 pub use newton::{NewtonSettings, SolveError};
 pub use observer::{NoObserver, Observer, StepState};
 pub use particles::MaterialPoints;

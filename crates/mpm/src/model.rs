@@ -33,13 +33,11 @@ impl Simulation {
         let select = |path: String, on| {
             let segments = selected_segments(on, &loops, &points, grid.h);
             if segments.is_empty() {
-                return Err(CaseError {
+                return Err(CaseError::new(
                     path,
-                    message:
-                        "selects no stretch of any body's boundary (it must pass within about \
-                         a point spacing of two neighbouring outer points)"
-                            .into(),
-                });
+                    "selects no stretch of any body's boundary (it must pass within about \
+                     a point spacing of two neighbouring outer points)",
+                ));
             }
             Ok(segments)
         };

@@ -307,6 +307,15 @@ pub struct CaseError {
     /// document itself.
     pub path: String,
     pub message: String,
+    pub kind: CaseErrorKind,
+}
+
+/// Whether a case could not be read as JSON at all, or is JSON that is not
+/// a valid case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CaseErrorKind {
+    Syntax,
+    Invalid,
 }
 
 #[cfg(test)]
@@ -326,6 +335,20 @@ mod tests {
         for name in builtin::NAMES {
             Case::from_json(builtin::get(name).unwrap()).unwrap();
         }
+    }
+
+    #[test]
+    fn text_that_is_not_json_is_a_syntax_error_and_a_wrong_case_is_not() {
+        let text = column_json().to_string();
+        for bad in [format!("{text} x"), text[..text.len() - 1].to_string()] {
+            assert_eq!(
+                Case::from_json(&bad).unwrap_err().kind,
+                CaseErrorKind::Syntax
+            );
+        }
+        let mut v = column_json();
+        v["grid"]["cell_size"] = "big".into();
+        assert_eq!(error_for(v).kind, CaseErrorKind::Invalid);
     }
 
     #[test]

@@ -1,5 +1,8 @@
-//! The second pass over a case: the values the types cannot check (signs,
-//! ranges, consistency), each error naming its field.
+//! Reading a case in two passes: `serde` for its shape, then the values the
+//! types cannot check (signs, ranges, consistency). Every error names its
+//! field.
+
+use serde_json::error::Category;
 
 use super::*;
 use crate::geometry::signed_area;
@@ -9,22 +12,37 @@ impl CaseError {
         Self {
             path: path.into(),
             message: message.into(),
+            kind: CaseErrorKind::Invalid,
         }
     }
 }
 
 impl Case {
-    /// Parses and validates a case from JSON text.
+    /// Parses and validates a case from JSON text. Text that is not JSON
+    /// (text after the case included) is a [`CaseErrorKind::Syntax`] error.
     pub fn from_json(text: &str) -> Result<Case, CaseError> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let case: Case = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let path = if path == "." || path.is_empty() {
-                "$".to_string()
-            } else {
-                path
+        let mut de = serde_json::Deserializer::from_str(text);
+        let case: Case = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            // A wrong field can come before a fault that makes the text not
+            // JSON at all: such text is malformed, whatever its start says.
+            let syntax = e.inner().classify() != Category::Data
+                || serde_json::from_str::<serde_json::Value>(text).is_err();
+            let path = match e.path().to_string() {
+                p if p.is_empty() || p == "." => "$".to_string(),
+                p => p,
             };
-            CaseError::new(path, e.into_inner().to_string())
+            CaseError {
+                kind: if syntax {
+                    CaseErrorKind::Syntax
+                } else {
+                    CaseErrorKind::Invalid
+                },
+                ..CaseError::new(path, e.into_inner().to_string())
+            }
+        })?;
+        de.end().map_err(|e| CaseError {
+            kind: CaseErrorKind::Syntax,
+            ..CaseError::new("$", e.to_string())
         })?;
         case.validate()?;
         Ok(case)

@@ -5,20 +5,20 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::Args;
-use mpm_service::{Config, Server};
+use mpm_service::{Config, Server, config};
 
 use crate::CliError;
 
 #[derive(Args)]
 pub struct ServeArgs {
     /// Address to listen on (port 0 picks a free port).
-    #[arg(long, env = "MPM_ADDR", default_value = "127.0.0.1:8080")]
+    #[arg(long, env = "MPM_ADDR", default_value = config::DEFAULT_ADDR)]
     addr: SocketAddr,
     /// SQLite database file, created on first start.
-    #[arg(long, env = "MPM_DATABASE", default_value = "mpm.sqlite")]
+    #[arg(long, env = "MPM_DATABASE", default_value = config::DEFAULT_DATABASE)]
     database: PathBuf,
     /// Jobs solved at once; each uses all cores through rayon.
-    #[arg(long, env = "MPM_WORKERS", default_value_t = 1)]
+    #[arg(long, env = "MPM_WORKERS", default_value_t = config::DEFAULT_WORKERS)]
     workers: usize,
     /// Threads in rayon's pool for the solver (default: one per core).
     #[arg(long, env = "MPM_SOLVER_THREADS")]
@@ -27,23 +27,23 @@ pub struct ServeArgs {
     #[arg(long, env = "MPM_TOKEN", hide_env_values = true)]
     token: Option<String>,
     /// Largest accepted request body, in bytes.
-    #[arg(long, env = "MPM_MAX_BODY_BYTES", default_value_t = 1 << 20)]
+    #[arg(long, env = "MPM_MAX_BODY_BYTES", default_value_t = config::DEFAULT_MAX_BODY_BYTES)]
     max_body_bytes: usize,
     /// Most material points a case may generate.
-    #[arg(long, env = "MPM_MAX_POINTS", default_value_t = 1_000_000)]
+    #[arg(long, env = "MPM_MAX_POINTS", default_value_t = config::DEFAULT_MAX_POINTS)]
     max_points: usize,
     /// Most load steps a case may ask for.
-    #[arg(long, env = "MPM_MAX_LOAD_STEPS", default_value_t = 10_000)]
+    #[arg(long, env = "MPM_MAX_LOAD_STEPS", default_value_t = config::DEFAULT_MAX_LOAD_STEPS)]
     max_load_steps: usize,
     /// Wall-time limit of one job, in seconds; a job over it fails.
-    #[arg(long, env = "MPM_JOB_TIME_LIMIT", default_value_t = 3600)]
+    #[arg(long, env = "MPM_JOB_TIME_LIMIT", default_value_t = config::DEFAULT_JOB_TIME_LIMIT.as_secs())]
     job_time_limit: u64,
     /// Lease of a running job, in seconds; a job whose worker died is
     /// claimed again this long after its last renewal.
-    #[arg(long, env = "MPM_LEASE_SECONDS", default_value_t = 30.0)]
+    #[arg(long, env = "MPM_LEASE_SECONDS", default_value_t = config::DEFAULT_LEASE.as_secs_f64())]
     lease_seconds: f64,
     /// Runs of one job (first plus retries after crashes) before it fails.
-    #[arg(long, env = "MPM_MAX_ATTEMPTS", default_value_t = 3)]
+    #[arg(long, env = "MPM_MAX_ATTEMPTS", default_value_t = config::DEFAULT_MAX_ATTEMPTS)]
     max_attempts: u32,
 }
 

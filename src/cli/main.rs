@@ -6,10 +6,15 @@
 //! - `mpm bench` measures cost against problem size and writes a report.
 //! - `mpm serve` runs the HTTP job service (see the README and openapi.yaml).
 
-mod bench;
-mod plot;
 mod run;
 mod serve;
+
+// The study tools live beside the service's sources in src/.
+#[path = "../bench.rs"]
+mod bench;
+#[path = "../plot.rs"]
+mod plot;
+#[path = "../study.rs"]
 mod study;
 
 use std::path::PathBuf;

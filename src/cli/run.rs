@@ -5,10 +5,10 @@ use std::fs::{self, File};
 use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
-use mpm::boundary::BoundaryOutput;
 use mpm::report::PointColumns;
 use mpm::vtk::{write_pvd, write_vtp, write_vtu};
 use mpm::{Case, Observer, RunReport, Simulation, StepReport, StepState};
+use mpm_service::step::StepDocument;
 use serde::Serialize;
 
 use crate::{CliError, DEFAULT_EXAMPLE};
@@ -154,15 +154,6 @@ impl<'a> Summary<'a> {
     }
 }
 
-/// One step's file: its report, the material points and the boundary
-/// curves (the same shape as the service's `GET /jobs/{id}/steps/{k}`).
-#[derive(Serialize)]
-struct StepFile<'a> {
-    report: &'a StepReport,
-    points: &'a PointColumns,
-    boundaries: &'a [BoundaryOutput],
-}
-
 struct ResultWriter {
     steps_dir: PathBuf,
     point_files: bool,
@@ -179,13 +170,13 @@ impl ResultWriter {
         let json = File::create(self.steps_dir.join(format!("{stem}.json")))?;
         let columns = PointColumns::new(state.points);
         let boundaries = state.boundaries();
-        let file = StepFile {
+        let document = StepDocument {
             report,
             points: &columns,
             boundaries: &boundaries,
         };
         let mut w = BufWriter::new(json);
-        serde_json::to_writer(&mut w, &file)?;
+        serde_json::to_writer(&mut w, &document)?;
         w.flush()?;
         let mut vtu = BufWriter::new(File::create(self.steps_dir.join(format!("{stem}.vtu")))?);
         write_vtu(&mut vtu, &columns)?;

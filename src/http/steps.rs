@@ -1,0 +1,73 @@
+//! The step endpoints: every finished step's report, and one step's
+//! document or its points as VTU.
+
+use axum::Json;
+use axum::extract::{Path, Query, State};
+use axum::http::header;
+use axum::response::{IntoResponse, Response};
+use mpm::report::PointColumns;
+use mpm::vtk::write_vtu;
+use serde::Deserialize;
+use serde_json::value::RawValue;
+
+use super::views::StepsView;
+use super::{ApiError, AppState, jobs};
+use crate::step::StoredStep;
+
+/// `GET /jobs/{id}/steps`: the report of every finished step.
+pub async fn steps(
+    State(state): State<AppState>,
+    Path(id): Path<i64>,
+) -> Result<Json<StepsView>, ApiError> {
+    jobs::find(&state.store, id).await?;
+    let steps = state
+        .store
+        .step_reports(id)
+        .await?
+        .into_iter()
+        .map(RawValue::from_string)
+        .collect::<Result<_, _>>()
+        .map_err(|e| ApiError::Internal(format!("stored report: {e}")))?;
+    Ok(Json(StepsView { job: id, steps }))
+}
+
+#[derive(Deserialize)]
+pub struct StepQuery {
+    format: Option<String>,
+}
+
+/// `GET /jobs/{id}/steps/{k}`: report, material points and boundary curves
+/// as JSON, or the points as VTU.
+pub async fn step(
+    State(state): State<AppState>,
+    Path((id, k)): Path<(i64, i64)>,
+    Query(q): Query<StepQuery>,
+) -> Result<Response, ApiError> {
+    let step: StoredStep = state
+        .store
+        .step(id, k)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("step {k} of job {id}")))?;
+    match q.format.as_deref() {
+        None | Some("json") => Ok(Json(step).into_response()),
+        Some("vtu") => {
+            let columns: PointColumns = serde_json::from_str(step.points.get())
+                .map_err(|e| ApiError::Internal(format!("stored points: {e}")))?;
+            let mut vtu = Vec::new();
+            write_vtu(&mut vtu, &columns).map_err(|e| ApiError::Internal(e.to_string()))?;
+            let disposition = format!("attachment; filename=\"job-{id}-step-{k:04}.vtu\"");
+            Ok((
+                [
+                    (header::CONTENT_TYPE, "application/xml".to_string()),
+                    (header::CONTENT_DISPOSITION, disposition),
+                ],
+                vtu,
+            )
+                .into_response())
+        }
+        Some(other) => Err(ApiError::BadQuery {
+            name: "format",
+            message: format!("{other:?} is not json or vtu"),
+        }),
+    }
+}

@@ -1,0 +1,195 @@
+//! What a submission must be to be queued: JSON, a valid case, and within
+//! the service's limits. Each check names the field that fails it.
+
+use mpm::{Case, CaseErrorKind, Simulation};
+
+use crate::config::Limits;
+
+/// Why a submission is refused.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Rejection {
+    /// The body is not JSON at all.
+    MalformedJson(String),
+    /// JSON, but not a valid case; `path` names the field.
+    InvalidCase { path: String, message: String },
+    /// A valid case that exceeds a configured limit.
+    LimitExceeded { path: String, message: String },
+}
+
+/// A case that may be queued, and the material points it makes.
+#[derive(Debug)]
+pub struct Admitted {
+    pub case: Case,
+    pub points: usize,
+}
+
+/// Reads a body as a case: the text and the case it holds. A body that is
+/// not JSON (text after the case included) is `MalformedJson`; JSON that is
+/// not a valid case is `InvalidCase` with the field path.
+pub fn read(body: &[u8]) -> Result<(&str, Case), Rejection> {
+    let text = std::str::from_utf8(body).map_err(|e| Rejection::MalformedJson(e.to_string()))?;
+    let case = Case::from_json(text).map_err(|e| match e.kind {
+        CaseErrorKind::Syntax => Rejection::MalformedJson(e.message),
+        CaseErrorKind::Invalid => Rejection::InvalidCase {
+            path: e.path,
+            message: e.message,
+        },
+    })?;
+    Ok((text, case))
+}
+
+/// Checks a case against the limits and builds its points (CPU work: call
+/// it off the async threads). Building the points also checks what only
+/// they can tell, e.g. that a boundary load selects some stretch of
+/// boundary.
+pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
+    check_load_steps(&case, limits)?;
+    check_point_bound(&case, limits)?;
+    let points = Simulation::new(&case)
+        .map_err(|e| Rejection::InvalidCase {
+            path: e.path,
+            message: e.message,
+        })?
+        .points
+        .len();
+    check_points(points, limits)?;
+    Ok(Admitted { case, points })
+}
+
+pub fn check_load_steps(case: &Case, limits: &Limits) -> Result<(), Rejection> {
+    if case.analysis.load_steps as usize > limits.max_load_steps {
+        return Err(Rejection::LimitExceeded {
+            path: "analysis.load_steps".into(),
+            message: format!(
+                "{} load steps exceed this service's limit of {}",
+                case.analysis.load_steps, limits.max_load_steps
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Refuses a case far over the point limit before generating anything,
+/// from the most points its bodies' bounding boxes could hold.
+pub fn check_point_bound(case: &Case, limits: &Limits) -> Result<(), Rejection> {
+    let bound: f64 = case
+        .bodies
+        .iter()
+        .map(|b| mpm::model::max_points(b, case.grid.cell_size))
+        .sum();
+    if bound > 4.0 * limits.max_points as f64 {
+        return Err(Rejection::LimitExceeded {
+            path: "bodies".into(),
+            message: format!(
+                "the bodies make about {bound:.3e} material points, over this service's limit of {}",
+                limits.max_points
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The number of points the case made: within the limit, and some.
+pub fn check_points(points: usize, limits: &Limits) -> Result<(), Rejection> {
+    if points > limits.max_points {
+        return Err(Rejection::LimitExceeded {
+            path: "bodies".into(),
+            message: format!(
+                "the bodies make {points} material points, over this service's limit of {}",
+                limits.max_points
+            ),
+        });
+    }
+    if points == 0 {
+        return Err(Rejection::InvalidCase {
+            path: "bodies".into(),
+            message:
+                "the bodies contain no material points (geometry smaller than the point spacing?)"
+                    .into(),
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+
+    fn example() -> serde_json::Value {
+        serde_json::from_str(mpm::case::builtin::get("cantilever-grid").unwrap()).unwrap()
+    }
+
+    fn read_err(body: &str) -> Rejection {
+        read(body.as_bytes()).expect_err(body)
+    }
+
+    #[test]
+    fn a_valid_case_reads_like_case_from_json() {
+        let text = example().to_string();
+        let (read_text, case) = read(text.as_bytes()).unwrap();
+        assert_eq!(read_text, text);
+        assert_eq!(case, Case::from_json(&text).unwrap());
+    }
+
+    #[test]
+    fn text_that_is_not_json_is_malformed_wherever_it_goes_wrong() {
+        for body in [
+            "{\"version\": 1,",
+            "not json",
+            "",
+            // A wrong field first, and then the text stops being JSON.
+            "{\"version\": 1, \"no_such_field\": 1,",
+            "{\"version\": 1, \"no_such_field\": 1e400}",
+        ] {
+            assert!(
+                matches!(read_err(body), Rejection::MalformedJson(_)),
+                "{body}"
+            );
+        }
+        let trailing = format!("{} x", example());
+        assert!(matches!(read_err(&trailing), Rejection::MalformedJson(_)));
+        assert!(matches!(read(b"\xff"), Err(Rejection::MalformedJson(_))));
+    }
+
+    #[test]
+    fn json_that_is_not_a_case_names_the_field_as_case_from_json_does() {
+        let mut typo = example();
+        typo["bodies"][0]["material"]["youngs_modulos"] = 1.into();
+        let mut range = example();
+        range["bodies"][0]["material"]["poisson_ratio"] = 0.5.into();
+        let duplicate = example().to_string().replacen("{", "{\"version\": 1, ", 1);
+        for body in [typo.to_string(), range.to_string(), duplicate, "[]".into()] {
+            let expected = Case::from_json(&body).unwrap_err();
+            assert_eq!(
+                read_err(&body),
+                Rejection::InvalidCase {
+                    path: expected.path,
+                    message: expected.message
+                },
+                "{body}"
+            );
+        }
+    }
+
+    #[test]
+    fn limits_name_the_field() {
+        let mut limits = Config::new("unused".into()).limits;
+        let case = Case::from_json(&example().to_string()).unwrap();
+        limits.max_load_steps = 4;
+        assert!(matches!(
+            check_load_steps(&case, &limits),
+            Err(Rejection::LimitExceeded { path, .. }) if path == "analysis.load_steps"
+        ));
+        limits.max_load_steps = 5;
+        limits.max_points = 10;
+        assert!(matches!(
+            admit(case, &limits),
+            Err(Rejection::LimitExceeded { path, .. }) if path == "bodies"
+        ));
+        assert!(matches!(
+            check_points(0, &limits),
+            Err(Rejection::InvalidCase { path, .. }) if path == "bodies"
+        ));
+    }
+}

@@ -1,0 +1,64 @@
+//! The document of one finished load step: its report, the material points
+//! and the boundary curves. `mpm run` writes it as `steps/step_NNNN.json`,
+//! the service stores its parts and serves it at `GET /jobs/{id}/steps/{k}`.
+
+use mpm::report::PointColumns;
+use mpm::{StepReport, StepState};
+use serde::Serialize;
+use serde_json::value::{RawValue, to_raw_value};
+
+/// The step document's shape. Its parts are the solver's values where they
+/// are written (`mpm run`) and their JSON text where stored and served.
+#[derive(Debug, Serialize)]
+pub struct StepDocument<R, P, B> {
+    /// `mpm::StepReport`
+    pub report: R,
+    /// `mpm::report::PointColumns`
+    pub points: P,
+    /// `[mpm::boundary::BoundaryOutput]`
+    pub boundaries: B,
+}
+
+/// A step document as stored: each part as JSON text, served as it is.
+pub type StoredStep = StepDocument<Box<RawValue>, Box<RawValue>, Box<RawValue>>;
+
+impl StoredStep {
+    /// The stored form of a step the solver has just finished.
+    pub fn new(report: &StepReport, state: &StepState<'_>) -> Self {
+        Self {
+            report: to_raw_value(report).expect("reports serialise"),
+            points: to_raw_value(&PointColumns::new(state.points)).expect("points serialise"),
+            boundaries: to_raw_value(&state.boundaries()).expect("boundaries serialise"),
+        }
+    }
+
+    /// Reads back the stored parts.
+    pub fn from_text(
+        report: String,
+        points: String,
+        boundaries: String,
+    ) -> serde_json::Result<Self> {
+        Ok(Self {
+            report: RawValue::from_string(report)?,
+            points: RawValue::from_string(points)?,
+            boundaries: RawValue::from_string(boundaries)?,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stored_step_is_served_as_its_parts_as_stored() {
+        let report = r#"{"step":1,"load_factor":0.5}"#;
+        let points = r#"{"position":[[0.0,1.5]]}"#;
+        let stored =
+            StoredStep::from_text(report.into(), points.into(), "[]".into()).expect("JSON");
+        assert_eq!(
+            serde_json::to_string(&stored).unwrap(),
+            format!(r#"{{"report":{report},"points":{points},"boundaries":[]}}"#)
+        );
+    }
+}
