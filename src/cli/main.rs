@@ -9,18 +9,11 @@
 mod run;
 mod serve;
 
-// The study tools live beside the service's sources in src/.
-#[path = "../bench.rs"]
-mod bench;
-#[path = "../plot.rs"]
-mod plot;
-#[path = "../study.rs"]
-mod study;
-
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use mpm_lab::{LabError, bench, study};
 
 /// The built-in case `mpm run` solves when given no file.
 pub const DEFAULT_EXAMPLE: &str = "cantilever";
@@ -103,15 +96,17 @@ fn main() -> ExitCode {
             max_points,
             out,
             repeats,
-        } => bench::bench(max_points, &out, repeats),
-        Command::BenchRow { scene, points } => bench::bench_row(scene, points),
+        } => bench::bench(max_points, &out, repeats).map_err(CliError::from),
+        Command::BenchRow { scene, points } => {
+            bench::bench_row(scene, points).map_err(CliError::from)
+        }
         Command::Study {
             name,
             out,
             quick,
             basis,
         } => match name.as_str() {
-            "cantilever" => study::cantilever(&out, quick, &basis),
+            "cantilever" => study::cantilever(&out, quick, &basis).map_err(CliError::from),
             other => Err(CliError::input(format!(
                 "no study {other:?}; available: cantilever"
             ))),
@@ -146,6 +141,15 @@ impl CliError {
         Self {
             code: 1,
             message: message.into(),
+        }
+    }
+}
+
+impl From<LabError> for CliError {
+    fn from(e: LabError) -> Self {
+        match e {
+            LabError::Input(message) => CliError::input(message),
+            LabError::Failed(message) => CliError::failed(message),
         }
     }
 }

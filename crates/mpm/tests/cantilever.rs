@@ -156,6 +156,7 @@ fn measure_case(mut case: serde_json::Value, h: f64, shift: [f64; 2]) -> (f64, f
 ///   at delta = h/100, see `boundary::ibm`);
 /// - grid moved by half a cell both ways: 2.8e-2 .. 3.3e-4 | 1.0e-2 ..
 ///   2.9e-4.
+///
 /// Moved by 0.21 of a cell vertically, the relative deflection converges
 /// alike (5.5e-4 at 0.125) but u_x, a thousandth of the deflection, is
 /// first order (2.1e-2 at 0.125): the two point rows of each cell sit

@@ -25,7 +25,7 @@ use std::time::Instant;
 use mpm::{Case, NoObserver, RunReport, Simulation};
 use serde_json::{Value, json};
 
-use crate::CliError;
+use crate::LabError;
 use crate::plot::{COLOURS, Plot, Series};
 
 /// Cell sizes of the sweep (m): the paper's three and one finer.
@@ -111,10 +111,10 @@ fn measure(
     rows: usize,
     band_width: Option<f64>,
     basis: &str,
-) -> Result<Run, CliError> {
+) -> Result<Run, LabError> {
     let json = case(method, h, rows, band_width, basis);
     let case = Case::from_json(&json.to_string())
-        .map_err(|e| CliError::failed(format!("study case: {e}")))?;
+        .map_err(|e| LabError::Failed(format!("study case: {e}")))?;
     let mut times = Vec::new();
     let mut outcome = Err(String::new());
     while times.len() < 5 {
@@ -156,9 +156,9 @@ fn summarise(report: &RunReport) -> Measured {
 /// Runs the study and writes `cantilever.{csv,md}` and three SVG plots to
 /// `out`. `quick` sweeps the two coarsest cells and three point counts;
 /// `basis` is `linear` (the paper's) or `gimp`.
-pub fn cantilever(out: &Path, quick: bool, basis: &str) -> Result<(), CliError> {
+pub fn cantilever(out: &Path, quick: bool, basis: &str) -> Result<(), LabError> {
     if !matches!(basis, "linear" | "gimp") {
-        return Err(CliError::input(format!(
+        return Err(LabError::Input(format!(
             "--basis must be linear or gimp, got {basis:?}"
         )));
     }
@@ -214,7 +214,7 @@ fn progress_line(run: &Run) -> String {
 
 /// The IBM band width from h / 10 to h / 10^5 on the paper's point count
 /// at h = 0.375 m (three points per cell each way).
-fn band_width_study(quick: bool, basis: &str) -> Result<Vec<Run>, CliError> {
+fn band_width_study(quick: bool, basis: &str) -> Result<Vec<Run>, LabError> {
     let h = if quick { 0.75 } else { 0.375 };
     (1..=5)
         .map(|k| {
@@ -227,13 +227,13 @@ fn band_width_study(quick: bool, basis: &str) -> Result<Vec<Run>, CliError> {
 
 /// Median wall time of the paper's case itself (896 points, 1.5 m cells)
 /// over 21 runs.
-fn paper_case_time(method: Method, basis: &str) -> Result<f64, CliError> {
+fn paper_case_time(method: Method, basis: &str) -> Result<f64, LabError> {
     let case = Case::from_json(&case(method, 1.5, 16, None, basis).to_string())
-        .map_err(|e| CliError::failed(format!("study case: {e}")))?;
+        .map_err(|e| LabError::Failed(format!("study case: {e}")))?;
     let mut times = Vec::new();
     for _ in 0..21 {
         let start = Instant::now();
-        solve(&case).map_err(|e| CliError::failed(format!("paper case ({method:?}): {e}")))?;
+        solve(&case).map_err(|e| LabError::Failed(format!("paper case ({method:?}): {e}")))?;
         times.push(start.elapsed().as_secs_f64());
     }
     times.sort_by(f64::total_cmp);
@@ -414,7 +414,7 @@ fn row(s: &mut String, r: &Run, reference: Option<&Measured>) {
 /// What a plot shows of a converged run, if anything.
 type PlotValue<'a> = dyn Fn(&Run, &Measured) -> Option<(f64, f64)> + 'a;
 
-fn write_plots(out: &Path, runs: &[Run], cells: &[f64]) -> Result<(), CliError> {
+fn write_plots(out: &Path, runs: &[Run], cells: &[f64]) -> Result<(), LabError> {
     let series = |value: &PlotValue<'_>| {
         let mut all = Vec::new();
         for method in [Method::Ibm, Method::Grid] {

@@ -15,7 +15,7 @@ use mpm::report::StepTimings;
 use mpm::{Case, NoObserver, Simulation};
 use serde_json::{Value, json};
 
-use crate::CliError;
+use crate::LabError;
 
 /// A scene scaled so that it has about `points` material points.
 struct Scene {
@@ -74,7 +74,7 @@ pub struct Row {
     peak_mib: Option<f64>,
 }
 
-pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), CliError> {
+pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabError> {
     let mut report = String::new();
     report.push_str("# Benchmarks\n\n");
     report.push_str(&format!(
@@ -141,36 +141,36 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), CliErr
 
 /// Runs one row in a child process (`mpm bench-row`), so that its peak
 /// memory is its own.
-fn measure_in_child(scene: usize, target: usize) -> Result<Row, CliError> {
+fn measure_in_child(scene: usize, target: usize) -> Result<Row, LabError> {
     let output = std::process::Command::new(std::env::current_exe()?)
         .args(["bench-row", &scene.to_string(), &target.to_string()])
         .output()?;
     if !output.status.success() {
-        return Err(CliError::failed(
+        return Err(LabError::Failed(
             String::from_utf8_lossy(&output.stderr).trim().to_string(),
         ));
     }
     serde_json::from_slice(&output.stdout)
-        .map_err(|e| CliError::failed(format!("bench-row output: {e}")))
+        .map_err(|e| LabError::Failed(format!("bench-row output: {e}")))
 }
 
 /// `mpm bench-row SCENE POINTS`: measures one row and prints it as JSON.
-pub fn bench_row(scene: usize, target: usize) -> Result<(), CliError> {
+pub fn bench_row(scene: usize, target: usize) -> Result<(), LabError> {
     let scene = SCENES
         .get(scene)
-        .ok_or_else(|| CliError::input(format!("no scene {scene}")))?;
+        .ok_or_else(|| LabError::Input(format!("no scene {scene}")))?;
     let row = measure(scene, target)?;
     println!(
         "{}",
-        serde_json::to_string(&row).map_err(|e| CliError::failed(e.to_string()))?
+        serde_json::to_string(&row).map_err(|e| LabError::Failed(e.to_string()))?
     );
     Ok(())
 }
 
-fn measure(scene: &Scene, target: usize) -> Result<Row, CliError> {
+fn measure(scene: &Scene, target: usize) -> Result<Row, LabError> {
     let case = Case::from_json(&(scene.build)(target).to_string())
-        .map_err(|e| CliError::failed(e.to_string()))?;
-    let mut sim = Simulation::new(&case).map_err(|e| CliError::failed(e.to_string()))?;
+        .map_err(|e| LabError::Failed(e.to_string()))?;
+    let mut sim = Simulation::new(&case).map_err(|e| LabError::Failed(e.to_string()))?;
     let steps = 2.min(sim.load_steps);
     let mut timings = StepTimings::default();
     let mut iterations = 0;
@@ -178,7 +178,7 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, CliError> {
     for step in 1..=steps {
         let r = sim
             .load_step(step, &mut NoObserver)
-            .map_err(|e| CliError::failed(format!("{}: {e}", scene.name)))?;
+            .map_err(|e| LabError::Failed(format!("{}: {e}", scene.name)))?;
         iterations += r.newton.iterations;
         dofs = r.active_dofs;
         timings += &r.timings;
@@ -195,16 +195,16 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, CliError> {
 
 /// Median, min and max wall time of the paper's 896-point cantilever (the
 /// built-in `cantilever`), and its size.
-fn end_to_end(repeats: usize) -> Result<(f64, f64, f64, usize), CliError> {
+fn end_to_end(repeats: usize) -> Result<(f64, f64, f64, usize), LabError> {
     let case = Case::from_json(&example("cantilever").to_string())
-        .map_err(|e| CliError::failed(e.to_string()))?;
+        .map_err(|e| LabError::Failed(e.to_string()))?;
     let mut times = Vec::with_capacity(repeats);
     let mut points = 0;
     for _ in 0..repeats.max(1) {
         let t = Instant::now();
-        let mut sim = Simulation::new(&case).map_err(|e| CliError::failed(e.to_string()))?;
+        let mut sim = Simulation::new(&case).map_err(|e| LabError::Failed(e.to_string()))?;
         sim.run(&mut NoObserver)
-            .map_err(|e| CliError::failed(format!("cantilever: {e}")))?;
+            .map_err(|e| LabError::Failed(format!("cantilever: {e}")))?;
         times.push(t.elapsed().as_secs_f64());
         points = sim.points.len();
     }

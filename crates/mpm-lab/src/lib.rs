@@ -1,0 +1,25 @@
+//! Studies and benchmarks of the solver, offered by the `mpm` command as
+//! `mpm study` and `mpm bench`: the paper's convergence study written as
+//! tables and SVG plots ([`study`]), and cost against problem size written
+//! to BENCHMARKS.md ([`bench`]). They use only the solver crate.
+
+pub mod bench;
+pub mod plot;
+pub mod study;
+
+/// Why a study or benchmark stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum LabError {
+    /// What was asked for does not exist (an unknown basis or scene).
+    #[error("{0}")]
+    Input(String),
+    /// A solve, a child process or a file write failed.
+    #[error("{0}")]
+    Failed(String),
+}
+
+impl From<std::io::Error> for LabError {
+    fn from(e: std::io::Error) -> Self {
+        LabError::Failed(e.to_string())
+    }
+}
