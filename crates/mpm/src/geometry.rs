@@ -194,3 +194,18 @@ pub fn winding_number(x: [f64; 2], ring: &[[f64; 2]]) -> i32 {
     }
     w
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn winding_number_tells_inside_from_outside_either_way_round() {
+        let ccw = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        assert_eq!(winding_number([0.5, 0.5], &ccw), 1);
+        assert_eq!(winding_number([1.5, 0.5], &ccw), 0);
+        let cw: Vec<[f64; 2]> = ccw.iter().rev().copied().collect();
+        assert_eq!(winding_number([0.5, 0.5], &cw), -1);
+        assert_eq!(winding_number([-0.5, 0.5], &cw), 0);
+    }
+}

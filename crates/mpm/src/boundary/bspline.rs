@@ -75,10 +75,8 @@ fn turn(a: Point, b: Point) -> f64 {
 /// sampled smooth curve neighbouring turns are alike, at the corner of a
 /// (deformed) polygon the side it comes from or goes to is nearly straight.
 /// One straight side is enough: the two corners of a side only two points
-/// long are neighbours, and each turns as much as the other (regression:
-/// requiring both made a two-point-wide column's base a bulging arc). This
-/// extends the book's rule (collinear chords on both sides) to deformed
-/// bodies.
+/// long are neighbours, and each turns as much as the other. This extends
+/// the book's rule (collinear chords on both sides) to deformed bodies.
 pub fn is_corner(q_prev: Point, q_in: Point, q_out: Point, q_next: Point) -> bool {
     let here = turn(q_in, q_out);
     here >= 30f64.to_radians()

@@ -37,8 +37,7 @@ pub enum Representation {
 /// `(h1 n1, h2 n2) / max(|n1|, |n2|)`, which reaches the middle of a
 /// domain's side on a straight edge and its corner at a corner (where `n` is
 /// the mean of the two normals). Polar fills' domains are turned with their
-/// angle; the offset is taken in that frame (an axis-aligned one tilted the
-/// radial edges of a sector turned by 30 degrees by up to half a degree).
+/// angle, and the offset is taken in that frame.
 pub fn set_offsets(
     loops: &mut [BoundaryLoop],
     points: &MaterialPoints,
@@ -88,10 +87,7 @@ pub fn set_offsets(
 /// half-width inside a straight side and up to about two inside such a
 /// curved edge). Round a rectangle's corner the next data point is two
 /// half-widths (edge) or three (points) from the selected side, so the
-/// selection stops at the corner. (Testing the material points with the
-/// wider tolerance for both, as before, caught the first segment of a polar
-/// sector's inner arc next to a radial edge: a roller there with the arc's
-/// normal held the arc.)
+/// selection stops at the corner.
 pub fn selected_segments(
     selector: &Selector,
     loops: &[BoundaryLoop],

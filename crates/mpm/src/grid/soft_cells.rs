@@ -14,15 +14,14 @@ use crate::configuration::Configuration;
 ///
 /// A node that only one or two points reach (a point has just crossed into
 /// an empty cell at a free surface) has displacement modes that no point
-/// resists: the tangent is singular there and the solve returns garbage along
-/// them, which breaks Newton (seen on a cantilever at 0.1 m cells, where the
-/// tip corner point crossed into a new cell column). The finite cell method
-/// fills the empty part of cut cells with a soft material for the same
-/// reason. It enters both the internal force (`K_soft u`) and the tangent, so
-/// Newton stays quadratic; the price is a stiffening of relative size
-/// `ratio` in each step's increment (the grid forgets it at the next reset).
-/// Adding it to the tangent only was tried: modes with small but real
-/// stiffness then converge at a rate of about 1, and Newton stalls.
+/// resists: the tangent is singular there and the solve returns garbage
+/// along them, which breaks Newton. The finite cell method fills the empty
+/// part of cut cells with a soft material for the same reason. It enters
+/// both the internal force (`K_soft u`) and the tangent, so Newton stays
+/// quadratic (in the tangent alone, modes with small but real stiffness
+/// would converge at a rate of about 1); the price is a stiffening of
+/// relative size `ratio` in each step's increment (the grid forgets it at
+/// the next reset).
 pub struct SoftCells {
     /// Active-node indices of each cell's corners: (i, j), (i+1, j), (i, j+1),
     /// (i+1, j+1).

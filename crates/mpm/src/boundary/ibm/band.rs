@@ -1,0 +1,350 @@
+//! The band terms of one load step: each anchor's penalty
+//! `(4/3) P A_nn P / delta` per unit length, integrated at the anchor with
+//! the bilinear shape functions of the step, and the ghost ties of the
+//! nodes beyond the supported boundary.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Matrix2, Vector2};
+
+use super::Anchor;
+use super::ghost::{GHOST, GHOST_STENCIL, GhostTie, nodes_beyond};
+use crate::assembly::Pattern;
+use crate::boundary::bspline::{bezier_derivative, local_segment};
+use crate::boundary::current_ring;
+use crate::boundary::quadrature::hat_shares;
+use crate::configuration::Configuration;
+use crate::geometry::winding_number;
+use crate::grid::{NodeKey, node_indices, node_key};
+use crate::particles::MaterialPoints;
+use crate::supports::Fix;
+
+/// Default band width `delta` in cells (see the module docs).
+pub const DEFAULT_BAND_WIDTH: f64 = 1e-2;
+
+/// One anchor's band term in a load step.
+#[derive(Debug, Clone)]
+struct BandPoint {
+    anchor: usize,
+    /// Its shares of the active nodes are `shares[first..last]`.
+    first: usize,
+    last: usize,
+    /// `dGamma * 4 / (3 delta) * P A_nn P`.
+    stiffness: Matrix2<f64>,
+    /// Displacement increment the boundary should make in this step.
+    target: [f64; 2],
+}
+
+/// The band terms of one load step.
+#[derive(Debug, Clone, Default)]
+pub struct BandTerms {
+    points: Vec<BandPoint>,
+    shares: Vec<(usize, f64)>,
+    ghosts: Vec<GhostTie>,
+    /// `3 delta / (4 h)`: turns band forces into a cell's material forces.
+    material_scale: f64,
+}
+
+impl BandTerms {
+    pub fn new(
+        start: &Configuration,
+        anchors: &[Anchor],
+        band_width: f64,
+        load_factor: f64,
+    ) -> Self {
+        let Configuration {
+            grid,
+            conn,
+            points,
+            loops,
+        } = *start;
+        let mut terms = BandTerms {
+            material_scale: 0.75 * band_width / grid.h,
+            ..Default::default()
+        };
+        let mut weights = Vec::with_capacity(4);
+        // Nodes just beyond a supported boundary, with the anchor that saw
+        // them first.
+        let mut beyond: BTreeMap<NodeKey, usize> = BTreeMap::new();
+        // The current data points of the loops with anchors.
+        let mut rings: BTreeMap<usize, Vec<[f64; 2]>> = BTreeMap::new();
+        for (i, a) in anchors.iter().enumerate() {
+            let current = rings
+                .entry(a.loop_index)
+                .or_insert_with(|| current_ring(&loops[a.loop_index], points));
+            let first = terms.shares.len();
+            if !hat_shares(
+                grid,
+                a.position(),
+                &conn.nodes,
+                &mut weights,
+                &mut terms.shares,
+            ) {
+                continue;
+            }
+            let d = bezier_derivative(&local_segment(current, a.segment), a.t);
+            let length = a.weight * (d[0] * d[0] + d[1] * d[1]).sqrt();
+            let a_nn = acoustic_tensor(points, a.point, a.normal);
+            for key in nodes_beyond(grid, a.position(), a.normal) {
+                if conn.nodes.binary_search(&key).is_ok() {
+                    beyond.entry(key).or_insert(i);
+                }
+            }
+            let held = projection(a.fix, a.normal);
+            let stiffness = held * a_nn * held * (length * 4.0 / (3.0 * band_width));
+            terms.points.push(BandPoint {
+                anchor: i,
+                first,
+                last: terms.shares.len(),
+                stiffness,
+                target: {
+                    let u = a.prescribed_at(load_factor);
+                    [u[0] - a.moved[0], u[1] - a.moved[1]]
+                },
+            });
+        }
+        for (key, anchor) in beyond {
+            let a = &anchors[anchor];
+            // Beyond the tangent at the anchor but inside the material (a
+            // concave stretch, or a curve through the points half a spacing
+            // inside the edge): no tie.
+            let material_side = if loops[a.loop_index].hole { 0 } else { 1 };
+            if winding_number(grid.node_position(key), &rings[&a.loop_index]) == material_side {
+                continue;
+            }
+            let (normal, a_nn) = (a.normal, acoustic_tensor(points, a.point, a.normal));
+            let (i, j) = node_indices(key);
+            // Inward along the grid axis closest to the normal.
+            let (di, dj) = if normal[0].abs() >= normal[1].abs() {
+                (-normal[0].signum() as i64, 0)
+            } else {
+                (0, -normal[1].signum() as i64)
+            };
+            let index = |k: i64| {
+                conn.nodes
+                    .binary_search(&node_key(i + k * di, j + k * dj))
+                    .ok()
+            };
+            if let (Some(a), Some(b), Some(c)) = (index(0), index(1), index(2)) {
+                terms.ghosts.push(GhostTie {
+                    nodes: [a, b, c],
+                    stiffness: a_nn * GHOST,
+                    support: anchors[anchor].support,
+                });
+            }
+        }
+        terms
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Node groups the band and the ghost ties couple (for the stiffness
+    /// pattern).
+    pub fn coupling_groups(&self) -> Vec<Vec<u32>> {
+        self.points
+            .iter()
+            .map(|b| {
+                self.shares[b.first..b.last]
+                    .iter()
+                    .map(|&(a, _)| a as u32)
+                    .collect()
+            })
+            .chain(
+                self.ghosts
+                    .iter()
+                    .map(|g| g.nodes.iter().map(|&a| a as u32).collect()),
+            )
+            .collect()
+    }
+
+    /// The grid's displacement increment `u` at a band point.
+    fn increment(&self, b: &BandPoint, u: &[f64]) -> [f64; 2] {
+        let mut v = [0.0; 2];
+        for &(a, n) in &self.shares[b.first..b.last] {
+            v[0] += n * u[2 * a];
+            v[1] += n * u[2 * a + 1];
+        }
+        v
+    }
+
+    /// `K (u_h - target)` at a band point: the band's contribution to the
+    /// internal force there (the force on the body is its negative).
+    fn force(&self, b: &BandPoint, u: &[f64]) -> Vector2<f64> {
+        let v = self.increment(b, u);
+        b.stiffness * Vector2::new(v[0] - b.target[0], v[1] - b.target[1])
+    }
+
+    /// Adds the band's internal force `N_a K (u_h - target)` and the ghost
+    /// ties' `c_a K (u_I - 2 u_J + u_K)` to `f`.
+    pub fn add_forces(&self, u: &[f64], f: &mut [f64]) {
+        for b in &self.points {
+            let force = self.force(b, u);
+            for &(a, n) in &self.shares[b.first..b.last] {
+                f[2 * a] += n * force[0];
+                f[2 * a + 1] += n * force[1];
+            }
+        }
+        for tie in &self.ghosts {
+            let force = tie.force(u);
+            for (&a, c) in tie.nodes.iter().zip(GHOST_STENCIL) {
+                f[2 * a] += c * force[0];
+                f[2 * a + 1] += c * force[1];
+            }
+        }
+    }
+
+    /// What a prescribed displacement asks of the material next to it: the
+    /// norm of the band forces at zero increment, `|N_a K target|`, with the
+    /// penalty's `4 / (3 delta)` replaced by a cell's `1 / h`. A yardstick
+    /// for residuals when nothing else loads the body; the band forces
+    /// themselves are `h / delta` times larger, and measuring against them
+    /// would let the material's balance go that much looser.
+    pub fn load_norm(&self, n_dofs: usize) -> f64 {
+        let mut f = vec![0.0; n_dofs];
+        self.add_forces(&vec![0.0; n_dofs], &mut f);
+        self.material_scale * f.iter().map(|v| v * v).sum::<f64>().sqrt()
+    }
+
+    /// Adds the band's stiffness `N_a N_b K` to tangent values.
+    pub fn add_stiffness(&self, pattern: &Pattern, values: &mut [f64]) {
+        for b in &self.points {
+            let shares = &self.shares[b.first..b.last];
+            for &(a, na) in shares {
+                for &(c, nc) in shares {
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            let added = pattern.add(
+                                values,
+                                2 * a + i,
+                                2 * c + j,
+                                na * nc * b.stiffness[(i, j)],
+                            );
+                            debug_assert!(added, "band couplings are in the pattern");
+                        }
+                    }
+                }
+            }
+        }
+        for tie in &self.ghosts {
+            let k = &tie.stiffness;
+            for (&a, ca) in tie.nodes.iter().zip(GHOST_STENCIL) {
+                for (&b, cb) in tie.nodes.iter().zip(GHOST_STENCIL) {
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            let added =
+                                pattern.add(values, 2 * a + i, 2 * b + j, ca * cb * k[(i, j)]);
+                            debug_assert!(added, "ghost couplings are in the pattern");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Per support of the case (`n` of them), the force the band terms and
+    /// ghost ties exert on the body at increment `u`: their nodal forces on
+    /// the DOFs that are free. On a DOF a grid support holds, the band
+    /// pushes against that support, not the body, and the grid support's
+    /// reaction (from the material's forces) is the body's side of it.
+    pub fn reactions(
+        &self,
+        anchors: &[Anchor],
+        u: &[f64],
+        fixed: &[bool],
+        n: usize,
+    ) -> Vec<[f64; 2]> {
+        let mut out = vec![[0.0; 2]; n];
+        let mut take = |support: usize, a: usize, share: f64, force: Vector2<f64>| {
+            for c in 0..2 {
+                if !fixed[2 * a + c] {
+                    out[support][c] -= share * force[c];
+                }
+            }
+        };
+        for b in &self.points {
+            let force = self.force(b, u);
+            for &(a, share) in &self.shares[b.first..b.last] {
+                take(anchors[b.anchor].support, a, share, force);
+            }
+        }
+        for tie in &self.ghosts {
+            let force = tie.force(u);
+            for (&a, c) in tie.nodes.iter().zip(GHOST_STENCIL) {
+                take(tie.support, a, c, force);
+            }
+        }
+        out
+    }
+
+    /// Moves the anchors with the converged increment `u`. An anchor that
+    /// found no active node this step (it has drifted off the cells the
+    /// material touches) moves with its material point instead, given as
+    /// that point's displacement over the step in `point_moved`.
+    pub fn advance(
+        &self,
+        anchors: &mut [Anchor],
+        u: &[f64],
+        point_moved: impl Fn(usize) -> [f64; 2],
+    ) {
+        let mut carried = vec![false; anchors.len()];
+        for b in &self.points {
+            let v = self.increment(b, u);
+            let a = &mut anchors[b.anchor];
+            a.moved[0] += v[0];
+            a.moved[1] += v[1];
+            carried[b.anchor] = true;
+        }
+        for (a, _) in anchors.iter_mut().zip(carried).filter(|(_, c)| !c) {
+            let v = point_moved(a.point);
+            a.moved[0] += v[0];
+            a.moved[1] += v[1];
+        }
+    }
+}
+
+/// `A_nn[i][j] = A[(2i+K),(2j+L)] n_K n_L` of point `p`'s material tangent
+/// at the start of the step.
+fn acoustic_tensor(points: &MaterialPoints, p: usize, n: [f64; 2]) -> Matrix2<f64> {
+    let material = &points.materials[points.material[p] as usize];
+    let j = points.deformation[p].determinant();
+    let tangent = material
+        .respond(&points.history[p], &Matrix2::zeros(), j)
+        .tangent;
+    Matrix2::from_fn(|i, jj| {
+        let mut sum = 0.0;
+        for k in 0..2 {
+            for l in 0..2 {
+                sum += n[k] * tangent[(2 * i + k, 2 * jj + l)] * n[l];
+            }
+        }
+        sum
+    })
+}
+
+/// The components a support holds, as a projection.
+fn projection(fix: Fix, n: [f64; 2]) -> Matrix2<f64> {
+    match fix {
+        Fix::Xy => Matrix2::identity(),
+        Fix::X => Matrix2::new(1.0, 0.0, 0.0, 0.0),
+        Fix::Y => Matrix2::new(0.0, 0.0, 0.0, 1.0),
+        Fix::Normal => Matrix2::new(n[0] * n[0], n[0] * n[1], n[1] * n[0], n[1] * n[1]),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn projections_hold_the_right_components() {
+        let n = [0.6, 0.8];
+        let p = projection(Fix::Normal, n);
+        let v = p * Vector2::new(0.8, -0.6); // tangential
+        assert!(v.norm() < 1e-15);
+        let v = p * Vector2::new(0.6, 0.8);
+        assert!((v - Vector2::new(0.6, 0.8)).norm() < 1e-15);
+        assert_eq!(projection(Fix::X, n), Matrix2::new(1.0, 0.0, 0.0, 0.0));
+    }
+}

@@ -1,0 +1,81 @@
+//! Ghost ties: the second difference `u_I - 2 u_J + u_K` of a node beyond
+//! a supported boundary (`I`) and the next two inward, penalised with a
+//! tenth of the band's `A_nn`. It vanishes for linear fields, so the patch
+//! tests stay exact, and it makes those nodes follow the linear
+//! continuation of the field inside. Only nodes more than a tenth of a
+//! cell beyond the boundary and outside the current curve are tied.
+
+use nalgebra::{Matrix2, Vector2};
+
+use crate::grid::{Grid, NodeKey, node_key};
+
+/// Weight of the ghost ties against the band's material stiffness.
+pub(super) const GHOST: f64 = 0.1;
+
+/// An active node beyond a supported boundary (`I`) and the next two
+/// inward (`J`, `K`), whose second difference `u_I - 2 u_J + u_K` is
+/// penalised (module docs).
+#[derive(Debug, Clone)]
+pub(super) struct GhostTie {
+    pub(super) nodes: [usize; 3],
+    pub(super) stiffness: Matrix2<f64>,
+    /// The support whose anchor found it (its reaction takes the tie's
+    /// force where part of it lands on a grid-held node).
+    pub(super) support: usize,
+}
+
+impl GhostTie {
+    /// `K (u_I - 2 u_J + u_K)`.
+    pub(super) fn force(&self, u: &[f64]) -> Vector2<f64> {
+        let mut g = Vector2::zeros();
+        for (&a, c) in self.nodes.iter().zip(GHOST_STENCIL) {
+            g += c * Vector2::new(u[2 * a], u[2 * a + 1]);
+        }
+        self.stiffness * g
+    }
+}
+
+/// The second difference's weights along `[I, J, K]`.
+pub(super) const GHOST_STENCIL: [f64; 3] = [1.0, -2.0, 1.0];
+
+/// Grid nodes that GIMP domains reaching just past a supported boundary at
+/// `x` (outward normal `n`) can touch: beyond it by more than a tenth of a
+/// cell (nearer ones take at least 90% of the band's shares there, and a
+/// node on a grid-aligned boundary that has moved a hair is not beyond it)
+/// and at most one cell, and within one cell of `x` along it.
+pub(super) fn nodes_beyond(
+    grid: &Grid,
+    x: [f64; 2],
+    n: [f64; 2],
+) -> impl Iterator<Item = NodeKey> + '_ {
+    let [ci, cj] = grid.cell_of(x);
+    let tol = 1e-9 * grid.h;
+    (cj - 1..=cj + 2)
+        .flat_map(move |j| (ci - 1..=ci + 2).map(move |i| node_key(i, j)))
+        .filter(move |&key| {
+            let p = grid.node_position(key);
+            let r = [p[0] - x[0], p[1] - x[1]];
+            let out = r[0] * n[0] + r[1] * n[1];
+            let along = (r[0] * n[1] - r[1] * n[0]).abs();
+            out > 0.1 * grid.h && out <= grid.h + tol && along <= grid.h + tol
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nodes_beyond_a_grid_aligned_side_are_the_next_column_out() {
+        let grid = Grid {
+            h: 1.0,
+            origin: [0.0, 0.0],
+        };
+        // An anchor on x = 0 that has moved a hair left: the nodes on x = 0
+        // are not beyond it, those on x = -1 within a cell along it are.
+        let found: Vec<[f64; 2]> = nodes_beyond(&grid, [-1e-4, 2.3], [-1.0, 0.0])
+            .map(|k| grid.node_position(k))
+            .collect();
+        assert_eq!(found, vec![[-1.0, 2.0], [-1.0, 3.0]]);
+    }
+}
