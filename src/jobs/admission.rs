@@ -117,7 +117,7 @@ mod tests {
     use crate::config::Config;
 
     fn example() -> serde_json::Value {
-        serde_json::from_str(mpm::case::builtin::get("cantilever-grid").unwrap()).unwrap()
+        mpm::case::builtin::json("cantilever-grid").unwrap()
     }
 
     fn read_err(body: &str) -> Rejection {

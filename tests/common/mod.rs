@@ -175,7 +175,7 @@ pub fn is_final(job: &Value) -> bool {
 
 /// A built-in example case as JSON.
 pub fn example(name: &str) -> Value {
-    serde_json::from_str(mpm::case::builtin::get(name).unwrap()).unwrap()
+    mpm::case::builtin::json(name).unwrap()
 }
 
 /// A case that takes tens of milliseconds a step: the self-weight column

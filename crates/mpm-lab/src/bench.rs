@@ -41,8 +41,7 @@ fn cells_across(points: usize) -> usize {
 }
 
 fn example(name: &str) -> Value {
-    serde_json::from_str(mpm::case::builtin::get(name).expect("built-in example"))
-        .expect("valid JSON")
+    mpm::case::builtin::json(name).expect("built-in example")
 }
 
 fn wide_column(points: usize) -> Value {

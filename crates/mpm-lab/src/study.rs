@@ -75,9 +75,7 @@ struct Measured {
 
 /// The paper's case at cell size `h` with `3.5 rows x rows` points.
 fn case(method: Method, h: f64, rows: usize, band_width: Option<f64>, basis: &str) -> Value {
-    let mut case: Value =
-        serde_json::from_str(mpm::case::builtin::get("cantilever").expect("built in"))
-            .expect("valid JSON");
+    let mut case = mpm::case::builtin::json("cantilever").expect("built in");
     case["basis"] = basis.into();
     case["grid"]["cell_size"] = h.into();
     case["bodies"][0]["points"] = json!({ "count": [rows * 7 / 2, rows] });

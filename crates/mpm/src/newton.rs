@@ -186,6 +186,13 @@ pub fn solve(
     unreachable!("the loop returns")
 }
 
+/// Observed order of convergence of three successive residuals,
+/// `p = log(r_2 / r_1) / log(r_1 / r_0)`: 2 for quadratic, 1 for linear
+/// convergence (meaningful in the asymptotic range, above round-off).
+pub fn observed_order(r: [f64; 3]) -> f64 {
+    (r[2] / r[1]).ln() / (r[1] / r[0]).ln()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -219,7 +226,7 @@ mod tests {
         // Once in the basin, e_{k+1} ~ C e_k^2: the exponent log(e3)/log(e2) -> 2.
         let r = &info.residuals;
         let n = r.len();
-        let order = (r[n - 2].ln() - r[n - 3].ln()) / (r[n - 3].ln() - r[n - 4].ln());
+        let order = observed_order([r[n - 4], r[n - 3], r[n - 2]]);
         assert!(order > 1.8, "{r:?}");
     }
 

@@ -84,40 +84,55 @@ fn errors(h: f64, basis: &str) -> (f64, f64, f64) {
     (e_in, e_out, stress_error / (P * area))
 }
 
-#[test]
-fn pressurised_thick_cylinder_converges_to_lame() {
-    // Measured (h = 0.25, 0.125, 0.0625; relative errors):
-    //   gimp:   u_r(a) 9.6e-2, 2.0e-2, 4.9e-4; u_r(b) 1.4e-2, 9.6e-3, 1.3e-3;
-    //           stress 1.5e-1, 7.5e-2, 5.0e-2 (order about 0.8)
-    //   linear: u_r(a) 4.5e-2, 1.7e-2, 1.1e-2; u_r(b) 1.8e-3, 7.0e-3, 1.2e-2;
-    //           stress 0.21, 0.16, 0.17: the bilinear basis integrated at
-    //           points that do not line up with the cells gives noisy
-    //           stresses (ring averages are within a few percent, single
-    //           points up to 40% off) that do not fall with h.
-    // Asserted for GIMP: every error falls and the finest are within the
-    // bounds below; the linear basis is reported only.
-    let sizes = [0.25, 0.125, 0.0625];
-    for basis in ["gimp", "linear"] {
-        let mut rows = Vec::new();
-        for h in sizes {
+/// Errors at h = 0.25, 0.125, 0.0625.
+fn error_rows(basis: &str) -> Vec<(f64, f64, f64)> {
+    [0.25, 0.125, 0.0625]
+        .into_iter()
+        .map(|h| {
             let (e_in, e_out, e_s) = errors(h, basis);
             eprintln!(
                 "{basis:>6} h {h:<7} u_r(a) {e_in:+.3e}  u_r(b) {e_out:+.3e}  stress {e_s:.3e}"
             );
-            rows.push((e_in.abs(), e_out.abs(), e_s));
-        }
-        if basis == "gimp" {
-            for w in rows.windows(2) {
-                assert!(
-                    w[1].0 < w[0].0 && w[1].1 < w[0].1 && w[1].2 < w[0].2,
-                    "{rows:?}"
-                );
-            }
-            let finest = rows[2];
-            assert!(
-                finest.0 < 1e-2 && finest.1 < 1e-2 && finest.2 < 6e-2,
-                "{rows:?}"
-            );
-        }
+            (e_in.abs(), e_out.abs(), e_s)
+        })
+        .collect()
+}
+
+/// GIMP converges to Lame's solution. Measured (h = 0.25, 0.125, 0.0625;
+/// relative errors): u_r(a) 9.6e-2, 2.0e-2, 4.9e-4; u_r(b) 1.4e-2, 9.6e-3,
+/// 1.3e-3; stress 1.5e-1, 7.5e-2, 5.0e-2 (order about 0.8). Asserted: every
+/// error falls and the finest are within the bounds below.
+#[test]
+fn pressurised_thick_cylinder_converges_to_lame() {
+    let rows = error_rows("gimp");
+    for w in rows.windows(2) {
+        assert!(
+            w[1].0 < w[0].0 && w[1].1 < w[0].1 && w[1].2 < w[0].2,
+            "{rows:?}"
+        );
+    }
+    let finest = rows[2];
+    assert!(
+        finest.0 < 1e-2 && finest.1 < 1e-2 && finest.2 < 6e-2,
+        "{rows:?}"
+    );
+}
+
+/// The bilinear basis on the same cylinder. Measured: u_r(a) 4.5e-2,
+/// 1.7e-2, 1.1e-2; u_r(b) 1.8e-3, 7.0e-3, 1.2e-2; stress 0.21, 0.16, 0.17.
+/// Integrated at points that do not line up with the cells, it gives noisy
+/// stresses (ring averages within a few percent, single points up to 40%
+/// off) that do not fall with h, and the outer displacement's small error
+/// grows with that noise. What holds, and is asserted: the inner
+/// displacement converges, every displacement stays within 5% of Lame's,
+/// and the stress error stays bounded (within a quarter of the pressure).
+#[test]
+fn bilinear_basis_keeps_the_cylinder_within_five_percent() {
+    let rows = error_rows("linear");
+    for w in rows.windows(2) {
+        assert!(w[1].0 < w[0].0, "{rows:?}");
+    }
+    for &(e_in, e_out, e_s) in &rows {
+        assert!(e_in < 5e-2 && e_out < 5e-2 && e_s < 0.25, "{rows:?}");
     }
 }

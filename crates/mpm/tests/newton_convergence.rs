@@ -5,10 +5,10 @@
 mod common;
 
 use common::{example, run};
+use mpm::newton::observed_order;
 
-/// Estimates the order from three successive residuals,
-/// p = log(r_{k+1} / r_k) / log(r_k / r_{k-1})  (2 for quadratic, 1 for
-/// linear convergence), wherever they lie in the asymptotic range (r_{k-1}
+/// Estimates the order from three successive residuals (2 for quadratic,
+/// 1 for linear convergence; `mpm::newton::observed_order`) wherever they lie in the asymptotic range (r_{k-1}
 /// below 5e-2 and falling) and above the round-off floor (r_{k+1} above
 /// 1e-11: converged residuals of these cases sit at 1e-13..1e-15, set by the
 /// conditioning of K, and say nothing about the rate).
@@ -19,7 +19,7 @@ fn assert_quadratic(case: &serde_json::Value) {
         let r = &step.newton.residuals;
         for w in r.windows(3) {
             if w[0] < 5e-2 && w[1] < w[0] && w[2] > 1e-11 {
-                let order = (w[2] / w[1]).ln() / (w[1] / w[0]).ln();
+                let order = observed_order([w[0], w[1], w[2]]);
                 assert!(
                     order > 1.8,
                     "step {}: residuals {r:?} (order {order:.2})",

@@ -12,3 +12,8 @@ pub fn get(name: &str) -> Option<&'static str> {
         _ => None,
     }
 }
+
+/// A built-in case as a JSON value, to edit into a new case.
+pub fn json(name: &str) -> Option<serde_json::Value> {
+    get(name).map(|text| serde_json::from_str(text).expect("built-in cases are JSON"))
+}

@@ -323,7 +323,7 @@ mod tests {
     use super::*;
 
     fn column_json() -> serde_json::Value {
-        serde_json::from_str(builtin::get("column").unwrap()).unwrap()
+        builtin::json("column").unwrap()
     }
 
     fn error_for(v: serde_json::Value) -> CaseError {

@@ -5,7 +5,7 @@ use mpm::{Case, NoObserver, RunReport, Simulation};
 
 /// A built-in example as an editable JSON value.
 pub fn example(name: &str) -> serde_json::Value {
-    serde_json::from_str(mpm::case::builtin::get(name).expect("built-in example")).unwrap()
+    mpm::case::builtin::json(name).expect("built-in example")
 }
 
 /// Parses (validating) and runs a case.
