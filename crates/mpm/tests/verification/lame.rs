@@ -8,9 +8,7 @@
 //! As in the cantilever test, a small pressure keeps the follower pressure's
 //! turning and the updated geometry far below the discretisation error.
 
-mod common;
-
-use common::run;
+use crate::common::run;
 use serde_json::json;
 
 const A: f64 = 1.0;

@@ -15,9 +15,7 @@
 //! force of about p w_tip, so its relative effect on u_x grows like p; at
 //! p = 1.5 Pa it was measured at 0.5%, at 1.5 mPa it is 5e-6.
 
-mod common;
-
-use common::run;
+use crate::common::run;
 use mpm::newton::observed_order;
 use serde_json::json;
 
@@ -228,7 +226,7 @@ fn ibm_clamped_cantilever_on_a_cut_grid_converges() {
 /// residual; a wrong sign or a missing term in the band's reactions shows).
 #[test]
 fn papers_cantilever_converges_quadratically_and_its_reactions_balance() {
-    let (_, report) = run(&common::example("cantilever"));
+    let (_, report) = run(&crate::common::example("cantilever"));
     for s in &report.steps {
         let r = &s.newton.residuals;
         let n = r.len();

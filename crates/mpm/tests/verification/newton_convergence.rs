@@ -2,9 +2,7 @@
 //! finite-deformation cases: once the relative residual r_k is small,
 //! r_{k+1} ~ C r_k^2, i.e. log r_{k+1} / log r_k -> 2.
 
-mod common;
-
-use common::{example, run};
+use crate::common::{example, run};
 use mpm::newton::observed_order;
 
 /// Estimates the order from three successive residuals (2 for quadratic,

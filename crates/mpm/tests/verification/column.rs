@@ -12,9 +12,7 @@
 //! so E ln(lambda)/lambda = -rho0 g (L - Y) fixes lambda(Y) and the top
 //! displacement is the integral of (lambda - 1) over the height: -25.940 m.
 
-mod common;
-
-use common::{example, orders, run};
+use crate::common::{example, orders, run};
 
 const L: f64 = 50.0;
 const E: f64 = 1.0e4;

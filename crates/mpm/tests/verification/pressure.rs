@@ -1,8 +1,6 @@
 //! Follower pressure on the B-spline boundary.
 
-mod common;
-
-use common::run;
+use crate::common::run;
 use mpm::newton::observed_order;
 use serde_json::json;
 

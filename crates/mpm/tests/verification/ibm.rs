@@ -4,9 +4,7 @@
 //! on IBM supports is in `column.rs`, the paper's cantilever in
 //! `cantilever.rs`.)
 
-mod common;
-
-use common::run;
+use crate::common::run;
 use serde_json::{Value, json};
 
 const E: f64 = 1.0e6;

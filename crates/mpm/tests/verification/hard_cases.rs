@@ -1,8 +1,6 @@
 //! Hard cases: situations that break naive implicit MPM.
 
-mod common;
-
-use common::example;
+use crate::common::example;
 use mpm::{Case, NoObserver, Simulation, SolveError};
 
 /// The grid-supported cantilever at 0.1 m cells in 400 load steps: at step

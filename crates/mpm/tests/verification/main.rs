@@ -1,0 +1,13 @@
+//! The solver's verification cases, each against an answer known from
+//! outside the code (analytical solutions, published tables, converged
+//! references), in one test binary so that the crate is linked once.
+
+mod common;
+
+mod cantilever;
+mod column;
+mod hard_cases;
+mod ibm;
+mod lame;
+mod newton_convergence;
+mod pressure;
