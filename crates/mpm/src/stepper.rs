@@ -204,13 +204,7 @@ impl Simulation {
             .iter()
             .map(|m| m.elastic())
             .max_by(|a, b| (a.lambda + 2.0 * a.mu).total_cmp(&(b.lambda + 2.0 * b.mu)))?;
-        Some(SoftCells::new(
-            start,
-            self.basis,
-            stiffest.lambda,
-            stiffest.mu,
-            ratio,
-        ))
+        Some(SoftCells::new(start, self.basis, &stiffest, ratio))
     }
 
     /// Body force and point loads, scaled by the load factor.

@@ -59,7 +59,7 @@ pub struct BoundarySpec {
     pub representation: Representation,
     /// Width `delta` (m) of the band inside the boundary over which the
     /// implicit boundary method's D-functions rise from 0 to 1. Default
-    /// 1% of the cell size (see `boundary::ibm`).
+    /// [`crate::boundary::ibm::DEFAULT_BAND_WIDTH`] cells (a hundredth).
     #[serde(default)]
     pub band_width: Option<f64>,
 }

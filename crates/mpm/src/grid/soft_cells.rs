@@ -7,6 +7,7 @@ use rayon::prelude::*;
 use super::{Basis, node_key};
 use crate::assembly::Pattern;
 use crate::configuration::Configuration;
+use crate::material::Elastic;
 
 /// A soft background material over every cell the material's point domains
 /// overlap: small-strain elastic in the step's displacement increment, with
@@ -33,9 +34,9 @@ pub struct SoftCells {
 
 impl SoftCells {
     /// The cells overlapped by any point's domain (its containing cell for
-    /// the linear basis), with a material of Lame constants `ratio *
-    /// (lambda, mu)`.
-    pub fn new(start: &Configuration, basis: Basis, lambda: f64, mu: f64, ratio: f64) -> Self {
+    /// the linear basis), with `ratio` times the Lame constants of the
+    /// `stiffest` material.
+    pub fn new(start: &Configuration, basis: Basis, stiffest: &Elastic, ratio: f64) -> Self {
         let Configuration {
             grid, conn, points, ..
         } = *start;
@@ -76,7 +77,7 @@ impl SoftCells {
             .collect();
         Self {
             cells,
-            k_cell: bilinear_cell_stiffness(ratio * lambda, ratio * mu),
+            k_cell: bilinear_cell_stiffness(ratio * stiffest.lambda, ratio * stiffest.mu),
         }
     }
 
