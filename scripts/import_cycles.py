@@ -1,0 +1,58 @@
+#!/usr/bin/env python3
+"""Lists cycles in a Rust crate's file-level import graph.
+
+    cd crates/mpm/src && python3 ../../../scripts/import_cycles.py
+
+Reads every .rs file below the current folder (test modules and comments
+left out), resolves each `crate::` and `super::` path to the file that holds
+the module it names, and prints the strongly connected components with more
+than one file. `cycles: []` means the files import each other without a
+cycle. A text scan, not a compiler: a path spelled through a re-export
+counts against the file that re-exports it.
+"""
+import os,re,sys
+files={}
+for root,_,fs in os.walk('.'):
+    for f in fs:
+        if f.endswith('.rs'):
+            p=os.path.join(root,f)[2:]
+            s=open(p).read().split('#[cfg(test)]')[0]
+            s='\n'.join(l for l in s.splitlines() if not l.strip().startswith('//'))
+            files[p]=s
+def modpath(p):
+    parts=p[:-3].split('/')
+    if parts[-1] in('mod','lib'): parts=parts[:-1]
+    return parts
+mods={tuple(modpath(p)):p for p in files}
+def resolve(parts):
+    for k in range(len(parts),0,-1):
+        if tuple(parts[:k]) in mods: return mods[tuple(parts[:k])]
+edges={}
+for p,s in files.items():
+    me=modpath(p); deps=set()
+    for m in re.finditer(r'\b(crate|super)::((?:\w+::)*)(\{[^}]*\}|\w+)', s):
+        path=[x for x in m.group(2).split('::') if x]
+        parts=path if m.group(1)=='crate' else me[:-1]+path
+        last=m.group(3)
+        items=[last] if not last.startswith('{') else [x.strip().split('::')[0] for x in last[1:-1].split(',') if x.strip()]
+        for it in items:
+            t=resolve(parts+[it]) or resolve(parts)
+            if t and t!=p: deps.add(t)
+    # `mod x;` declarations are containment, not imports
+    edges[p]=deps
+index={};low={};st=[];on=set();res=[];i=[0]
+sys.setrecursionlimit(10000)
+def sc(v):
+    index[v]=low[v]=i[0];i[0]+=1;st.append(v);on.add(v)
+    for w in edges[v]:
+        if w not in index: sc(w); low[v]=min(low[v],low[w])
+        elif w in on: low[v]=min(low[v],index[w])
+    if low[v]==index[v]:
+        comp=[]
+        while True:
+            w=st.pop();on.discard(w);comp.append(w)
+            if w==v:break
+        if len(comp)>1: res.append(comp)
+for v in edges:
+    if v not in index: sc(v)
+print("cycles:", res)
