@@ -219,6 +219,7 @@ impl Equilibrium for StepEquilibrium<'_> {
 
 /// Displacement `sum_a N_a u_a` and displacement gradient
 /// `grad_u = sum_a u_a (x) g_a` of a point (`dF = I + grad_u`).
+#[inline]
 pub fn increment(links: &[Link], u: &[f64]) -> ([f64; 2], Matrix2<f64>) {
     let mut dx = [0.0; 2];
     let mut df = Matrix2::zeros();

@@ -98,6 +98,7 @@ impl Pattern {
         self.try_block(a, b).expect("linked nodes are neighbours")
     }
 
+    #[inline]
     fn try_block(&self, a: u32, b: u32) -> Option<(usize, usize)> {
         let nb = &self.neighbours[self.first[b as usize]..self.first[b as usize + 1]];
         let k = nb.binary_search(&a).ok()?;
@@ -106,6 +107,7 @@ impl Pattern {
 
     /// Adds `value` at `(row, col)` (DOF indices); returns false, adding
     /// nothing, if the entry is outside the pattern.
+    #[inline]
     pub fn add(&self, values: &mut [f64], row: usize, col: usize, value: f64) -> bool {
         match self.try_block((row / 2) as u32, (col / 2) as u32) {
             Some((base, stride)) => {

@@ -100,6 +100,7 @@ impl Connectivity {
         2 * self.nodes.len()
     }
 
+    #[inline]
     pub fn point_links(&self, p: usize) -> &[Link] {
         &self.links[self.offsets[p]..self.offsets[p + 1]]
     }

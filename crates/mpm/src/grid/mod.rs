@@ -16,10 +16,12 @@ pub type NodeKey = u64;
 
 const BIAS: i64 = 1 << 31;
 
+#[inline]
 pub fn node_key(i: i64, j: i64) -> NodeKey {
     (((i + BIAS) as u64) << 32) | ((j + BIAS) as u64 & 0xffff_ffff)
 }
 
+#[inline]
 pub fn node_indices(key: NodeKey) -> (i64, i64) {
     ((key >> 32) as i64 - BIAS, (key & 0xffff_ffff) as i64 - BIAS)
 }
@@ -34,10 +36,12 @@ pub struct Grid {
 impl Grid {
     /// Integer coordinates `(i, j)` of the cell holding `x`: the one whose
     /// lower-left node is `(i, j)`.
+    #[inline]
     pub fn cell_of(&self, x: [f64; 2]) -> [i64; 2] {
         [0, 1].map(|d| ((x[d] - self.origin[d]) / self.h).floor() as i64)
     }
 
+    #[inline]
     pub fn node_position(&self, key: NodeKey) -> [f64; 2] {
         let (i, j) = node_indices(key);
         [
