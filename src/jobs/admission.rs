@@ -1,7 +1,8 @@
 //! What a submission must be to be queued: JSON, a valid case, and within
 //! the service's limits. Each check names the field that fails it.
 
-use mpm::{Case, CaseErrorKind, Simulation};
+use mpm::model::Seeded;
+use mpm::{Case, CaseErrorKind};
 
 use crate::config::Limits;
 
@@ -45,7 +46,7 @@ pub fn read(body: &[u8]) -> Result<(&str, Case), Rejection> {
 pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
     check_load_steps(&case, limits)?;
     check_point_bound(&case, limits)?;
-    let points = Simulation::new(&case)
+    let points = Seeded::new(&case)
         .map_err(|e| Rejection::InvalidCase {
             path: e.path,
             message: e.message,

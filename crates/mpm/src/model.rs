@@ -1,12 +1,13 @@
 //! From the case (what a user submits) to the solver's own types: the only
 //! module that reads the case schema. It seeds the bodies with points,
-//! finds their boundary loops, resolves every boundary selector to loop
-//! segments once, and splits the supports by how they are imposed.
+//! finds their boundary loops and resolves every boundary selector to loop
+//! segments once ([`Seeded`]), then splits the supports by how they are
+//! imposed.
 
 use crate::boundary::ibm::{self, IbmSupport};
 use crate::boundary::loading::LoadedStretch;
 use crate::boundary::traction::Traction;
-use crate::boundary::{find_loops, selected_segments, set_offsets};
+use crate::boundary::{BoundaryLoop, find_loops, selected_segments, set_offsets};
 use crate::case::{BasisKind, Body, Case, CaseError, MaterialSpec, SupportMethod};
 use crate::grid::{Basis, Grid};
 use crate::material::{Elastic, Material};
@@ -17,21 +18,31 @@ use crate::probes::Probes;
 use crate::stepper::Simulation;
 use crate::supports::GridSupport;
 
-impl Simulation {
-    /// Builds the initial state of a validated case. Fails, naming the
-    /// field, when a boundary load or an IBM support selects no stretch of
-    /// any body's boundary (which could not be told before the points were
-    /// generated).
+/// Loop segments per loop, `(loop index, segments)`, that a selector picks.
+type Selection = Vec<(usize, Vec<usize>)>;
+
+/// What a case's bodies make before any load step: the material points,
+/// their boundary loops, and the loop segments each boundary selector picks.
+/// Seeding is where reading a case costs time and memory, and the one check
+/// left after validation: a boundary selector that picks nothing fails
+/// here, naming its field.
+pub struct Seeded {
+    pub points: MaterialPoints,
+    pub loops: Vec<BoundaryLoop>,
+    /// Per boundary load of the case.
+    loads: Vec<Selection>,
+    /// Per support of the case; `None` for the grid-node ones.
+    supports: Vec<Option<Selection>>,
+}
+
+impl Seeded {
+    /// Seeds a validated case.
     pub fn new(case: &Case) -> Result<Self, CaseError> {
-        let grid = Grid {
-            h: case.grid.cell_size,
-            origin: case.grid.origin,
-        };
         let points = material_points(case);
         let mut loops = find_loops(&points.lattice, &points.material, &points.reference);
         set_offsets(&mut loops, &points, case.boundary.representation);
         let select = |path: String, on| {
-            let segments = selected_segments(on, &loops, &points, grid.h);
+            let segments = selected_segments(on, &loops, &points, case.grid.cell_size);
             if segments.is_empty() {
                 return Err(CaseError::new(
                     path,
@@ -41,15 +52,48 @@ impl Simulation {
             }
             Ok(segments)
         };
+        let loads = (case.loads.boundary.iter().enumerate())
+            .map(|(i, load)| select(format!("loads.boundary[{i}].on"), &load.on))
+            .collect::<Result<_, _>>()?;
+        let supports = (case.supports.iter().enumerate())
+            .map(|(i, s)| match s.method {
+                SupportMethod::Grid => Ok(None),
+                SupportMethod::Ibm => select(format!("supports[{i}].on"), &s.on).map(Some),
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Self {
+            points,
+            loops,
+            loads,
+            supports,
+        })
+    }
+}
+
+impl Simulation {
+    /// Builds the initial state of a validated case. Fails, naming the
+    /// field, when a boundary load or an IBM support selects no stretch of
+    /// any body's boundary (which could not be told before the points were
+    /// generated).
+    pub fn new(case: &Case) -> Result<Self, CaseError> {
+        let Seeded {
+            points,
+            loops,
+            loads,
+            supports,
+        } = Seeded::new(case)?;
+        let grid = Grid {
+            h: case.grid.cell_size,
+            origin: case.grid.origin,
+        };
         let mut boundary_loads = Vec::new();
-        for (i, load) in case.loads.boundary.iter().enumerate() {
-            let segments = select(format!("loads.boundary[{i}].on"), &load.on)?;
+        for (load, selection) in case.loads.boundary.iter().zip(loads) {
             let traction = match (load.traction, load.pressure) {
                 (Some(t), _) => Traction::Dead(t),
                 (None, Some(p)) => Traction::Pressure(p),
                 (None, None) => continue, // rejected by validation
             };
-            boundary_loads.extend(segments.into_iter().map(|(loop_index, segments)| {
+            boundary_loads.extend(selection.into_iter().map(|(loop_index, segments)| {
                 LoadedStretch {
                     loop_index,
                     segments,
@@ -58,16 +102,16 @@ impl Simulation {
             }));
         }
         let (mut grid_supports, mut ibm_supports) = (Vec::new(), Vec::new());
-        for (index, s) in case.supports.iter().enumerate() {
-            match s.method {
-                SupportMethod::Grid => grid_supports.push(GridSupport {
+        for ((index, s), selection) in case.supports.iter().enumerate().zip(supports) {
+            match selection {
+                None => grid_supports.push(GridSupport {
                     index,
                     on: s.on,
                     fix: s.fix,
                 }),
-                SupportMethod::Ibm => ibm_supports.push(IbmSupport {
+                Some(segments) => ibm_supports.push(IbmSupport {
                     index,
-                    segments: select(format!("supports[{index}].on"), &s.on)?,
+                    segments,
                     fix: s.fix,
                     displacement: s.displacement.unwrap_or([0.0, 0.0]),
                     rotation: s.rotation,
