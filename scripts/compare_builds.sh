@@ -7,13 +7,21 @@
 set -euo pipefail
 old=$1 new=$2 work=${3:-$(mktemp -d)}
 here=$(cd "$(dirname "$0")" && pwd)
+# Runs one command quietly; on failure shows its output and stops.
+quiet() {
+  local log; log=$(mktemp)
+  if ! "$@" >"$log" 2>&1; then
+    cat "$log" >&2; echo "failed: $*" >&2; exit 1
+  fi
+  rm -f "$log"
+}
 for side in before after; do
   bin=$old; [ "$side" = after ] && bin=$new
   dir=$work/$side
   rm -rf "$dir"; mkdir -p "$dir"
-  "$bin" study cantilever --quick --basis gimp --out "$dir/study_gimp" >/dev/null 2>&1
-  "$bin" study cantilever --quick --basis linear --out "$dir/study_linear" >/dev/null 2>&1
-  "$bin" run --example column --out "$dir/column" >/dev/null 2>&1
-  "$bin" run --example cantilever --out "$dir/cantilever" >/dev/null 2>&1
+  quiet "$bin" study cantilever --quick --basis gimp --out "$dir/study_gimp"
+  quiet "$bin" study cantilever --quick --basis linear --out "$dir/study_linear"
+  quiet "$bin" run --example column --out "$dir/column"
+  quiet "$bin" run --example cantilever --out "$dir/cantilever"
 done
 python3 "$here/compare_runs.py" "$work/before" "$work/after"

@@ -6,10 +6,12 @@
 Each directory holds the outputs of the same commands from two builds:
 `mpm run ... --out DIR/NAME` (compared through NAME/summary.json and, where
 present, NAME/steps/step_NNNN.json) and `mpm study ... --out DIR/NAME`
-(compared through NAME/cantilever.csv). Everything must be byte-identical
-except wall-clock times: `wall_seconds` and `timings` in the JSON, the
-`seconds` column in the CSV. Exits 1 and lists the first differences
-otherwise.
+(compared through NAME/cantilever.csv). Every value must be identical
+except wall-clock times (`wall_seconds` and `timings` in the JSON, the
+`seconds` column in the CSV): JSON is compared parsed, so each float is
+compared exactly (to the last bit), and CSV cells as text. A result file
+present on one side only is a difference. Exits 1 and lists the first
+differences otherwise.
 
 scripts/compare_builds.sh runs the standard set of commands with two
 binaries and calls this.
@@ -45,17 +47,26 @@ def csv_rows(path):
     return rows
 
 
+def loader_for(path):
+    if path.suffix == ".json" and (path.name == "summary.json" or path.parent.name == "steps"):
+        return json_text
+    if path.suffix == ".csv":
+        return csv_rows
+    return None
+
+
 def compare(before, after):
     differences = []
     compared = 0
+    for new in sorted(after.rglob("*")):
+        rel = new.relative_to(after)
+        if loader_for(new) and not (before / rel).exists():
+            differences.append(f"{rel}: missing in {before}")
     for old in sorted(before.rglob("*")):
         rel = old.relative_to(before)
         new = after / rel
-        if old.suffix == ".json" and (old.name == "summary.json" or old.parent.name == "steps"):
-            loader = json_text
-        elif old.suffix == ".csv":
-            loader = csv_rows
-        else:
+        loader = loader_for(old)
+        if loader is None:
             continue
         if not new.exists():
             differences.append(f"{rel}: missing in {after}")

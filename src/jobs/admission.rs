@@ -30,7 +30,13 @@ pub struct Admitted {
 pub fn read(body: &[u8]) -> Result<(&str, Case), Rejection> {
     let text = std::str::from_utf8(body).map_err(|e| Rejection::MalformedJson(e.to_string()))?;
     let case = Case::from_json(text).map_err(|e| match e.kind {
-        CaseErrorKind::Syntax => Rejection::MalformedJson(e.message),
+        // The JSON parser's own word on where the text stops being JSON
+        // (a case error may come first in the text).
+        CaseErrorKind::Syntax => Rejection::MalformedJson(
+            serde_json::from_str::<serde_json::Value>(text)
+                .err()
+                .map_or(e.message, |e| e.to_string()),
+        ),
         CaseErrorKind::Invalid => Rejection::InvalidCase {
             path: e.path,
             message: e.message,
@@ -57,7 +63,7 @@ pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
     Ok(Admitted { case, points })
 }
 
-pub fn check_load_steps(case: &Case, limits: &Limits) -> Result<(), Rejection> {
+fn check_load_steps(case: &Case, limits: &Limits) -> Result<(), Rejection> {
     if case.analysis.load_steps as usize > limits.max_load_steps {
         return Err(Rejection::LimitExceeded {
             path: "analysis.load_steps".into(),
@@ -72,7 +78,7 @@ pub fn check_load_steps(case: &Case, limits: &Limits) -> Result<(), Rejection> {
 
 /// Refuses a case far over the point limit before generating anything,
 /// from the most points its bodies' bounding boxes could hold.
-pub fn check_point_bound(case: &Case, limits: &Limits) -> Result<(), Rejection> {
+fn check_point_bound(case: &Case, limits: &Limits) -> Result<(), Rejection> {
     let bound: f64 = case
         .bodies
         .iter()
@@ -91,7 +97,7 @@ pub fn check_point_bound(case: &Case, limits: &Limits) -> Result<(), Rejection> 
 }
 
 /// The number of points the case made: within the limit, and some.
-pub fn check_points(points: usize, limits: &Limits) -> Result<(), Rejection> {
+fn check_points(points: usize, limits: &Limits) -> Result<(), Rejection> {
     if points > limits.max_points {
         return Err(Rejection::LimitExceeded {
             path: "bodies".into(),
@@ -143,8 +149,11 @@ mod tests {
             "{\"version\": 1, \"no_such_field\": 1,",
             "{\"version\": 1, \"no_such_field\": 1e400}",
         ] {
-            assert!(
-                matches!(read_err(body), Rejection::MalformedJson(_)),
+            // The message is the JSON parser's, not the case's.
+            let parser = serde_json::from_str::<serde_json::Value>(body).unwrap_err();
+            assert_eq!(
+                read_err(body),
+                Rejection::MalformedJson(parser.to_string()),
                 "{body}"
             );
         }

@@ -2,6 +2,11 @@
 //! `mpm study` and `mpm bench`: the paper's convergence study written as
 //! tables and SVG plots ([`study`]), and cost against problem size written
 //! to BENCHMARKS.md ([`bench`]). They use only the solver crate.
+//!
+//! [`bench::bench`] measures each row in a child process (for its own peak
+//! memory) by running the current executable as `mpm bench-row SCENE
+//! POINTS`: a binary that offers `bench` must offer `bench-row` too, as
+//! [`bench::bench_row`].
 
 pub mod bench;
 pub mod plot;

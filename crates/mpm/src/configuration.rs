@@ -1,10 +1,8 @@
 //! The configuration a load step starts from, which the updated-Lagrangian
-//! step measures its increment against: the grid and the step's active
-//! nodes, the material points and their boundary loops. The stages that
-//! build a step's terms (boundary loads, the IBM band, the soft background)
-//! take it as one bundle.
+//! step measures its increment against: the grid, the step's active nodes
+//! and the material points. The stages that build a step's terms (boundary
+//! loads, the IBM band, the soft background) take it as one bundle.
 
-use crate::boundary::BoundaryLoop;
 use crate::grid::{Connectivity, Grid};
 use crate::particles::MaterialPoints;
 
@@ -14,5 +12,4 @@ pub struct Configuration<'a> {
     /// The grid reset of the step: shape functions on the active nodes.
     pub conn: &'a Connectivity,
     pub points: &'a MaterialPoints,
-    pub loops: &'a [BoundaryLoop],
 }

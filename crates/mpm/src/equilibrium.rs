@@ -8,11 +8,11 @@ use std::time::Instant;
 use nalgebra::Matrix2;
 use rayon::prelude::*;
 
-use crate::assembly::{self, Pattern};
+use crate::assembly::{self, Pattern, SoftCells};
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
 use crate::configuration::Configuration;
-use crate::grid::{Connectivity, Link, SoftCells};
+use crate::grid::{Connectivity, Link};
 use crate::linsolve::{Factorisation, SparseSolver};
 use crate::material::Response;
 use crate::newton::{Equilibrium, InvertedPoint};
@@ -30,6 +30,16 @@ pub struct StepTerms<'a> {
     pub loading: BoundaryLoading<'a>,
     pub band: BandTerms,
     pub soft: Option<SoftCells>,
+}
+
+impl StepTerms<'_> {
+    /// The stiffness pattern: the material's couplings (points' nodes) and
+    /// those the boundary loads and the band terms add.
+    pub fn pattern(&self, conn: &Connectivity) -> Pattern {
+        let mut groups = self.loading.coupling_groups();
+        groups.extend(self.band.coupling_groups());
+        Pattern::build(conn, &groups)
+    }
 }
 
 /// The equilibrium equations of one load step, as Newton sees them.
@@ -58,13 +68,13 @@ pub struct StepEquilibrium<'a> {
     f_int: Vec<f64>,
     responses: Vec<Response>,
     solver: SparseSolver,
-    pub timings: StepTimings,
+    timings: StepTimings,
 }
 
 impl<'a> StepEquilibrium<'a> {
-    /// The system of a step on the configuration `start`, with the
-    /// stiffness pattern of every coupling its terms add.
-    pub fn new(start: &Configuration<'a>, terms: StepTerms<'a>) -> Self {
+    /// The system of a step on the configuration `start`; `pattern` must
+    /// hold every coupling of `terms` ([`StepTerms::pattern`]).
+    pub fn new(start: &Configuration<'a>, terms: StepTerms<'a>, pattern: Pattern) -> Self {
         let conn = start.conn;
         let StepTerms {
             held,
@@ -73,11 +83,9 @@ impl<'a> StepEquilibrium<'a> {
             band,
             soft,
         } = terms;
-        let mut groups = loading.coupling_groups();
-        groups.extend(band.coupling_groups());
         Self {
             conn,
-            pattern: Pattern::build(conn, &groups),
+            pattern,
             points: start.points,
             held,
             soft,
@@ -100,8 +108,8 @@ impl<'a> StepEquilibrium<'a> {
         self.held.fixed[dof]
     }
 
-    /// The DOFs that are not held.
-    pub fn free_dofs(&self) -> usize {
+    /// The number of DOFs that are not held.
+    pub fn n_free_dofs(&self) -> usize {
         self.conn.n_dofs() - self.held.count()
     }
 

@@ -1,6 +1,6 @@
 //! Plane geometry shared by the case and the solver: the regions bodies
 //! fill, the selections supports and loads act on, and the polygon
-//! primitives (area, winding) used by seeding, validation and the boundary.
+//! primitives (area, point in ring) used by seeding, validation and the boundary.
 //!
 //! The case schema re-exports [`Geometry`] and [`Selector`]: they are values
 //! the solver reads directly, so the solver never imports the schema.
@@ -83,7 +83,7 @@ impl Geometry {
                 p[0] > min[0] && p[0] < max[0] && p[1] > min[1] && p[1] < max[1]
             }
             Geometry::Polygon { vertices, holes } => {
-                winding_number(p, vertices) != 0 && !holes.iter().any(|h| winding_number(p, h) != 0)
+                inside_ring(vertices, p) && !holes.iter().any(|h| inside_ring(h, p))
             }
             Geometry::Circle { center, radius } => dist(center) < *radius,
             Geometry::Annulus {
@@ -177,22 +177,22 @@ pub fn signed_area(ring: &[[f64; 2]]) -> f64 {
         / 2.0
 }
 
-/// Winding number of the closed polygon `ring` about `x` (counter-clockwise
-/// positive).
-pub fn winding_number(x: [f64; 2], ring: &[[f64; 2]]) -> i32 {
-    let mut w = 0;
-    for (k, a) in ring.iter().enumerate() {
-        let b = ring[(k + 1) % ring.len()];
-        let cross = (b[0] - a[0]) * (x[1] - a[1]) - (x[0] - a[0]) * (b[1] - a[1]);
-        if a[1] <= x[1] {
-            if b[1] > x[1] && cross > 0.0 {
-                w += 1;
+/// Whether `p` lies inside the closed ring of vertices (either
+/// orientation): the even-odd crossing test.
+pub fn inside_ring(ring: &[[f64; 2]], p: [f64; 2]) -> bool {
+    let mut inside = false;
+    let n = ring.len();
+    for i in 0..n {
+        let a = ring[i];
+        let b = ring[(i + 1) % n];
+        if (a[1] > p[1]) != (b[1] > p[1]) {
+            let x = a[0] + (p[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if p[0] < x {
+                inside = !inside;
             }
-        } else if b[1] <= x[1] && cross < 0.0 {
-            w -= 1;
         }
     }
-    w
+    inside
 }
 
 #[cfg(test)]
@@ -200,12 +200,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn winding_number_tells_inside_from_outside_either_way_round() {
+    fn inside_ring_tells_inside_from_outside_either_way_round() {
         let ccw = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-        assert_eq!(winding_number([0.5, 0.5], &ccw), 1);
-        assert_eq!(winding_number([1.5, 0.5], &ccw), 0);
+        assert!(inside_ring(&ccw, [0.5, 0.5]));
+        assert!(!inside_ring(&ccw, [1.5, 0.5]));
         let cw: Vec<[f64; 2]> = ccw.iter().rev().copied().collect();
-        assert_eq!(winding_number([0.5, 0.5], &cw), -1);
-        assert_eq!(winding_number([-0.5, 0.5], &cw), 0);
+        assert!(inside_ring(&cw, [0.5, 0.5]));
+        assert!(!inside_ring(&cw, [-0.5, 0.5]));
     }
 }

@@ -169,7 +169,7 @@ fn material_points(case: &Case) -> MaterialPoints {
 }
 
 /// The constitutive model of a material spec.
-pub fn material(spec: &MaterialSpec) -> Material {
+fn material(spec: &MaterialSpec) -> Material {
     let (e, nu, _) = spec.constants();
     let constants = Elastic::from_young_poisson(e, nu);
     match spec {

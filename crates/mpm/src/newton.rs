@@ -20,7 +20,7 @@ pub struct NewtonSettings {
     /// A relative residual above this (or not finite) is divergence (1e8).
     pub divergence_limit: f64,
     /// Soft-background stiffness in the tangent, relative to the stiffest
-    /// material (1e-6); see [`crate::grid::SoftCells`].
+    /// material (1e-6); see [`crate::assembly::SoftCells`].
     pub tangent_regularisation: f64,
 }
 
@@ -223,7 +223,7 @@ mod tests {
         let mut eq = Cubic { x0: 3.0, x: 3.0 };
         let (u, info) = solve(&mut eq, &NewtonSettings::default(), 1, &mut NoObserver).unwrap();
         assert!((3.0 + u[0] - 2.0).abs() < 1e-9);
-        // Once in the basin, e_{k+1} ~ C e_k^2: the exponent log(e3)/log(e2) -> 2.
+        // Once in the basin, r_{k+1} ~ C r_k^p with p = 2.
         let r = &info.residuals;
         let n = r.len();
         let order = observed_order([r[n - 4], r[n - 3], r[n - 2]]);

@@ -64,7 +64,7 @@ pub struct StepReport {
     /// point loads and boundary loads on the converged boundary): at
     /// equilibrium the reactions add up to minus this, unless two grid
     /// supports hold the same component of a node (both then report its
-    /// force). Zero in steps stored before it was reported.
+    /// force). Zero when absent from a stored step.
     #[serde(default)]
     pub applied_load: [f64; 2],
 }

@@ -16,18 +16,19 @@ use nalgebra::Matrix2;
 use rayon::prelude::*;
 
 use crate::assembly;
+use crate::assembly::SoftCells;
 use crate::boundary::BoundaryLoop;
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::{BoundaryLoading, LoadedStretch};
 use crate::configuration::Configuration;
 use crate::equilibrium::{StepEquilibrium, StepTerms, increment};
-use crate::grid::{Basis, Connectivity, Grid, NodeKey, SoftCells};
+use crate::grid::{Basis, Connectivity, Grid, NodeKey};
 use crate::material::Response;
 use crate::newton::{self, NewtonSettings, SolveError};
 use crate::observer::{Observer, StepState};
 use crate::particles::MaterialPoints;
 use crate::probes::Probes;
-use crate::report::{RunReport, StepReport};
+use crate::report::{RunReport, StepReport, StepTimings};
 use crate::supports::{GridSupport, HeldDofs};
 
 /// A case made ready to run: points, grid, loads and supports
@@ -90,27 +91,30 @@ impl Simulation {
         step: usize,
         observer: &mut dyn Observer,
     ) -> Result<StepReport, SolveError> {
-        let started = Instant::now();
+        let mut clock = Stopwatch::start();
         self.check_inside_extent(step - 1)?;
         let load_factor = step as f64 / self.load_steps as f64;
 
         let conn = self.reset_grid();
-        let mut eq = self.assemble(&self.configuration(&conn), load_factor);
-        let grid_seconds = started.elapsed().as_secs_f64();
+        let mut eq = self.assemble(&conn, load_factor);
+        let grid_seconds = clock.lap();
 
         let (u, newton) = newton::solve(&mut eq, &self.settings, step, observer)?;
+        clock.lap();
 
-        let update_start = Instant::now();
         let reactions = eq.reactions(&self.anchors, &u, self.n_supports);
         let applied_load = eq.applied_load();
-        let active_dofs = eq.free_dofs();
-        let (responses, band, mut timings) = eq.into_converged();
+        let active_dofs = eq.n_free_dofs();
+        let (responses, band, solve_timings) = eq.into_converged();
         self.update_points(&conn, &u, &responses);
         self.probes.advect(&self.grid, &conn, &u);
         self.advance_anchors(&band, &conn, &u);
-        timings.grid = grid_seconds;
-        timings.update = update_start.elapsed().as_secs_f64();
-        timings.total = started.elapsed().as_secs_f64();
+        let timings = StepTimings {
+            grid: grid_seconds,
+            update: clock.lap(),
+            total: clock.total(),
+            ..solve_timings
+        };
 
         Ok(StepReport {
             step,
@@ -127,36 +131,34 @@ impl Simulation {
 
     /// The grid reset: every point's shape functions at its current
     /// position, on the nodes inside the grid's extent.
-    pub fn reset_grid(&self) -> Connectivity {
+    pub(crate) fn reset_grid(&self) -> Connectivity {
         Connectivity::build(&self.grid, self.basis, &self.points, |node| {
             self.node_in_grid(node)
         })
     }
 
-    /// The configuration a step starts from, on its grid reset `conn`.
-    pub fn configuration<'a>(&'a self, conn: &'a Connectivity) -> Configuration<'a> {
-        Configuration {
+    /// The system of a step at `load_factor` on its grid reset `conn`: the
+    /// step's terms, then the stiffness pattern of every coupling they add.
+    pub(crate) fn assemble<'a>(
+        &'a self,
+        conn: &'a Connectivity,
+        load_factor: f64,
+    ) -> StepEquilibrium<'a> {
+        let start = Configuration {
             grid: &self.grid,
             conn,
             points: &self.points,
-            loops: &self.loops,
-        }
-    }
-
-    /// The system of a step at `load_factor` on the configuration `start`.
-    pub fn assemble<'a>(
-        &'a self,
-        start: &Configuration<'a>,
-        load_factor: f64,
-    ) -> StepEquilibrium<'a> {
-        let terms = StepTerms {
-            held: HeldDofs::find(&self.grid_supports, start.grid, start.conn),
-            f_ext: self.external_force(start.conn, load_factor),
-            loading: BoundaryLoading::new(start, &self.boundary_loads, load_factor),
-            band: BandTerms::new(start, &self.anchors, self.band_width, load_factor),
-            soft: self.soft_cells(start),
         };
-        StepEquilibrium::new(start, terms)
+        let loops = &self.loops;
+        let terms = StepTerms {
+            held: HeldDofs::find(&self.grid_supports, &self.grid, conn),
+            f_ext: self.external_force(conn, load_factor),
+            loading: BoundaryLoading::new(&start, loops, &self.boundary_loads, load_factor),
+            band: BandTerms::new(&start, loops, &self.anchors, self.band_width, load_factor),
+            soft: self.soft_cells(&start),
+        };
+        let pattern = terms.pattern(conn);
+        StepEquilibrium::new(&start, terms, pattern)
     }
 
     /// Whether a node lies in the grid's extent (with a tolerance of 1e-9 h).
@@ -256,6 +258,35 @@ impl Simulation {
     }
 }
 
+/// Laps of wall-clock time within a load step.
+struct Stopwatch {
+    start: Instant,
+    lap: Instant,
+}
+
+impl Stopwatch {
+    fn start() -> Self {
+        let now = Instant::now();
+        Self {
+            start: now,
+            lap: now,
+        }
+    }
+
+    /// Seconds since the last lap (or the start).
+    fn lap(&mut self) -> f64 {
+        let now = Instant::now();
+        let seconds = (now - self.lap).as_secs_f64();
+        self.lap = now;
+        seconds
+    }
+
+    /// Seconds since the start.
+    fn total(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -268,7 +299,7 @@ mod tests {
     fn first_tangent_condition(case: &Case) -> f64 {
         let sim = Simulation::new(case).unwrap();
         let conn = sim.reset_grid();
-        let mut eq = sim.assemble(&sim.configuration(&conn), 1.0 / sim.load_steps as f64);
+        let mut eq = sim.assemble(&conn, 1.0 / sim.load_steps as f64);
         let n = conn.n_dofs();
         eq.out_of_balance(&vec![0.0; n]).unwrap();
         let free: Vec<usize> = (0..n).filter(|&i| !eq.is_held(i)).collect();

@@ -11,10 +11,12 @@
 
 pub mod forces;
 pub mod pattern;
+pub mod soft_cells;
 pub mod stiffness;
 
 pub use forces::{body_force, internal_force};
 pub use pattern::{Pattern, constrain};
+pub use soft_cells::SoftCells;
 pub use stiffness::stiffness;
 
 use rayon::prelude::*;

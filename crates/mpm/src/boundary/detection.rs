@@ -27,7 +27,7 @@ pub struct BoundaryLoop {
     /// Per data point, the vector in the reference configuration from the
     /// material point to the curve's data point: zero when the curve runs
     /// through the points, out to the edge of the point's domain otherwise
-    /// (see [`crate::case::Representation`]).
+    /// (see [`crate::boundary::Representation`]).
     pub offset: Vec<[f64; 2]>,
 }
 

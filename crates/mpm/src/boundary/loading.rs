@@ -52,15 +52,11 @@ impl<'a> BoundaryLoading<'a> {
     /// step's start configuration.
     pub fn new(
         start: &Configuration<'a>,
+        loops: &'a [BoundaryLoop],
         stretches: &'a [LoadedStretch],
         load_factor: f64,
     ) -> Self {
-        let Configuration {
-            grid,
-            conn,
-            points,
-            loops,
-        } = *start;
+        let Configuration { grid, conn, points } = *start;
         let mut loading = Self {
             grid,
             conn,

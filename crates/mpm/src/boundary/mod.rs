@@ -80,14 +80,12 @@ pub fn set_offsets(
 /// The segments of each loop that `selector` picks in the reference
 /// configuration, as `(loop index, segments)` for loops with any: a segment
 /// is picked when both its end data points (reference positions, offsets
-/// set) are near the selection: within 1.5 domain half-widths of it for the
-/// material edge (whose data points lie on a straight selected side, and
-/// within about a half-width of a curved edge filled on a Cartesian
-/// lattice), within 2.02 half-widths through the points (which sit a
-/// half-width inside a straight side and up to about two inside such a
-/// curved edge). Round a rectangle's corner the next data point is two
-/// half-widths (edge) or three (points) from the selected side, so the
-/// selection stops at the corner.
+/// set) are within 1.5 domain half-widths of the selection: the material
+/// edge's data points lie on a straight selected side, and within about a
+/// half-width of a curved edge filled on a Cartesian lattice; through the
+/// points they sit a half-width inside a straight side. Round a rectangle's
+/// corner the next data point is two half-widths (edge) or three (points)
+/// from the selected side, so the selection stops at the corner.
 pub fn selected_segments(
     selector: &Selector,
     loops: &[BoundaryLoop],
@@ -99,14 +97,10 @@ pub fn selected_segments(
         .enumerate()
         .filter_map(|(l, lp)| {
             let n = lp.points.len();
+            let ring = reference_ring(lp, points);
             let on = |k: usize| {
-                let (p, d) = (lp.points[k], lp.offset[k]);
-                let hw = points.domain[p].half_width;
-                let x = points.reference[p];
-                selector.contains(
-                    [x[0] + d[0], x[1] + d[1]],
-                    1.5 * hw[0].max(hw[1]) + 1e-9 * h,
-                )
+                let hw = points.domain[lp.points[k]].half_width;
+                selector.contains(ring[k], 1.5 * hw[0].max(hw[1]) + 1e-9 * h)
             };
             let segments: Vec<usize> = (0..n).filter(|&k| on(k) && on((k + 1) % n)).collect();
             (!segments.is_empty()).then_some((l, segments))

@@ -1,18 +1,15 @@
 //! Equivalent nodal forces of tractions on the boundary curve,
 //! `f_a = int_Gamma N_a t dGamma` (the paper's eq. 2), by Gauss quadrature.
 //!
-//! Each Bezier segment of the curve is split where it crosses a grid line,
-//! so every quadrature piece sees one cell and smooth (bilinear) shape
-//! functions; each piece gets 4-point Gauss-Legendre quadrature in the
-//! segment parameter. With the mapping's Jacobian written out, a follower
+//! The quadrature is [`super::quadrature`]'s: 4 Gauss points on each piece
+//! of a segment between grid lines. With the mapping's Jacobian written out, a follower
 //! pressure `p` on the current curve has the density `-p (C'_y, -C'_x)` per
 //! unit parameter (the outward normal times `|C'|`), a polynomial of degree 2
 //! in the parameter; times the bilinear `N_a` on the cubic curve the
 //! integrand has degree 8, so 4 points leave an error of the curve's own
 //! order. A dead traction `t` has the density `t |C'|`.
 //!
-//! The shape functions are the bilinear finite-element ones (as in the
-//! paper) whatever the basis of the points. A curve piece in a cell with an
+//! The shape functions are the bilinear ones, as in the paper. A curve piece in a cell with an
 //! inactive corner (rare: the curve bulging past the material's cells) gives
 //! that corner's share to the active ones, in proportion.
 

@@ -89,17 +89,18 @@ pub struct Analysis {
 pub struct NewtonSpec {
     /// Converged when the out-of-balance force norm over the free degrees of
     /// freedom, relative to the external (or internal, if larger) force norm,
-    /// falls below this. Default 1e-9.
+    /// falls below this. Default: [`NewtonSettings`]'s.
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
-    /// Iteration cap per load step; reaching it fails the job. Default 30.
+    /// Iteration cap per load step; reaching it fails the job. Default:
+    /// [`NewtonSettings`]'s.
     #[serde(default = "default_max_iterations")]
     pub max_iterations: u32,
-    /// Stiffness of the soft background added to the tangent over the
-    /// cells the material touches, relative to the stiffest material
-    /// (default 1e-6; 0 turns it off). It keeps the solve regular when a
-    /// point alone reaches new nodes; the converged answer does not depend on
-    /// it.
+    /// Stiffness of the soft background over the cells the material
+    /// touches, relative to the stiffest material (default: [`NewtonSettings`]'s;
+    /// 0 turns it off). It keeps the solve regular when a point alone
+    /// reaches new nodes, and stiffens each step's increment by a relative
+    /// amount of its size.
     #[serde(default = "default_tangent_regularisation")]
     pub tangent_regularisation: f64,
 }

@@ -5,11 +5,9 @@
 
 pub mod basis;
 pub mod connectivity;
-pub mod soft_cells;
 
 pub use basis::{Basis, NodeWeight};
 pub use connectivity::{Connectivity, Link};
-pub use soft_cells::SoftCells;
 
 /// A lattice node packed into one integer; ordering is by `i`, then `j`.
 pub type NodeKey = u64;

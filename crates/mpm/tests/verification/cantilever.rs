@@ -83,9 +83,10 @@ fn small_load_cantilever_converges_to_the_finite_element_reference() {
     // Measured (edge, h = 1, 0.5, 0.25, 0.125): relative deflection errors
     // 3.3e-2, 8.8e-3, 2.2e-3, 3.7e-4 (second order: the bilinear cells'
     // bending error); u_x within 6e-6 of the exact value at every h (the
-    // follower pressure's push along the beam, module docs). Through the points: 9.7e-2 .. 9.0e-3 and u_x 25% ..
-    // 2.8% low (first order: the loaded curve is half a spacing short of
-    // the edge at each end and half a spacing low).
+    // follower pressure's push along the beam, module docs). Through the
+    // points: 9.7e-2 .. 9.0e-3 and u_x 25% .. 2.8% low (first order: the
+    // loaded curve is half a spacing short of the edge at each end and half
+    // a spacing low).
     let of = |r: &str| {
         rows.iter()
             .filter(move |row| row.0 == r)
@@ -160,7 +161,7 @@ fn measure_case(mut case: serde_json::Value, h: f64, shift: [f64; 2]) -> (f64, f
 ///   3.0e-4 (grid-node supports: 3.3e-2 .. 3.7e-4 | 6e-6 throughout; the
 ///   IBM fixes a stretch one point spacing long where the reference pins a
 ///   point, and its penalty gives a little: 1e-3 of the relative deflection
-///   at delta = h/100, see `boundary::ibm`);
+///   at delta = h/100, see docs/ibm.md);
 /// - grid moved by half a cell both ways: 2.8e-2 .. 3.3e-4 | 1.0e-2 ..
 ///   1.8e-4.
 ///

@@ -7,8 +7,8 @@ use mpm::{Case, NoObserver, Simulation, SolveError};
 /// 34 the tip's top corner point crosses into an empty cell column, and the
 /// two new nodes there are reached by that point alone. Their displacement
 /// modes have (almost) no stiffness; without the soft background the linear
-/// solve returns metres of garbage along them and Newton stalls (regression
-/// test for that failure: "did not converge in load step 34").
+/// solve returns metres of garbage along them and Newton stalls ("did not
+/// converge in load step 34").
 fn tip_corner_crossing(regularisation: f64) -> Result<(), SolveError> {
     let mut case = example("cantilever-grid");
     case["grid"]["cell_size"] = 0.1.into();

@@ -1,13 +1,13 @@
 //! Newton-Raphson with the consistent tangent converges quadratically on
 //! finite-deformation cases: once the relative residual r_k is small,
-//! r_{k+1} ~ C r_k^2, i.e. log r_{k+1} / log r_k -> 2.
+//! r_{k+1} ~ C r_k^p with p = 2.
 
 use crate::common::{example, run};
 use mpm::newton::observed_order;
 
-/// Estimates the order from three successive residuals (2 for quadratic,
-/// 1 for linear convergence; `mpm::newton::observed_order`) wherever they lie in the asymptotic range (r_{k-1}
-/// below 5e-2 and falling) and above the round-off floor (r_{k+1} above
+/// Estimates the order p from three successive residuals
+/// (`mpm::newton::observed_order`) wherever they lie in the asymptotic
+/// range (r_{k-1} below 5e-2 and falling) and above the round-off floor (r_{k+1} above
 /// 1e-11: converged residuals of these cases sit at 1e-13..1e-15, set by the
 /// conditioning of K, and say nothing about the rate).
 fn assert_quadratic(case: &serde_json::Value) {

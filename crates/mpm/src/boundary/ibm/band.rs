@@ -7,16 +7,15 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Matrix2, Vector2};
 
-use super::Anchor;
-use super::ghost::{GHOST, GHOST_STENCIL, GhostTie, nodes_beyond};
+use super::anchors::Anchor;
+use super::ghost::{self, GHOST_STENCIL, GhostTie, nodes_beyond};
 use crate::assembly::Pattern;
 use crate::boundary::bspline::{bezier_derivative, local_segment};
 use crate::boundary::current_ring;
+use crate::boundary::detection::BoundaryLoop;
 use crate::boundary::quadrature::hat_shares;
 use crate::configuration::Configuration;
-use crate::geometry::winding_number;
-use crate::grid::{NodeKey, node_indices, node_key};
-use crate::particles::MaterialPoints;
+use crate::grid::NodeKey;
 use crate::supports::Fix;
 
 /// Default band width `delta` in cells (see the module docs).
@@ -48,16 +47,12 @@ pub struct BandTerms {
 impl BandTerms {
     pub fn new(
         start: &Configuration,
+        loops: &[BoundaryLoop],
         anchors: &[Anchor],
         band_width: f64,
         load_factor: f64,
     ) -> Self {
-        let Configuration {
-            grid,
-            conn,
-            points,
-            loops,
-        } = *start;
+        let Configuration { grid, conn, points } = *start;
         let mut terms = BandTerms {
             material_scale: 0.75 * band_width / grid.h,
             ..Default::default()
@@ -84,7 +79,7 @@ impl BandTerms {
             }
             let d = bezier_derivative(&local_segment(current, a.segment), a.t);
             let length = a.weight * (d[0] * d[0] + d[1] * d[1]).sqrt();
-            let a_nn = acoustic_tensor(points, a.point, a.normal);
+            let a_nn = a.acoustic_tensor(points);
             for key in nodes_beyond(grid, a.position(), a.normal) {
                 if conn.nodes.binary_search(&key).is_ok() {
                     beyond.entry(key).or_insert(i);
@@ -103,36 +98,7 @@ impl BandTerms {
                 },
             });
         }
-        for (key, anchor) in beyond {
-            let a = &anchors[anchor];
-            // Beyond the tangent at the anchor but inside the material (a
-            // concave stretch, or a curve through the points half a spacing
-            // inside the edge): no tie.
-            let material_side = if loops[a.loop_index].hole { 0 } else { 1 };
-            if winding_number(grid.node_position(key), &rings[&a.loop_index]) == material_side {
-                continue;
-            }
-            let (normal, a_nn) = (a.normal, acoustic_tensor(points, a.point, a.normal));
-            let (i, j) = node_indices(key);
-            // Inward along the grid axis closest to the normal.
-            let (di, dj) = if normal[0].abs() >= normal[1].abs() {
-                (-normal[0].signum() as i64, 0)
-            } else {
-                (0, -normal[1].signum() as i64)
-            };
-            let index = |k: i64| {
-                conn.nodes
-                    .binary_search(&node_key(i + k * di, j + k * dj))
-                    .ok()
-            };
-            if let (Some(a), Some(b), Some(c)) = (index(0), index(1), index(2)) {
-                terms.ghosts.push(GhostTie {
-                    nodes: [a, b, c],
-                    stiffness: a_nn * GHOST,
-                    support: anchors[anchor].support,
-                });
-            }
-        }
+        terms.ghosts = ghost::ties(start, loops, anchors, &beyond, &rings);
         terms
     }
 
@@ -302,25 +268,6 @@ impl BandTerms {
             a.moved[1] += v[1];
         }
     }
-}
-
-/// `A_nn[i][j] = A[(2i+K),(2j+L)] n_K n_L` of point `p`'s material tangent
-/// at the start of the step.
-fn acoustic_tensor(points: &MaterialPoints, p: usize, n: [f64; 2]) -> Matrix2<f64> {
-    let material = &points.materials[points.material[p] as usize];
-    let j = points.deformation[p].determinant();
-    let tangent = material
-        .respond(&points.history[p], &Matrix2::zeros(), j)
-        .tangent;
-    Matrix2::from_fn(|i, jj| {
-        let mut sum = 0.0;
-        for k in 0..2 {
-            for l in 0..2 {
-                sum += n[k] * tangent[(2 * i + k, 2 * jj + l)] * n[l];
-            }
-        }
-        sum
-    })
 }
 
 /// The components a support holds, as a projection.

@@ -5,9 +5,15 @@
 //! continuation of the field inside. Only nodes more than a tenth of a
 //! cell beyond the boundary and outside the current curve are tied.
 
+use std::collections::BTreeMap;
+
 use nalgebra::{Matrix2, Vector2};
 
-use crate::grid::{Grid, NodeKey, node_key};
+use super::anchors::Anchor;
+use crate::boundary::detection::BoundaryLoop;
+use crate::configuration::Configuration;
+use crate::geometry::inside_ring;
+use crate::grid::{Grid, NodeKey, node_indices, node_key};
 
 /// Weight of the ghost ties against the band's material stiffness.
 pub(super) const GHOST: f64 = 0.1;
@@ -59,6 +65,55 @@ pub(super) fn nodes_beyond(
             let along = (r[0] * n[1] - r[1] * n[0]).abs();
             out > 0.1 * grid.h && out <= grid.h + tol && along <= grid.h + tol
         })
+}
+
+/// The ghost ties of the active nodes found beyond supported boundaries
+/// (`beyond`: node and the anchor that found it). A node beyond the tangent
+/// at its anchor but inside the material (a concave stretch, or a curve
+/// through the points half a spacing inside the edge) is not tied; the
+/// others are tied inward along the grid axis closest to the anchor's
+/// normal, where the next two nodes are active. `rings` are the current
+/// data points of the loops with anchors.
+pub(super) fn ties(
+    start: &Configuration,
+    loops: &[BoundaryLoop],
+    anchors: &[Anchor],
+    beyond: &BTreeMap<NodeKey, usize>,
+    rings: &BTreeMap<usize, Vec<[f64; 2]>>,
+) -> Vec<GhostTie> {
+    let Configuration { grid, conn, points } = *start;
+    let mut ties = Vec::new();
+    for (&key, &anchor) in beyond {
+        let a = &anchors[anchor];
+        // Beyond the tangent at the anchor but inside the material (a
+        // concave stretch, or a curve through the points half a spacing
+        // inside the edge): no tie.
+        let inside = inside_ring(&rings[&a.loop_index], grid.node_position(key));
+        if inside != loops[a.loop_index].hole {
+            continue;
+        }
+        let (normal, a_nn) = (a.normal, a.acoustic_tensor(points));
+        let (i, j) = node_indices(key);
+        // Inward along the grid axis closest to the normal.
+        let (di, dj) = if normal[0].abs() >= normal[1].abs() {
+            (-normal[0].signum() as i64, 0)
+        } else {
+            (0, -normal[1].signum() as i64)
+        };
+        let index = |k: i64| {
+            conn.nodes
+                .binary_search(&node_key(i + k * di, j + k * dj))
+                .ok()
+        };
+        if let (Some(a), Some(b), Some(c)) = (index(0), index(1), index(2)) {
+            ties.push(GhostTie {
+                nodes: [a, b, c],
+                stiffness: a_nn * GHOST,
+                support: anchors[anchor].support,
+            });
+        }
+    }
+    ties
 }
 
 #[cfg(test)]

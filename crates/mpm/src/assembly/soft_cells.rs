@@ -4,9 +4,9 @@
 
 use rayon::prelude::*;
 
-use super::{Basis, node_key};
-use crate::assembly::Pattern;
+use super::Pattern;
 use crate::configuration::Configuration;
+use crate::grid::{Basis, node_key};
 use crate::material::Elastic;
 
 /// A soft background material over every cell the material's point domains
@@ -37,9 +37,7 @@ impl SoftCells {
     /// the linear basis), with `ratio` times the Lame constants of the
     /// `stiffest` material.
     pub fn new(start: &Configuration, basis: Basis, stiffest: &Elastic, ratio: f64) -> Self {
-        let Configuration {
-            grid, conn, points, ..
-        } = *start;
+        let Configuration { grid, conn, points } = *start;
         let mut keys: Vec<(i64, i64)> = (0..points.len())
             .into_par_iter()
             .flat_map_iter(|p| {
