@@ -51,7 +51,7 @@ pub fn read(body: &[u8]) -> Result<(&str, Case), Rejection> {
 /// boundary.
 pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
     check_load_steps(&case, limits)?;
-    check_point_bound(&case, limits)?;
+    check_fill_sizes(&case, limits)?;
     let points = Seeded::new(&case)
         .map_err(|e| Rejection::InvalidCase {
             path: e.path,
@@ -76,19 +76,39 @@ fn check_load_steps(case: &Case, limits: &Limits) -> Result<(), Rejection> {
     Ok(())
 }
 
-/// Refuses a case far over the point limit before generating anything,
-/// from the most points its bodies' bounding boxes could hold.
-fn check_point_bound(case: &Case, limits: &Limits) -> Result<(), Rejection> {
-    let bound: f64 = case
-        .bodies
-        .iter()
-        .map(|b| mpm::model::max_points(b, case.grid.cell_size))
-        .sum();
-    if bound > 4.0 * limits.max_points as f64 {
+/// Lattice sites a body's seeding may scan, per point of the point limit:
+/// a shape other than a rectangle or an annulus sector scans the lattice
+/// over its bounding box (a circle keeps pi/4 of it).
+const SITES_PER_POINT: f64 = 4.0;
+
+/// Refuses a case over the point limit before seeding anything, from the
+/// per-direction counts of every body's lattice: exact for rectangles and
+/// annulus sectors, and for other shapes the sites their seeding would
+/// scan. Microseconds, whatever the case asks for.
+fn check_fill_sizes(case: &Case, limits: &Limits) -> Result<(), Rejection> {
+    let max = limits.max_points as f64;
+    let mut points = 0.0;
+    for (i, body) in case.bodies.iter().enumerate() {
+        let size = mpm::model::fill_size(body, &case.grid);
+        if size.exact {
+            points += size.sites;
+        } else if size.sites > SITES_PER_POINT * max {
+            return Err(Rejection::LimitExceeded {
+                path: format!("bodies[{i}].points"),
+                message: format!(
+                    "seeding this body scans {:.3e} lattice sites (its bounding box at this spacing), \
+                     over this service's limit of {:.3e} ({SITES_PER_POINT} per point of the point limit)",
+                    size.sites,
+                    SITES_PER_POINT * max
+                ),
+            });
+        }
+    }
+    if points > max {
         return Err(Rejection::LimitExceeded {
             path: "bodies".into(),
             message: format!(
-                "the bodies make about {bound:.3e} material points, over this service's limit of {}",
+                "the bodies make {points:.0} material points, over this service's limit of {}",
                 limits.max_points
             ),
         });

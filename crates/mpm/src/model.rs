@@ -8,12 +8,12 @@ use crate::boundary::ibm::{self, IbmSupport};
 use crate::boundary::loading::LoadedStretch;
 use crate::boundary::traction::Traction;
 use crate::boundary::{BoundaryLoop, find_loops, selected_segments, set_offsets};
-use crate::case::{BasisKind, Body, Case, CaseError, MaterialSpec, SupportMethod};
+use crate::case::{BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, SupportMethod};
 use crate::grid::{Basis, Grid};
 use crate::material::{Elastic, Material};
 use crate::newton::NewtonSettings;
 use crate::particles::MaterialPoints;
-use crate::particles::seeding::{self, Density};
+use crate::particles::seeding::{self, Density, FillSize};
 use crate::probes::Probes;
 use crate::stepper::Simulation;
 use crate::supports::GridSupport;
@@ -189,10 +189,10 @@ fn density(body: &Body, cell_size: f64) -> Density {
     }
 }
 
-/// An upper bound on the number of points a body makes, without making
-/// them (see [`seeding::max_points`]).
-pub fn max_points(body: &Body, cell_size: f64) -> f64 {
-    seeding::max_points(&body.geometry, density(body, cell_size))
+/// How many lattice sites seeding a body visits, counted without seeding
+/// it (see [`seeding::size`]).
+pub fn fill_size(body: &Body, grid: &GridSpec) -> FillSize {
+    seeding::size(&body.geometry, density(body, grid.cell_size), grid.origin)
 }
 
 fn basis(kind: BasisKind) -> Basis {

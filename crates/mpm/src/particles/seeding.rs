@@ -50,9 +50,7 @@ pub fn fill(geometry: &Geometry, density: Density, origin: [f64; 2]) -> Vec<Seed
     match geometry {
         Geometry::Rectangle { min, max } => {
             let size = [max[0] - min[0], max[1] - min[1]];
-            let n = count
-                .map(|c| [c[0] as usize, c[1] as usize])
-                .unwrap_or_else(|| size.map(|l| ((l / spacing).round() as usize).max(1)));
+            let n = rectangle_counts(size, spacing, count).map(|n| n as usize);
             let step = [size[0] / n[0] as f64, size[1] / n[1] as f64];
             let mut out = Vec::with_capacity(n[0] * n[1]);
             for j in 0..n[1] {
@@ -102,8 +100,7 @@ pub fn fill(geometry: &Geometry, density: Density, origin: [f64; 2]) -> Vec<Seed
 /// place is (ring, division), which maps counter-clockwise loops to
 /// counter-clockwise loops.
 fn polar_sector(c: [f64; 2], a: f64, b: f64, t0: f64, t1: f64, s: f64) -> Vec<SeedPoint> {
-    let n_r = (((b - a) / s).round() as usize).max(1);
-    let n_t = (((t1 - t0) * 0.5 * (a + b) / s).round() as usize).max(1);
+    let [n_r, n_t] = sector_counts(a, b, t0, t1, s).map(|n| n as usize);
     let (dr, dt) = ((b - a) / n_r as f64, (t1 - t0) / n_t as f64);
     let mut out = Vec::with_capacity(n_r * n_t);
     for j in 0..n_t {
@@ -135,8 +132,8 @@ fn lattice_inside(
     origin: [f64; 2],
     inside: impl Fn([f64; 2]) -> bool,
 ) -> Vec<SeedPoint> {
-    let first = |d: usize| ((lo[d] - origin[d]) / s - 0.5).floor() as i64;
-    let last = |d: usize| ((hi[d] - origin[d]) / s - 0.5).ceil() as i64;
+    let first = |d: usize| lattice_range(lo, hi, s, origin, d).0 as i64;
+    let last = |d: usize| lattice_range(lo, hi, s, origin, d).1 as i64;
     let mut out = Vec::new();
     for j in first(1)..=last(1) {
         for i in first(0)..=last(0) {
@@ -161,16 +158,86 @@ fn lattice_inside(
     out
 }
 
-/// An upper bound on the number of points [`fill`] makes, without making
-/// them: the bounding box's area over a point's area (exact for
-/// rectangles). Lets a service refuse a huge case before allocating it.
-pub fn max_points(geometry: &Geometry, density: Density) -> f64 {
-    match density {
-        Density::Count([nx, ny]) => nx as f64 * ny as f64,
-        Density::Spacing(s) => {
+/// Points per direction of a rectangle of `size`: the given `count`, or
+/// the spacing rounded, at least one.
+fn rectangle_counts(size: [f64; 2], spacing: f64, count: Option<[u32; 2]>) -> [f64; 2] {
+    match count {
+        Some(c) => c.map(f64::from),
+        None => size.map(|l| (l / spacing).round().max(1.0)),
+    }
+}
+
+/// `[n_r, n_t]` of a polar lattice on an annulus sector (radii `a < b`,
+/// angles `t0 < t1` in radians) at spacing `s`, at least one each.
+fn sector_counts(a: f64, b: f64, t0: f64, t1: f64, s: f64) -> [f64; 2] {
+    [
+        ((b - a) / s).round().max(1.0),
+        ((t1 - t0) * 0.5 * (a + b) / s).round().max(1.0),
+    ]
+}
+
+/// First and last index, along direction `d`, of the lattice sites (spacing
+/// `s`, offset half a spacing from `origin`) that cover `[lo, hi]`.
+fn lattice_range(lo: [f64; 2], hi: [f64; 2], s: f64, origin: [f64; 2], d: usize) -> (f64, f64) {
+    (
+        ((lo[d] - origin[d]) / s - 0.5).floor(),
+        ((hi[d] - origin[d]) / s - 0.5).ceil(),
+    )
+}
+
+/// How many lattice sites [`fill`] visits, found without visiting them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FillSize {
+    /// Sites visited: for rectangles and annulus sectors every site is a
+    /// point; the other shapes scan the lattice over their bounding box and
+    /// keep the sites inside.
+    pub sites: f64,
+    /// Whether every site is a point (rectangles and annulus sectors), so
+    /// that `sites` is the number of points, not a bound on it.
+    pub exact: bool,
+}
+
+/// The size of [`fill`]'s work for `geometry` at `density`, in
+/// microseconds whatever the size: per-direction counts multiplied in
+/// floating point, so a huge body gives a huge number, not an overflow.
+pub fn size(geometry: &Geometry, density: Density, origin: [f64; 2]) -> FillSize {
+    let (spacing, count) = match density {
+        Density::Spacing(s) => (s, None),
+        Density::Count(c) => (f64::NAN, Some(c)),
+    };
+    let (counts, exact) = match geometry {
+        Geometry::Rectangle { min, max } => (
+            rectangle_counts([max[0] - min[0], max[1] - min[1]], spacing, count),
+            true,
+        ),
+        Geometry::AnnulusSector {
+            inner_radius,
+            outer_radius,
+            start_angle,
+            end_angle,
+            ..
+        } => (
+            sector_counts(
+                *inner_radius,
+                *outer_radius,
+                start_angle.to_radians(),
+                end_angle.to_radians(),
+                spacing,
+            ),
+            true,
+        ),
+        geometry => {
             let (lo, hi) = geometry.bounding_box();
-            (hi[0] - lo[0]) * (hi[1] - lo[1]) / (s * s) + 1.0
+            let n = |d: usize| {
+                let (first, last) = lattice_range(lo, hi, spacing, origin, d);
+                last - first + 1.0
+            };
+            ([n(0), n(1)], false)
         }
+    };
+    FillSize {
+        sites: counts[0] * counts[1],
+        exact,
     }
 }
 
@@ -220,5 +287,63 @@ mod tests {
         let pts = fill(&b, Density::Spacing(0.25 / 4.0), [0.0, 0.0]);
         // 16 x 16 lattice minus the 8 x 8 hole.
         assert_eq!(pts.len(), 256 - 64);
+    }
+
+    #[test]
+    fn size_counts_the_sites_without_visiting_them() {
+        let shapes = [
+            Geometry::Rectangle {
+                min: [0.0, 0.0],
+                max: [1.3, 0.7],
+            },
+            Geometry::AnnulusSector {
+                center: [0.5, 0.5],
+                inner_radius: 0.5,
+                outer_radius: 1.0,
+                start_angle: 10.0,
+                end_angle: 100.0,
+            },
+            Geometry::Circle {
+                center: [0.3, 0.2],
+                radius: 0.8,
+            },
+            Geometry::Polygon {
+                vertices: vec![[0.0, 0.0], [2.0, 0.3], [0.4, 1.1]],
+                holes: vec![],
+            },
+        ];
+        for g in &shapes {
+            let made = fill(g, Density::Spacing(0.05), [0.1, 0.0]).len() as f64;
+            let size = size(g, Density::Spacing(0.05), [0.1, 0.0]);
+            if size.exact {
+                assert_eq!(size.sites, made, "{g:?}");
+            } else {
+                assert!(
+                    size.sites >= made && size.sites < 3.0 * made,
+                    "{g:?}: {size:?}"
+                );
+            }
+        }
+        // The thin rectangle that once made 5e6 points to count them: its
+        // bounding box's area is 5e-6, but it is a column of 5e6 points.
+        let thin = Geometry::Rectangle {
+            min: [0.0, 0.0],
+            max: [1e-9, 5000.0],
+        };
+        assert_eq!(size(&thin, Density::Spacing(1e-3), [0.0, 0.0]).sites, 5e6);
+        // A sliver polygon scans a column of 1e9 sites for a handful of
+        // points; a body 1e300 long gives a finite or infinite count, never
+        // a wrapped one.
+        let sliver = Geometry::Polygon {
+            vertices: vec![[0.0, 0.0], [1e-12, 0.0], [0.0, 1e6]],
+            holes: vec![],
+        };
+        let s = size(&sliver, Density::Spacing(1e-3), [0.0, 0.0]);
+        assert!(!s.exact && s.sites > 1e9, "{s:?}");
+        let huge = Geometry::Rectangle {
+            min: [0.0, 0.0],
+            max: [1e300, 1e300],
+        };
+        assert!(size(&huge, Density::Spacing(1e-3), [0.0, 0.0]).sites > 1e300);
     }
 }
