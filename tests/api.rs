@@ -325,3 +325,66 @@ fn bodies_over_the_limits_are_refused_from_their_lattice_counts() {
     assert!(grown < 200 << 20, "peak memory grew by {grown} bytes");
     assert_eq!(app.total_jobs(), 0);
 }
+
+/// `(status, error code, details)` of a GET or POST that must fail with the
+/// one error body.
+fn error_of(app: &common::TestApp, method: &str, path: &str) -> (u16, String, Value) {
+    let (status, text) = match method {
+        "GET" => app.get(path),
+        _ => app.post(path, "{}"),
+    };
+    let v: Value = serde_json::from_str(&text)
+        .unwrap_or_else(|_| panic!("{method} {path}: the error body is JSON: {text:?}"));
+    let code = v["error"]["code"].as_str().unwrap_or_default().to_string();
+    (status, code, v["error"]["details"].clone())
+}
+
+/// Path and query parse errors and wrong methods answered with axum's plain
+/// text (or an empty body) until the extractors and the router's fallbacks
+/// kept the contract; an offset near i64::MAX overflowed the next link.
+#[test]
+fn errors_from_paths_queries_and_methods_keep_the_contract() {
+    let app = spawn_app();
+    for path in ["/jobs/abc", "/jobs/9223372036854775808", "/jobs/1/steps/x"] {
+        let (status, code, _) = error_of(&app, "GET", path);
+        assert_eq!((status, code.as_str()), (404, "not_found"), "{path}");
+    }
+    for (path, parameter) in [
+        ("/jobs?limit=1e9", "limit"),
+        ("/jobs?limit=9223372036854775808", "limit"),
+        ("/jobs?limit=1&limit=2", "query"),
+        ("/jobs?offset=9223372036854775807", "offset"),
+        ("/jobs?offset=-1", "offset"),
+    ] {
+        let (status, code, details) = error_of(&app, "GET", path);
+        assert_eq!((status, code.as_str()), (400, "bad_query"), "{path}");
+        assert_eq!(details["parameter"], parameter, "{path}");
+    }
+    let (status, code, _) = error_of(&app, "POST", "/health");
+    assert_eq!((status, code.as_str()), (405, "method_not_allowed"));
+}
+
+/// With a token: the scheme is read in any case (RFC 7235), and an unknown
+/// route or method answers 401 like the known ones, so routes cannot be
+/// listed without the token.
+#[test]
+fn a_token_is_read_in_any_case_and_hides_the_routes() {
+    let app = spawn_app_with(|c| c.token = Some("s3cret".into()));
+    let get = |path: &str, authorization: &str| match app
+        .agent
+        .get(format!("{}{path}", app.base))
+        .header("authorization", authorization)
+        .call()
+    {
+        Ok(r) => r.status().as_u16(),
+        Err(ureq::Error::StatusCode(code)) => code,
+        Err(e) => panic!("{e}"),
+    };
+    assert_eq!(get("/jobs", "bearer s3cret"), 200);
+    assert_eq!(get("/jobs", "BEARER s3cret"), 200);
+    assert_eq!(get("/jobs", "Bearer s3creT"), 401);
+    assert_eq!(get("/no/such/route", "Bearer nope"), 401);
+    assert_eq!(get("/no/such/route", "Bearer s3cret"), 404);
+    assert_eq!(app.get("/no/such/route").0, 401);
+    assert_eq!(app.post("/health", "{}").0, 401);
+}

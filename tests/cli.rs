@@ -146,3 +146,33 @@ fn quick_study_writes_tables_and_plots() {
         .unwrap();
     assert_eq!(bad.status.code(), Some(2));
 }
+
+/// An empty token once turned authentication off without a word; the
+/// service now refuses to start with one (exit 2, naming the setting).
+#[test]
+fn serve_refuses_an_empty_token() {
+    let dir = temp_dir("empty-token");
+    let mut child = mpm()
+        .args(["serve", "--addr", "127.0.0.1:0", "--token", ""])
+        .arg("--database")
+        .arg(dir.join("jobs.sqlite"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if std::time::Instant::now() > deadline {
+            child.kill().unwrap();
+            panic!("mpm serve started with an empty token");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
+    assert_eq!(status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("MPM_TOKEN"), "{stderr}");
+}

@@ -66,9 +66,16 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
             "workers, lease-seconds and max-attempts must be positive",
         ));
     }
+    if args.token.as_deref().is_some_and(|t| t.trim().is_empty()) {
+        // An empty token would match no request's, or turn authentication
+        // off if it were read as "none": neither is what was meant.
+        return Err(CliError::input(
+            "--token (MPM_TOKEN) is empty: give a token, or unset it to run without one",
+        ));
+    }
     let mut config = Config::new(args.database);
     config.workers = args.workers;
-    config.token = args.token.filter(|t| !t.is_empty());
+    config.token = args.token;
     config.lease = Duration::from_secs_f64(args.lease_seconds);
     config.poll_interval = config.poll_interval.min(config.lease / 3);
     config.max_attempts = args.max_attempts;

@@ -30,6 +30,8 @@ pub enum ApiError {
     Conflict(String),
     #[error("missing or wrong bearer token")]
     Unauthorized,
+    #[error("this route does not answer that method")]
+    MethodNotAllowed,
     #[error("internal error")]
     Internal(String),
 }
@@ -77,6 +79,11 @@ impl ApiError {
             ApiError::NotFound(_) => (StatusCode::NOT_FOUND, "not_found", Value::Null),
             ApiError::Conflict(_) => (StatusCode::CONFLICT, "conflict", Value::Null),
             ApiError::Unauthorized => (StatusCode::UNAUTHORIZED, "unauthorized", Value::Null),
+            ApiError::MethodNotAllowed => (
+                StatusCode::METHOD_NOT_ALLOWED,
+                "method_not_allowed",
+                Value::Null,
+            ),
             ApiError::Internal(_) => (StatusCode::INTERNAL_SERVER_ERROR, "internal", Value::Null),
         }
     }

@@ -3,8 +3,10 @@
 
 use axum::Json;
 use axum::body::Bytes;
+use axum::extract::State;
 use axum::extract::rejection::BytesRejection;
-use axum::extract::{Path, Query, State};
+
+use super::extract::{IdPath, Params, integer};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
@@ -61,14 +63,18 @@ pub async fn submit(
 #[derive(Deserialize)]
 pub struct ListQuery {
     status: Option<String>,
-    limit: Option<i64>,
-    offset: Option<i64>,
+    limit: Option<String>,
+    offset: Option<String>,
 }
+
+/// The furthest a page may start: far beyond any queue, and far from
+/// overflowing `offset + limit` in the next link.
+const MAX_OFFSET: i64 = 1 << 40;
 
 /// `GET /jobs`: newest first, filtered by status, paginated.
 pub async fn list(
     State(state): State<AppState>,
-    Query(q): Query<ListQuery>,
+    Params(q): Params<ListQuery>,
 ) -> Result<Json<Value>, ApiError> {
     let status = match q.status.as_deref() {
         None => None,
@@ -80,18 +86,18 @@ pub async fn list(
             ),
         })?),
     };
-    let limit = q.limit.unwrap_or(50);
+    let limit = integer("limit", q.limit.as_deref())?.unwrap_or(50);
     if !(1..=500).contains(&limit) {
         return Err(ApiError::BadQuery {
             name: "limit",
             message: "must be in 1..=500".into(),
         });
     }
-    let offset = q.offset.unwrap_or(0);
-    if offset < 0 {
+    let offset = integer("offset", q.offset.as_deref())?.unwrap_or(0);
+    if !(0..=MAX_OFFSET).contains(&offset) {
         return Err(ApiError::BadQuery {
             name: "offset",
-            message: "must not be negative".into(),
+            message: format!("must be in 0..={MAX_OFFSET}"),
         });
     }
     let (rows, total) = state.store.list(status, limit, offset).await?;
@@ -112,7 +118,7 @@ pub async fn list(
 
 pub async fn job(
     State(state): State<AppState>,
-    Path(id): Path<i64>,
+    IdPath(id): IdPath<i64>,
 ) -> Result<Json<JobView>, ApiError> {
     let job = find(&state.store, id).await?;
     Ok(Json(JobView::new(&job)))
@@ -122,7 +128,7 @@ pub async fn job(
 /// stops at its next Newton iteration (202), its finished steps kept.
 pub async fn cancel(
     State(state): State<AppState>,
-    Path(id): Path<i64>,
+    IdPath(id): IdPath<i64>,
 ) -> Result<Response, ApiError> {
     let outcome = state.store.cancel(id).await?;
     let code = match outcome {
@@ -146,7 +152,7 @@ pub async fn cancel(
 /// `GET /jobs/{id}/case`: the case as it was submitted.
 pub async fn case(
     State(state): State<AppState>,
-    Path(id): Path<i64>,
+    IdPath(id): IdPath<i64>,
 ) -> Result<Response, ApiError> {
     let text = state
         .store
@@ -159,7 +165,7 @@ pub async fn case(
 /// `GET /jobs/{id}/result`: probe histories, reactions and cost, so far.
 pub async fn result(
     State(state): State<AppState>,
-    Path(id): Path<i64>,
+    IdPath(id): IdPath<i64>,
 ) -> Result<Json<ResultView>, ApiError> {
     let job = find(&state.store, id).await?;
     let reports = state

@@ -3,6 +3,7 @@
 
 mod auth;
 mod error;
+mod extract;
 mod jobs;
 mod steps;
 mod views;
@@ -10,7 +11,7 @@ mod views;
 use std::sync::Arc;
 
 use axum::extract::{DefaultBodyLimit, State};
-use axum::http::{StatusCode, header};
+use axum::http::{HeaderMap, StatusCode, header};
 use axum::middleware;
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
@@ -54,9 +55,29 @@ pub fn router(state: AppState) -> Router {
     Router::new()
         .route("/health", get(health))
         .merge(protected)
-        .fallback(|| async { ApiError::NotFound("route".into()) })
+        .fallback(unknown_route)
+        .method_not_allowed_fallback(method_not_allowed)
         .layer(DefaultBodyLimit::max(state.config.limits.max_body_bytes))
         .with_state(state)
+}
+
+/// No such route: 404, or 401 without the token when one is set.
+async fn unknown_route(State(state): State<AppState>, headers: HeaderMap) -> ApiError {
+    if auth::authorized(&state, &headers) {
+        ApiError::NotFound("route".into())
+    } else {
+        ApiError::Unauthorized
+    }
+}
+
+/// A route that does not answer this method: 405, or 401 without the
+/// token when one is set.
+async fn method_not_allowed(State(state): State<AppState>, headers: HeaderMap) -> ApiError {
+    if auth::authorized(&state, &headers) {
+        ApiError::MethodNotAllowed
+    } else {
+        ApiError::Unauthorized
+    }
 }
 
 async fn health(State(state): State<AppState>) -> Response {
@@ -75,4 +96,28 @@ async fn health(State(state): State<AppState>) -> Response {
 
 async fn openapi() -> impl IntoResponse {
     ([(header::CONTENT_TYPE, "application/yaml")], OPENAPI)
+}
+
+#[cfg(test)]
+mod tests {
+    /// YAML 1.1 parsers (PyYAML, and tools built on it) read the keys `on`,
+    /// `off`, `yes`, `no`, `y` and `n` as booleans: a selector's `on` became
+    /// `true`, and the spec's own example failed with
+    /// `supports[0].true`. Every such key in the contract is quoted.
+    #[test]
+    fn the_contract_has_no_key_that_yaml_1_1_reads_as_a_boolean() {
+        let booleans = ["on", "off", "yes", "no", "y", "n", "true", "false"];
+        for (number, line) in super::OPENAPI.lines().enumerate() {
+            // Keys start a line (after `- ` in a list) or follow `{` or `,`.
+            let starts = std::iter::once(line.trim_start().trim_start_matches("- "))
+                .chain(line.split(['{', ',']).skip(1).map(str::trim_start));
+            for key in starts.filter_map(|s| s.split_once(':').map(|(k, _)| k.trim())) {
+                assert!(
+                    !booleans.contains(&key.to_ascii_lowercase().as_str()),
+                    "openapi.yaml line {}: unquoted key {key:?}",
+                    number + 1
+                );
+            }
+        }
+    }
 }

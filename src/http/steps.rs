@@ -2,7 +2,9 @@
 //! document or its points as VTU.
 
 use axum::Json;
-use axum::extract::{Path, Query, State};
+use axum::extract::State;
+
+use super::extract::{IdPath, Params};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use mpm::report::PointColumns;
@@ -17,7 +19,7 @@ use crate::step::StoredStep;
 /// `GET /jobs/{id}/steps`: the report of every finished step.
 pub async fn steps(
     State(state): State<AppState>,
-    Path(id): Path<i64>,
+    IdPath(id): IdPath<i64>,
 ) -> Result<Json<StepsView>, ApiError> {
     jobs::find(&state.store, id).await?;
     let steps = state
@@ -40,8 +42,8 @@ pub struct StepQuery {
 /// as JSON, or the points as VTU.
 pub async fn step(
     State(state): State<AppState>,
-    Path((id, k)): Path<(i64, i64)>,
-    Query(q): Query<StepQuery>,
+    IdPath((id, k)): IdPath<(i64, i64)>,
+    Params(q): Params<StepQuery>,
 ) -> Result<Response, ApiError> {
     let step: StoredStep = state
         .store

@@ -1,0 +1,53 @@
+//! Path and query extractors whose rejections keep the error contract: the
+//! one JSON error body, never axum's plain-text rejections.
+
+use axum::extract::{FromRequestParts, Path, Query};
+use axum::http::request::Parts;
+use serde::de::DeserializeOwned;
+
+use super::ApiError;
+
+/// A path's parameters (`{id}`, `{step}`): a segment that does not parse
+/// (`/jobs/abc`, an id past i64) names nothing there, so it is a 404.
+pub struct IdPath<T>(pub T);
+
+impl<S: Send + Sync, T: DeserializeOwned + Send> FromRequestParts<S> for IdPath<T> {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &S) -> Result<Self, ApiError> {
+        Path::<T>::from_request_parts(parts, state)
+            .await
+            .map(|Path(value)| IdPath(value))
+            .map_err(|_| ApiError::NotFound(parts.uri.path().to_string()))
+    }
+}
+
+/// Query parameters: a query string that does not deserialize (a
+/// parameter given twice, an unknown shape) is a 400 `bad_query`.
+pub struct Params<T>(pub T);
+
+impl<S: Send + Sync, T: DeserializeOwned + Send> FromRequestParts<S> for Params<T> {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &S) -> Result<Self, ApiError> {
+        Query::<T>::from_request_parts(parts, state)
+            .await
+            .map(|Query(value)| Params(value))
+            .map_err(|rejection| ApiError::BadQuery {
+                name: "query",
+                message: rejection.body_text(),
+            })
+    }
+}
+
+/// An integer query parameter, named in the error when it is not one.
+pub fn integer(name: &'static str, value: Option<&str>) -> Result<Option<i64>, ApiError> {
+    value
+        .map(|v| {
+            v.parse::<i64>().map_err(|_| ApiError::BadQuery {
+                name,
+                message: format!("{v:?} is not an integer"),
+            })
+        })
+        .transpose()
+}
