@@ -189,7 +189,17 @@ mod tests {
         let mut range = example();
         range["bodies"][0]["material"]["poisson_ratio"] = 0.5.into();
         let duplicate = example().to_string().replacen("{", "{\"version\": 1, ", 1);
-        for body in [typo.to_string(), range.to_string(), duplicate, "[]".into()] {
+        let overflow =
+            example()
+                .to_string()
+                .replacen("\"cell_size\":", "\"cell_size\":1e309,\"x\":", 1);
+        for body in [
+            typo.to_string(),
+            range.to_string(),
+            duplicate,
+            "[]".into(),
+            overflow,
+        ] {
             let expected = Case::from_json(&body).unwrap_err();
             assert_eq!(
                 read_err(&body),

@@ -60,6 +60,8 @@ pub enum SolveError {
         step: usize,
         iteration: usize,
         residual: f64,
+        /// The last finite residual of the step before it, if any.
+        last_finite: Option<f64>,
     },
     #[error(
         "material point {point} inverted (J = {jacobian:.3e}) in load step {step} at iteration {iteration}"
@@ -69,12 +71,17 @@ pub enum SolveError {
         iteration: usize,
         point: usize,
         jacobian: f64,
+        /// The residual of the last admissible trial state (none at
+        /// iteration 0).
+        residual: Option<f64>,
     },
     #[error("linear solve failed in load step {step} at iteration {iteration}: {message}")]
     LinearSolve {
         step: usize,
         iteration: usize,
         message: String,
+        /// The residual the solve was to correct.
+        residual: f64,
     },
     #[error(
         "material point {point} left the grid extent at ({x:.4}, {y:.4}) after load step {step}"
@@ -86,32 +93,55 @@ pub enum SolveError {
         y: f64,
     },
     #[error("cancelled in load step {step} at iteration {iteration}")]
-    Cancelled { step: usize, iteration: usize },
+    Cancelled {
+        step: usize,
+        iteration: usize,
+        residual: f64,
+    },
 }
 
 impl SolveError {
-    /// `(step, iteration, residual)` where known, for reports.
+    /// `(step, iteration, residual)` where known, for reports: the
+    /// residual is the last finite relative residual of the step (none when
+    /// the step stopped before computing one, or left the grid between
+    /// steps).
     pub fn location(&self) -> (usize, Option<usize>, Option<f64>) {
-        match *self {
+        let (step, iteration, residual) = match *self {
             SolveError::NotConverged {
                 step,
                 iteration,
                 residual,
             }
-            | SolveError::Diverged {
+            | SolveError::LinearSolve {
+                step,
+                iteration,
+                residual,
+                ..
+            }
+            | SolveError::Cancelled {
                 step,
                 iteration,
                 residual,
             } => (step, Some(iteration), Some(residual)),
+            SolveError::Diverged {
+                step,
+                iteration,
+                residual,
+                last_finite,
+            } => (
+                step,
+                Some(iteration),
+                Some(residual).filter(|r| r.is_finite()).or(last_finite),
+            ),
             SolveError::Inverted {
-                step, iteration, ..
-            }
-            | SolveError::LinearSolve {
-                step, iteration, ..
-            }
-            | SolveError::Cancelled { step, iteration } => (step, Some(iteration), None),
+                step,
+                iteration,
+                residual,
+                ..
+            } => (step, Some(iteration), residual),
             SolveError::LeftGrid { step, .. } => (step, None, None),
-        }
+        };
+        (step, iteration, residual.filter(|r| r.is_finite()))
     }
 }
 
@@ -140,11 +170,13 @@ pub fn solve(
         factorisation: None,
     };
     for iteration in 0.. {
+        let last_finite = info.residuals.iter().rev().copied().find(|r| r.is_finite());
         let (r, scale) = eq.out_of_balance(&u).map_err(|p| SolveError::Inverted {
             step,
             iteration,
             point: p.point,
             jacobian: p.jacobian,
+            residual: last_finite,
         })?;
         let norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
         let residual = if norm == 0.0 { 0.0 } else { norm / scale };
@@ -155,6 +187,7 @@ pub fn solve(
                 step,
                 iteration,
                 residual,
+                last_finite,
             });
         }
         if residual <= settings.tolerance {
@@ -169,7 +202,11 @@ pub fn solve(
             });
         }
         if observer.should_cancel() {
-            return Err(SolveError::Cancelled { step, iteration });
+            return Err(SolveError::Cancelled {
+                step,
+                iteration,
+                residual,
+            });
         }
         let (du, kind) = eq
             .correction(&r)
@@ -177,6 +214,7 @@ pub fn solve(
                 step,
                 iteration,
                 message,
+                residual,
             })?;
         info.factorisation = Some(kind);
         for (ui, dui) in u.iter_mut().zip(&du) {
@@ -244,6 +282,53 @@ mod tests {
                 residual,
             }) => assert!(residual > 1e-9),
             other => panic!("{other:?}"),
+        }
+    }
+
+    /// `x^3 = 8` from `x = 1`, whose trial states past `x = 3` are refused
+    /// (an inverted point) or, if `nan_past` is set, give a NaN residual.
+    struct Fragile {
+        x: f64,
+        nan_past: bool,
+    }
+
+    impl Equilibrium for Fragile {
+        fn n_dofs(&self) -> usize {
+            1
+        }
+        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
+            let x = 1.0 + u[0];
+            if x > 3.0 && !self.nan_past {
+                return Err(InvertedPoint {
+                    point: 7,
+                    jacobian: -1.0,
+                });
+            }
+            self.x = x;
+            let r = if x > 3.0 { f64::NAN } else { 8.0 - x.powi(3) };
+            Ok((vec![r], 8.0))
+        }
+        fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
+            Ok((vec![r[0] / (3.0 * self.x * self.x)], Factorisation::Lu))
+        }
+    }
+
+    /// Every failure after a residual was computed reports the last finite
+    /// one: Newton's first step from x = 1 overshoots to x = 3.33, which is
+    /// refused (an inverted point) or gives a NaN residual (divergence);
+    /// the residual before it was |8 - 1| / 8 = 0.875.
+    #[test]
+    fn failures_report_the_last_finite_residual() {
+        let settings = NewtonSettings::default();
+        for (nan_past, step) in [(false, 4), (true, 2)] {
+            let mut eq = Fragile { x: 1.0, nan_past };
+            let e = solve(&mut eq, &settings, step, &mut NoObserver).unwrap_err();
+            if nan_past {
+                assert!(matches!(e, SolveError::Diverged { .. }), "{e}");
+            } else {
+                assert!(matches!(e, SolveError::Inverted { .. }), "{e}");
+            }
+            assert_eq!(e.location(), (step, Some(1), Some(0.875)), "{e}");
         }
     }
 }

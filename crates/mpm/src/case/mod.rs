@@ -350,6 +350,17 @@ mod tests {
         let mut v = column_json();
         v["grid"]["cell_size"] = "big".into();
         assert_eq!(error_for(v).kind, CaseErrorKind::Invalid);
+        // A number f64 cannot hold is an invalid value, and its field named.
+        let text =
+            column_json()
+                .to_string()
+                .replacen("\"cell_size\":3.125", "\"cell_size\":1e309", 1);
+        assert!(text.contains("1e309"), "{text}");
+        let e = Case::from_json(&text).unwrap_err();
+        assert_eq!(
+            (e.kind, e.path.as_str()),
+            (CaseErrorKind::Invalid, "grid.cell_size")
+        );
     }
 
     #[test]

@@ -23,10 +23,14 @@ impl Case {
     pub fn from_json(text: &str) -> Result<Case, CaseError> {
         let mut de = serde_json::Deserializer::from_str(text);
         let case: Case = serde_path_to_error::deserialize(&mut de).map_err(|e| {
-            // A wrong field can come before a fault that makes the text not
-            // JSON at all: such text is malformed, whatever its start says.
-            let syntax = e.inner().classify() != Category::Data
-                || serde_json::from_str::<serde_json::Value>(text).is_err();
+            // A number beyond f64 is JSON the case cannot hold: name its
+            // field. A wrong field can come before a fault that makes the
+            // text not JSON at all: such text is malformed, whatever its
+            // start says.
+            let out_of_range = e.inner().to_string().starts_with("number out of range");
+            let syntax = !out_of_range
+                && (e.inner().classify() != Category::Data
+                    || serde_json::from_str::<serde_json::Value>(text).is_err());
             let path = match e.path().to_string() {
                 p if p.is_empty() || p == "." => "$".to_string(),
                 p => p,
