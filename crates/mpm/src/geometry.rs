@@ -195,6 +195,48 @@ pub fn inside_ring(ring: &[[f64; 2]], p: [f64; 2]) -> bool {
     inside
 }
 
+/// The first pair of edges `(i, j)` of a closed ring that cross or touch
+/// without being neighbours (edge `k` runs from vertex `k` to `k + 1`), or
+/// `None` for a simple ring. Quadratic in the number of vertices.
+pub fn self_crossing(ring: &[[f64; 2]]) -> Option<(usize, usize)> {
+    let n = ring.len();
+    let edge = |k: usize| (ring[k], ring[(k + 1) % n]);
+    for i in 0..n {
+        for j in i + 2..n {
+            if i == 0 && j == n - 1 {
+                continue; // neighbours through vertex 0
+            }
+            let ((a, b), (c, d)) = (edge(i), edge(j));
+            if segments_meet(a, b, c, d) {
+                return Some((i, j));
+            }
+        }
+    }
+    None
+}
+
+/// Whether segments `ab` and `cd` share a point.
+fn segments_meet(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
+    let orient = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
+        let v = (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]);
+        (v > 0.0) as i8 - (v < 0.0) as i8
+    };
+    let within = |p: [f64; 2], q: [f64; 2], r: [f64; 2]| {
+        (0..2).all(|k| r[k] >= p[k].min(q[k]) && r[k] <= p[k].max(q[k]))
+    };
+    let (o1, o2, o3, o4) = (
+        orient(a, b, c),
+        orient(a, b, d),
+        orient(c, d, a),
+        orient(c, d, b),
+    );
+    (o1 != o2 && o3 != o4)
+        || (o1 == 0 && within(a, b, c))
+        || (o2 == 0 && within(a, b, d))
+        || (o3 == 0 && within(c, d, a))
+        || (o4 == 0 && within(c, d, b))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -207,5 +249,26 @@ mod tests {
         let cw: Vec<[f64; 2]> = ccw.iter().rev().copied().collect();
         assert!(inside_ring(&cw, [0.5, 0.5]));
         assert!(!inside_ring(&cw, [-0.5, 0.5]));
+    }
+
+    #[test]
+    fn self_crossings_are_found_and_simple_rings_pass() {
+        // A bow tie: edges 0 and 2 cross.
+        let bow = [[0.0, 0.0], [4.0, 2.0], [4.0, 0.0], [0.0, 1.0]];
+        assert_eq!(self_crossing(&bow), Some((0, 2)));
+        let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        assert_eq!(self_crossing(&square), None);
+        let triangle = [[0.0, 0.0], [1e-12, 0.0], [0.0, 1e6]];
+        assert_eq!(self_crossing(&triangle), None);
+        // A vertex touching a non-neighbouring edge.
+        let pinched = [
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [1.0, 1.0],
+            [2.0, 2.0],
+            [0.0, 2.0],
+            [1.0, 0.0],
+        ];
+        assert!(self_crossing(&pinched).is_some());
     }
 }

@@ -174,7 +174,7 @@ impl Simulation {
     /// Material must stay inside the extent, or, on an unbounded grid, within
     /// the range of node indices (2^30 cells from the origin).
     fn check_inside_extent(&self, step: usize) -> Result<(), SolveError> {
-        let reach = self.grid.h * (1u64 << 30) as f64;
+        let reach = self.grid.h * crate::grid::REACH_CELLS;
         let o = self.grid.origin;
         let (lo, hi) = self
             .extent

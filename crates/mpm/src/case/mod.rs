@@ -363,6 +363,35 @@ mod tests {
         );
     }
 
+    /// A tiny cell size, or a body far from the origin, once passed
+    /// validation and stopped "after load step 0" with the material off
+    /// the grid; the body is now refused, named.
+    #[test]
+    fn a_body_beyond_the_grids_reach_is_refused() {
+        let mut v = column_json();
+        v["grid"]["extent"] = serde_json::Value::Null;
+        v["grid"]["cell_size"] = 1e-300.into();
+        v["bodies"][0]["points"] = serde_json::json!({"spacing": 0.5});
+        assert_eq!(error_for(v).path, "bodies[0].geometry");
+        let mut v = column_json();
+        v["grid"]["extent"] = serde_json::Value::Null;
+        v["bodies"][0]["geometry"] =
+            serde_json::json!({"rectangle": {"min": [1e15, 0], "max": [1.00000001e15, 1]}});
+        assert_eq!(error_for(v).path, "bodies[0].geometry");
+    }
+
+    /// A self-intersecting polygon was accepted and failed with an
+    /// inverted point at step 1.
+    #[test]
+    fn a_polygon_that_crosses_itself_is_refused() {
+        let mut v = column_json();
+        v["bodies"][0]["geometry"] =
+            serde_json::json!({"polygon": {"vertices": [[0, 0], [4, 2], [4, 0], [0, 1]]}});
+        let e = error_for(v);
+        assert_eq!(e.path, "bodies[0].geometry.polygon.vertices");
+        assert!(e.message.contains("crosses itself"), "{e}");
+    }
+
     #[test]
     fn poisson_ratio_of_one_half_names_the_field() {
         let mut v = column_json();

@@ -5,7 +5,8 @@
 use serde_json::error::Category;
 
 use super::*;
-use crate::geometry::signed_area;
+use crate::geometry::{self_crossing, signed_area};
+use crate::grid::REACH_CELLS;
 
 impl CaseError {
     pub(crate) fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
@@ -84,6 +85,7 @@ impl Case {
         }
         for (i, body) in self.bodies.iter().enumerate() {
             body.validate(&format!("bodies[{i}]"))?;
+            self.check_body_on_grid(i, body)?;
         }
         if let Some(g) = self.loads.gravity {
             finite_pair("loads.gravity", g)?;
@@ -189,6 +191,31 @@ impl Case {
                 ));
             }
             finite_pair(&format!("probes[{i}].at"), p.at)?;
+        }
+        Ok(())
+    }
+}
+
+impl Case {
+    /// A body must start within the node indices' reach of the grid's
+    /// origin, which a tiny cell size or a far body exceeds (the run would
+    /// stop before its first step with the material off the grid).
+    fn check_body_on_grid(&self, i: usize, body: &Body) -> Result<(), CaseError> {
+        let (lo, hi) = body.geometry.bounding_box();
+        let g = &self.grid;
+        let path = format!("bodies[{i}].geometry");
+        let reach = g.cell_size * REACH_CELLS;
+        let far = (0..2)
+            .map(|d| (lo[d] - g.origin[d]).abs().max((hi[d] - g.origin[d]).abs()))
+            .fold(0.0, f64::max);
+        if far > reach {
+            return Err(CaseError::new(
+                path,
+                format!(
+                    "lies {far:.3e} m from grid.origin, beyond the grid's reach of {REACH_CELLS:.0} cells \
+                     ({reach:.3e} m at this cell size)"
+                ),
+            ));
         }
         Ok(())
     }
@@ -397,5 +424,24 @@ fn check_ring(path: &str, ring: &[[f64; 2]]) -> Result<(), CaseError> {
     if signed_area(ring).abs() <= 0.0 {
         return Err(CaseError::new(path, "encloses no area"));
     }
+    if ring.len() > MAX_RING_VERTICES {
+        return Err(CaseError::new(
+            path,
+            format!(
+                "has {} vertices, more than the {MAX_RING_VERTICES} a ring may have",
+                ring.len()
+            ),
+        ));
+    }
+    if let Some((i, j)) = self_crossing(ring) {
+        return Err(CaseError::new(
+            path,
+            format!("crosses itself: edges {i} and {j} meet (a polygon must be simple)"),
+        ));
+    }
     Ok(())
 }
+
+/// Vertices a polygon's ring may have: the simplicity check is quadratic in
+/// them (5e7 edge pairs at this size, a fraction of a second).
+const MAX_RING_VERTICES: usize = 10_000;

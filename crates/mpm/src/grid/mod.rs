@@ -14,6 +14,11 @@ pub type NodeKey = u64;
 
 const BIAS: i64 = 1 << 31;
 
+/// How far from the grid's origin, in cells, material may go: node keys
+/// hold indices within 2^31 of it, and this leaves room for the nodes
+/// around the material.
+pub const REACH_CELLS: f64 = (1u64 << 30) as f64;
+
 #[inline]
 pub fn node_key(i: i64, j: i64) -> NodeKey {
     (((i + BIAS) as u64) << 32) | ((j + BIAS) as u64 & 0xffff_ffff)
