@@ -16,6 +16,8 @@ pub const DEFAULT_POLL_INTERVAL: Duration = Duration::from_secs(1);
 pub const DEFAULT_MAX_BODY_BYTES: usize = 1 << 20;
 pub const DEFAULT_MAX_POINTS: usize = 1_000_000;
 pub const DEFAULT_MAX_LOAD_STEPS: usize = 10_000;
+/// Jobs that may wait in the queue; a submission beyond them gets 429.
+pub const DEFAULT_MAX_QUEUED: usize = 1_000;
 pub const DEFAULT_JOB_TIME_LIMIT: Duration = Duration::from_secs(3600);
 
 #[derive(Debug, Clone)]
@@ -43,6 +45,7 @@ pub struct Limits {
     pub max_body_bytes: usize,
     pub max_points: usize,
     pub max_load_steps: usize,
+    pub max_queued: usize,
     pub job_time_limit: Duration,
 }
 
@@ -60,6 +63,7 @@ impl Config {
                 max_body_bytes: DEFAULT_MAX_BODY_BYTES,
                 max_points: DEFAULT_MAX_POINTS,
                 max_load_steps: DEFAULT_MAX_LOAD_STEPS,
+                max_queued: DEFAULT_MAX_QUEUED,
                 job_time_limit: DEFAULT_JOB_TIME_LIMIT,
             },
         }

@@ -15,7 +15,7 @@ use std::net::SocketAddr;
 use std::sync::Arc;
 
 use tokio::net::TcpListener;
-use tokio::sync::{Notify, oneshot};
+use tokio::sync::{Notify, Semaphore, oneshot};
 use tokio::task::JoinHandle;
 
 pub use config::{Config, Limits};
@@ -64,11 +64,13 @@ impl Server {
         let running = Arc::new(RunningJobs::default());
         let workers =
             WorkerPool::start(store.clone(), config.clone(), wake.clone(), running.clone());
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         let app = http::router(AppState {
             store,
             config,
             wake,
             running,
+            admissions: Arc::new(Semaphore::new(cores)),
         });
         let (stop, stopped) = oneshot::channel::<()>();
         let serving = tokio::spawn(async move {

@@ -388,3 +388,42 @@ fn a_token_is_read_in_any_case_and_hides_the_routes() {
     assert_eq!(app.get("/no/such/route").0, 401);
     assert_eq!(app.post("/health", "{}").0, 401);
 }
+
+/// A full queue answers 429 with Retry-After and creates nothing; a place
+/// freed (here by a cancel) takes the next submission. No worker runs, so
+/// the queue's length is what was submitted.
+#[test]
+fn a_full_queue_answers_429_with_retry_after() {
+    let app = spawn_app_with(|c| {
+        c.workers = 0;
+        c.limits.max_queued = 2;
+    });
+    let case = example("cantilever-grid");
+    let first = app.submit(&case);
+    app.submit(&case);
+    let response = app
+        .agent
+        .post(format!("{}/jobs", app.base))
+        .header("content-type", "application/json")
+        .config()
+        .http_status_as_error(false)
+        .build()
+        .send(case.to_string())
+        .unwrap();
+    assert_eq!(response.status().as_u16(), 429);
+    assert_eq!(
+        response
+            .headers()
+            .get("retry-after")
+            .map(|v| v.to_str().unwrap()),
+        Some("10")
+    );
+    let body: Value =
+        serde_json::from_str(&response.into_body().read_to_string().unwrap()).unwrap();
+    assert_eq!(body["error"]["code"], "queue_full");
+    assert_eq!(body["error"]["details"]["max_queued"], 2);
+    assert_eq!(app.total_jobs(), 2);
+    assert_eq!(app.post(&format!("/jobs/{first}/cancel"), "").0, 200);
+    app.submit(&case);
+    assert_eq!(app.total_jobs(), 3);
+}

@@ -35,6 +35,9 @@ pub struct ServeArgs {
     /// Most load steps a case may ask for.
     #[arg(long, env = "MPM_MAX_LOAD_STEPS", default_value_t = config::DEFAULT_MAX_LOAD_STEPS)]
     max_load_steps: usize,
+    /// Jobs that may wait in the queue; more submissions get 429.
+    #[arg(long, env = "MPM_MAX_QUEUED", default_value_t = config::DEFAULT_MAX_QUEUED)]
+    max_queued: usize,
     /// Wall-time limit of one job, in seconds; a job over it fails.
     #[arg(long, env = "MPM_JOB_TIME_LIMIT", default_value_t = config::DEFAULT_JOB_TIME_LIMIT.as_secs())]
     job_time_limit: u64,
@@ -82,6 +85,7 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
     config.limits.max_body_bytes = args.max_body_bytes;
     config.limits.max_points = args.max_points;
     config.limits.max_load_steps = args.max_load_steps;
+    config.limits.max_queued = args.max_queued;
     config.limits.job_time_limit = Duration::from_secs(args.job_time_limit);
 
     let runtime = tokio::runtime::Runtime::new()?;

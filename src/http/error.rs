@@ -9,6 +9,9 @@ use serde_json::{Value, json};
 
 use crate::jobs::admission::Rejection;
 
+/// What a 429 asks a client to wait before it submits again, in seconds.
+const RETRY_AFTER_SECONDS: &str = "10";
+
 #[derive(Debug, thiserror::Error)]
 pub enum ApiError {
     /// The body is not JSON at all.
@@ -32,6 +35,8 @@ pub enum ApiError {
     Unauthorized,
     #[error("this route does not answer that method")]
     MethodNotAllowed,
+    #[error("the queue is full ({limit} jobs wait); try again later")]
+    QueueFull { limit: usize },
     #[error("internal error")]
     Internal(String),
 }
@@ -79,6 +84,11 @@ impl ApiError {
             ApiError::NotFound(_) => (StatusCode::NOT_FOUND, "not_found", Value::Null),
             ApiError::Conflict(_) => (StatusCode::CONFLICT, "conflict", Value::Null),
             ApiError::Unauthorized => (StatusCode::UNAUTHORIZED, "unauthorized", Value::Null),
+            ApiError::QueueFull { limit } => (
+                StatusCode::TOO_MANY_REQUESTS,
+                "queue_full",
+                json!({ "max_queued": limit }),
+            ),
             ApiError::MethodNotAllowed => (
                 StatusCode::METHOD_NOT_ALLOWED,
                 "method_not_allowed",
@@ -99,6 +109,12 @@ impl IntoResponse for ApiError {
             json!({ "error": { "code": code, "message": self.to_string(), "details": details } }),
         );
         let mut response = (status, body).into_response();
+        if status == StatusCode::TOO_MANY_REQUESTS {
+            response.headers_mut().insert(
+                axum::http::header::RETRY_AFTER,
+                axum::http::HeaderValue::from_static(RETRY_AFTER_SECONDS),
+            );
+        }
         if status == StatusCode::UNAUTHORIZED {
             response.headers_mut().insert(
                 axum::http::header::WWW_AUTHENTICATE,

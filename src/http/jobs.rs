@@ -30,12 +30,30 @@ pub async fn submit(
             ApiError::MalformedJson(rejection.body_text())
         }
     })?;
+    let limits = &state.config.limits;
+    if state.store.queued().await? >= limits.max_queued as i64 {
+        return Err(ApiError::QueueFull {
+            limit: limits.max_queued,
+        });
+    }
     let (text, case) = admission::read(&body)?;
+    // Seeding a case is CPU work: off the async threads, and no more of it
+    // at once than there are cores. The permit goes with the blocking task,
+    // so a client that hangs up does not free it before the work ends.
+    let permit = state
+        .admissions
+        .clone()
+        .acquire_owned()
+        .await
+        .map_err(|e| ApiError::Internal(format!("admissions: {e}")))?;
     let admitted = {
         let config = state.config.clone();
-        tokio::task::spawn_blocking(move || admission::admit(case, &config.limits))
-            .await
-            .map_err(|e| ApiError::Internal(format!("case check: {e}")))??
+        tokio::task::spawn_blocking(move || {
+            let _permit = permit;
+            admission::admit(case, &config.limits)
+        })
+        .await
+        .map_err(|e| ApiError::Internal(format!("case check: {e}")))??
     };
     let id = state
         .store

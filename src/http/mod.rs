@@ -17,7 +17,7 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
 use serde_json::json;
-use tokio::sync::Notify;
+use tokio::sync::{Notify, Semaphore};
 
 pub use error::ApiError;
 
@@ -36,6 +36,8 @@ pub struct AppState {
     pub wake: Arc<Notify>,
     /// Jobs running in this process, to pass cancel requests on at once.
     pub running: Arc<RunningJobs>,
+    /// Submissions being checked at once: one per core.
+    pub admissions: Arc<Semaphore>,
 }
 
 pub fn router(state: AppState) -> Router {

@@ -173,6 +173,13 @@ impl Store {
         Ok((rows, total))
     }
 
+    /// Jobs waiting in the queue.
+    pub async fn queued(&self) -> Result<i64, sqlx::Error> {
+        sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE status = 'queued'")
+            .fetch_one(&self.pool)
+            .await
+    }
+
     /// Fails running jobs whose lease has expired and that have used all
     /// their attempts. Returns how many.
     pub async fn fail_exhausted(&self, max_attempts: i64) -> Result<u64, sqlx::Error> {
