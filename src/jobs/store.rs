@@ -215,6 +215,16 @@ impl Store {
         lease: Duration,
     ) -> Result<Option<Claimed>, sqlx::Error> {
         let t = now();
+        // A job whose worker died after a cancel request ends as cancelled,
+        // keeping its steps, rather than being run again.
+        sqlx::query(AssertSqlSafe(format!(
+            "UPDATE jobs SET status = '{CANCELLED}', finished_at = ? \
+             WHERE status = '{RUNNING}' AND cancel_requested = 1 AND lease_expires_at < ?"
+        )))
+        .bind(t)
+        .bind(t)
+        .execute(&self.pool)
+        .await?;
         let claimable =
             format!("(status = '{QUEUED}' OR (status = '{RUNNING}' AND lease_expires_at < ?))");
         let claimed: Option<Claimed> = sqlx::query_as(AssertSqlSafe(format!(
@@ -351,6 +361,20 @@ impl Store {
         if queued.rows_affected() == 1 {
             return Ok(CancelOutcome::Cancelled);
         }
+        // Running, but its worker is gone (the lease expired): no one would
+        // stop it, so it ends here, its finished steps kept.
+        let orphaned = sqlx::query(AssertSqlSafe(format!(
+            "UPDATE jobs SET status = '{CANCELLED}', finished_at = ? \
+             WHERE id = ? AND status = '{RUNNING}' AND lease_expires_at < ?"
+        )))
+        .bind(t)
+        .bind(id)
+        .bind(t)
+        .execute(&self.pool)
+        .await?;
+        if orphaned.rows_affected() == 1 {
+            return Ok(CancelOutcome::Cancelled);
+        }
         let running = sqlx::query(AssertSqlSafe(format!(
             "UPDATE jobs SET cancel_requested = 1 WHERE id = ? AND status = '{RUNNING}'"
         )))
@@ -408,4 +432,62 @@ async fn update_held<'c>(
     )));
     let done = bind(update).bind(id).bind(owner).execute(executor).await?;
     Ok(done.rows_affected() == 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    async fn store(tag: &str) -> Store {
+        let dir = std::env::temp_dir().join(format!("mpm-store-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Store::open(&dir.join("jobs.sqlite")).await.unwrap()
+    }
+
+    /// A running job with one finished step, claimed by `owner` with `lease`.
+    async fn running_job(store: &Store, owner: &str, lease: Duration) -> i64 {
+        let id = store.insert("{}", None, 1, 10).await.unwrap();
+        let claimed = store.claim(owner, lease).await.unwrap().unwrap();
+        assert_eq!(claimed.id, id);
+        let step = StoredStep::from_text("{}".into(), "{}".into(), "[]".into()).unwrap();
+        assert!(store.save_step(id, owner, 1, 3, &step).await.unwrap());
+        id
+    }
+
+    /// Cancelling a running job whose server was killed answered 202, then
+    /// the job was claimed again, its steps deleted, run again and only
+    /// then cancelled. A job whose worker is gone ends as cancelled at
+    /// once, and one whose worker dies after a cancel request is never
+    /// claimed again; both keep their finished steps.
+    #[tokio::test]
+    async fn a_cancelled_job_whose_worker_died_is_not_run_again() {
+        let store = store("orphan").await;
+        let orphan = running_job(&store, "dead", Duration::ZERO).await;
+        tokio::time::sleep(Duration::from_millis(10)).await;
+        assert_eq!(
+            store.cancel(orphan).await.unwrap(),
+            CancelOutcome::Cancelled
+        );
+
+        let requested = running_job(&store, "dying", Duration::from_millis(300)).await;
+        assert_eq!(
+            store.cancel(requested).await.unwrap(),
+            CancelOutcome::Requested
+        );
+        tokio::time::sleep(Duration::from_millis(400)).await;
+        assert!(
+            store
+                .claim("next", Duration::from_secs(30))
+                .await
+                .unwrap()
+                .is_none()
+        );
+
+        for id in [orphan, requested] {
+            let job = store.get(id).await.unwrap().unwrap();
+            assert_eq!(job.status, JobStatus::Cancelled, "job {id}");
+            assert_eq!(store.step_reports(id).await.unwrap().len(), 1, "job {id}");
+        }
+    }
 }
