@@ -220,6 +220,8 @@ fn fifty_concurrent_submissions_are_all_accepted_and_all_finish() {
 fn a_token_guards_every_endpoint_but_health() {
     let app = spawn_app_with(|c| c.token = Some("s3cret".into()));
     assert_eq!(app.get("/health").0, 200);
+    let health: Value = serde_json::from_str(&app.get("/health").1).unwrap();
+    assert!(health["database_bytes"].as_i64().unwrap() > 0, "{health}");
     let (status, body) = app.get("/jobs");
     assert_eq!(status, 401);
     assert!(body.contains("unauthorized"));

@@ -83,8 +83,14 @@ async fn method_not_allowed(State(state): State<AppState>, headers: HeaderMap) -
 }
 
 async fn health(State(state): State<AppState>) -> Response {
-    match state.store.ping().await {
-        Ok(()) => Json(json!({"status": "ok", "database": "ok"})).into_response(),
+    let checked = async {
+        state.store.ping().await?;
+        state.store.size_bytes().await
+    };
+    match checked.await {
+        Ok(bytes) => {
+            Json(json!({"status": "ok", "database": "ok", "database_bytes": bytes})).into_response()
+        }
         Err(e) => {
             tracing::error!(error = %e, "health check: database unavailable");
             (

@@ -173,6 +173,15 @@ impl Store {
         Ok((rows, total))
     }
 
+    /// The database's size in bytes (its pages; the write-ahead log aside).
+    pub async fn size_bytes(&self) -> Result<i64, sqlx::Error> {
+        sqlx::query_scalar(
+            "SELECT page_count * page_size FROM pragma_page_count(), pragma_page_size()",
+        )
+        .fetch_one(&self.pool)
+        .await
+    }
+
     /// Jobs waiting in the queue.
     pub async fn queued(&self) -> Result<i64, sqlx::Error> {
         sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE status = 'queued'")
