@@ -18,6 +18,13 @@ pub const DEFAULT_MAX_POINTS: usize = 1_000_000;
 pub const DEFAULT_MAX_LOAD_STEPS: usize = 10_000;
 /// Jobs that may wait in the queue; a submission beyond them gets 429.
 pub const DEFAULT_MAX_QUEUED: usize = 1_000;
+/// What one job may store (its steps' points), in bytes: 4 GiB, e.g.
+/// 100,000 points over 150 load steps.
+pub const DEFAULT_MAX_JOB_BYTES: usize = 1 << 32;
+/// How long checking one submission (seeding its bodies) may take: far
+/// more than a case within the point limit needs (about 1.2 s a million
+/// points).
+pub const DEFAULT_ADMISSION_TIME_LIMIT: Duration = Duration::from_secs(20);
 pub const DEFAULT_JOB_TIME_LIMIT: Duration = Duration::from_secs(3600);
 
 #[derive(Debug, Clone)]
@@ -46,7 +53,11 @@ pub struct Limits {
     pub max_points: usize,
     pub max_load_steps: usize,
     pub max_queued: usize,
+    /// What one job's stored steps may take, estimated before it is queued.
+    pub max_job_bytes: usize,
     pub job_time_limit: Duration,
+    /// How long checking one submission may take; 503 past it.
+    pub admission_time_limit: Duration,
 }
 
 impl Config {
@@ -64,7 +75,9 @@ impl Config {
                 max_points: DEFAULT_MAX_POINTS,
                 max_load_steps: DEFAULT_MAX_LOAD_STEPS,
                 max_queued: DEFAULT_MAX_QUEUED,
+                max_job_bytes: DEFAULT_MAX_JOB_BYTES,
                 job_time_limit: DEFAULT_JOB_TIME_LIMIT,
+                admission_time_limit: DEFAULT_ADMISSION_TIME_LIMIT,
             },
         }
     }

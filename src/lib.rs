@@ -15,7 +15,7 @@ use std::net::SocketAddr;
 use std::sync::Arc;
 
 use tokio::net::TcpListener;
-use tokio::sync::{Notify, Semaphore, oneshot};
+use tokio::sync::{Notify, Semaphore, watch};
 use tokio::task::JoinHandle;
 
 pub use config::{Config, Limits};
@@ -27,7 +27,9 @@ use worker::{RunningJobs, WorkerPool};
 pub struct Server {
     /// The address it listens on (the real port when bound to port 0).
     pub addr: SocketAddr,
-    stop: oneshot::Sender<()>,
+    /// Set once at shutdown: the server stops accepting, and submissions
+    /// still being checked give up.
+    stop: watch::Sender<bool>,
     serving: JoinHandle<std::io::Result<()>>,
     workers: WorkerPool,
 }
@@ -65,18 +67,19 @@ impl Server {
         let workers =
             WorkerPool::start(store.clone(), config.clone(), wake.clone(), running.clone());
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let (stop, mut stopped) = watch::channel(false);
         let app = http::router(AppState {
             store,
             config,
             wake,
             running,
             admissions: Arc::new(Semaphore::new(cores)),
+            stopping: stopped.clone(),
         });
-        let (stop, stopped) = oneshot::channel::<()>();
         let serving = tokio::spawn(async move {
             axum::serve(listener, app)
-                .with_graceful_shutdown(async {
-                    let _ = stopped.await;
+                .with_graceful_shutdown(async move {
+                    let _ = stopped.wait_for(|stop| *stop).await;
                 })
                 .await
         });
@@ -92,7 +95,7 @@ impl Server {
     /// workers (running jobs return to the queue at their next Newton
     /// iteration) and waits for them.
     pub async fn shutdown(self) {
-        let _ = self.stop.send(());
+        let _ = self.stop.send(true);
         match self.serving.await {
             Ok(Ok(())) => {}
             Ok(Err(e)) => tracing::error!(error = %e, "server stopped with an error"),

@@ -5,7 +5,7 @@ mod common;
 use std::collections::BTreeSet;
 use std::time::Duration;
 
-use common::{example, is_final, slow_case, spawn_app, spawn_app_with};
+use common::{example, filled_at_1mm, is_final, slow_case, spawn_app, spawn_app_with};
 use serde_json::{Value, json};
 
 const LONG: Duration = Duration::from_secs(120);
@@ -295,16 +295,7 @@ fn peak_memory() -> u64 {
 #[test]
 fn bodies_over_the_limits_are_refused_from_their_lattice_counts() {
     let app = spawn_app();
-    let with = |geometry: Value| {
-        let mut case = example("cantilever-grid");
-        case["grid"]["cell_size"] = 1e-3.into();
-        case["bodies"][0]["geometry"] = geometry;
-        case["bodies"][0]["points"] = json!({"per_cell": 1});
-        case["loads"] = json!({});
-        case["supports"] = json!([]);
-        case["probes"] = json!([]);
-        case.to_string()
-    };
+    let with = |geometry: Value| filled_at_1mm(geometry).to_string();
     let peak_before = peak_memory();
     for (body, path) in [
         (
@@ -428,4 +419,167 @@ fn a_full_queue_answers_429_with_retry_after() {
     assert_eq!(app.post(&format!("/jobs/{first}/cancel"), "").0, 200);
     app.submit(&case);
     assert_eq!(app.total_jobs(), 3);
+}
+
+/// `(status, headers, body)` of `POST /jobs` with these extra headers.
+fn submit_with(
+    app: &common::TestApp,
+    headers: &[(&str, &str)],
+    body: &str,
+) -> (u16, ureq::http::HeaderMap, Value) {
+    let mut request = app
+        .agent
+        .post(format!("{}/jobs", app.base))
+        .header("content-type", "application/json");
+    for (name, value) in headers {
+        request = request.header(*name, *value);
+    }
+    let response = request
+        .config()
+        .http_status_as_error(false)
+        .build()
+        .send(body)
+        .unwrap();
+    let status = response.status().as_u16();
+    let headers = response.headers().clone();
+    let text = response.into_body().read_to_string().unwrap();
+    (status, headers, serde_json::from_str(&text).unwrap())
+}
+
+/// A POST whose response is lost leaves a job the client cannot know
+/// about; retried with the same `Idempotency-Key` and body it gets that job
+/// (200, same id and Location), even racing itself or with the queue full.
+/// The key with another body is 422; a malformed key is 400 naming the
+/// header. Nothing runs (no workers), so the jobs counted are the ones made.
+#[test]
+fn an_idempotency_key_makes_a_retried_submission_return_the_same_job() {
+    let app = spawn_app_with(|c| {
+        c.workers = 0;
+        c.limits.max_queued = 8;
+    });
+    let case = example("cantilever-grid").to_string();
+    let key = [("Idempotency-Key", "run-42/attempt")];
+    let (status, headers, first) = submit_with(&app, &key, &case);
+    assert_eq!(status, 201, "{first}");
+    let id = first["id"].as_i64().unwrap();
+    let (status, again_headers, again) = submit_with(&app, &key, &case);
+    assert_eq!(status, 200, "{again}");
+    assert_eq!(again["id"], id);
+    assert_eq!(again_headers.get("location"), headers.get("location"));
+    assert_eq!(app.total_jobs(), 1);
+
+    let mut other = example("cantilever-grid");
+    other["analysis"]["load_steps"] = 2.into();
+    let (status, _, reused) = submit_with(&app, &key, &other.to_string());
+    assert_eq!(status, 422, "{reused}");
+    assert_eq!(reused["error"]["code"], "idempotency_key_reused");
+    assert_eq!(reused["error"]["details"]["header"], "Idempotency-Key");
+    assert_eq!(reused["error"]["details"]["job"], id);
+
+    let long = "k".repeat(256);
+    for bad in ["", "has space", "caf\u{e9}", long.as_str()] {
+        let (status, _, body) = submit_with(&app, &[("Idempotency-Key", bad)], &case);
+        assert_eq!(status, 400, "{bad:?}: {body}");
+        assert_eq!(body["error"]["code"], "bad_header");
+        assert_eq!(body["error"]["details"]["header"], "Idempotency-Key");
+    }
+    assert_eq!(app.total_jobs(), 1);
+
+    // Eight clients race with one new key: one job, and all eight get it.
+    let ids: BTreeSet<i64> = std::thread::scope(|s| {
+        let racers: Vec<_> = (0..8)
+            .map(|_| {
+                s.spawn(|| {
+                    let (status, _, job) =
+                        submit_with(&app, &[("Idempotency-Key", "raced")], &case);
+                    assert!(status == 201 || status == 200, "{status}: {job}");
+                    job["id"].as_i64().unwrap()
+                })
+            })
+            .collect();
+        racers.into_iter().map(|r| r.join().unwrap()).collect()
+    });
+    assert_eq!(ids.len(), 1, "{ids:?}");
+    assert_eq!(app.total_jobs(), 2);
+
+    // With the queue full, a retry still gets its job; a new key does not.
+    for _ in 0..6 {
+        assert_eq!(submit_with(&app, &[], &case).0, 201);
+    }
+    assert_eq!(submit_with(&app, &[], &case).0, 429);
+    assert_eq!(submit_with(&app, &key, &case).0, 200);
+    assert_eq!(
+        submit_with(&app, &[("Idempotency-Key", "new")], &case).0,
+        429
+    );
+}
+
+/// A job's stored steps are estimated from its points and load steps before
+/// it is queued, and refused over `max_job_bytes` naming the field further
+/// over its own limit. The estimate bounds what a run stores: the
+/// cantilever's step documents, as served, take between half of it and
+/// all of it.
+#[test]
+fn a_job_that_would_store_too_much_is_refused_naming_the_field() {
+    let app = spawn_app();
+    let case = example("cantilever-grid");
+    let id = app.submit(&case);
+    let job = app.wait_for(id, LONG, is_final);
+    assert_eq!(job["status"], "succeeded", "{job}");
+    let points = job["points"].as_u64().unwrap() as usize;
+    let steps = job["progress"]["of"].as_u64().unwrap() as u32;
+    let documents: Vec<String> = (1..=steps)
+        .map(|k| app.get(&format!("/jobs/{id}/steps/{k}")).1)
+        .collect();
+    let served: usize = documents.iter().map(String::len).sum();
+    let first: Value = serde_json::from_str(&documents[0]).unwrap();
+    let boundary_points = first["boundaries"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["points"].as_array().unwrap().len())
+        .sum();
+    let estimate = mpm_service::jobs::admission::stored_bytes(points, boundary_points, steps);
+    let ratio = served as f64 / estimate;
+    assert!(
+        (0.5..=1.0).contains(&ratio),
+        "served {served} of {estimate} bytes"
+    );
+
+    eprintln!(
+        "{points} points, {boundary_points} boundary points: served {served} of {estimate} bytes"
+    );
+    let just_under = estimate as usize - 1;
+    // 5 of 10,000 load steps against a few hundred of a million points.
+    let app = spawn_app_with(|c| c.limits.max_job_bytes = just_under);
+    let (status, code, path) = rejection(&app, &case.to_string());
+    assert_eq!((status, code.as_str()), (422, "limit_exceeded"));
+    assert_eq!(path.as_deref(), Some("analysis.load_steps"));
+    // With the points at their limit, they drive it.
+    let app = spawn_app_with(|c| {
+        c.limits.max_job_bytes = just_under;
+        c.limits.max_points = points;
+    });
+    let (_, _, path) = rejection(&app, &case.to_string());
+    assert_eq!(path.as_deref(), Some("bodies"));
+    assert_eq!(app.total_jobs(), 0);
+}
+
+/// Checking a submission has a time limit: past it the client gets 503
+/// with Retry-After, and nothing is queued.
+#[test]
+fn a_submission_whose_check_runs_out_of_time_is_503() {
+    let app = spawn_app_with(|c| c.limits.admission_time_limit = Duration::from_millis(50));
+    let (status, headers, body) = submit_with(
+        &app,
+        &[],
+        &filled_at_1mm(json!({"rectangle": {"min": [0, 0], "max": [1, 1]}})).to_string(),
+    );
+    assert_eq!(status, 503, "{body}");
+    assert_eq!(body["error"]["code"], "unavailable");
+    assert_eq!(
+        headers.get("retry-after").map(|v| v.to_str().unwrap()),
+        Some("10")
+    );
+    assert_eq!(app.total_jobs(), 0);
 }

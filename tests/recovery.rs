@@ -7,13 +7,18 @@ mod common;
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Child, Command, Stdio};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use common::{TempDir, agent, is_final, request, slow_case, wait_for};
-use serde_json::Value;
+use serde_json::{Value, json};
 
 /// Starts `mpm serve` on a free port; returns the child and its base URL.
 fn start_server(database: &Path) -> (Child, String) {
+    start_server_with(database, &[])
+}
+
+/// Starts `mpm serve` with extra flags.
+fn start_server_with(database: &Path, flags: &[&str]) -> (Child, String) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_mpm"))
         .args([
             "serve",
@@ -24,6 +29,7 @@ fn start_server(database: &Path) -> (Child, String) {
             "--database",
         ])
         .arg(database)
+        .args(flags)
         .env("MPM_LOG", "warn")
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
@@ -107,4 +113,50 @@ fn finished_jobs_and_their_steps_survive_a_restart() {
     );
     second.kill().unwrap();
     second.wait().unwrap();
+}
+
+/// SIGTERM while a submission is being checked: the check is given up, its
+/// client is answered 503, and the server exits at once instead of waiting
+/// for the seeding (a sliver that scanned for seconds once kept a server
+/// from stopping for over 20 s).
+#[test]
+fn sigterm_does_not_wait_for_a_submission_being_checked() {
+    let dir = TempDir::new("sigterm");
+    let (mut server, base) =
+        start_server_with(&dir.0.join("jobs.sqlite"), &["--max-points", "2000000"]);
+    // Two million points at 1 mm: about 2.5 s of seeding.
+    let case = common::filled_at_1mm(json!({"rectangle": {"min": [0, 0], "max": [2, 1]}}));
+    let response = std::thread::scope(|s| {
+        let submit = s.spawn(|| {
+            request(
+                &agent(),
+                "POST",
+                &format!("{base}/jobs"),
+                Some(&case.to_string()),
+            )
+        });
+        std::thread::sleep(Duration::from_millis(300));
+        let term = Instant::now();
+        let killed = Command::new("kill")
+            .args(["-TERM", &server.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let status = loop {
+            if let Some(status) = server.try_wait().unwrap() {
+                break status;
+            }
+            assert!(
+                term.elapsed() < Duration::from_secs(10),
+                "still running 10 s after SIGTERM"
+            );
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        eprintln!("exited {:.2} s after SIGTERM", term.elapsed().as_secs_f64());
+        assert!(status.success(), "{status}");
+        submit.join().unwrap()
+    });
+    let (status, body) = response;
+    assert_eq!(status, 503, "{body}");
+    assert!(body.contains("\"unavailable\""), "{body}");
 }

@@ -38,9 +38,17 @@ pub struct ServeArgs {
     /// Jobs that may wait in the queue; more submissions get 429.
     #[arg(long, env = "MPM_MAX_QUEUED", default_value_t = config::DEFAULT_MAX_QUEUED)]
     max_queued: usize,
+    /// Bytes one job may store (its steps' points, estimated from the
+    /// points and load steps before it is queued).
+    #[arg(long, env = "MPM_MAX_JOB_BYTES", default_value_t = config::DEFAULT_MAX_JOB_BYTES)]
+    max_job_bytes: usize,
     /// Wall-time limit of one job, in seconds; a job over it fails.
     #[arg(long, env = "MPM_JOB_TIME_LIMIT", default_value_t = config::DEFAULT_JOB_TIME_LIMIT.as_secs())]
     job_time_limit: u64,
+    /// Time limit of checking one submission (seeding its bodies), in
+    /// seconds; past it the submission gets 503.
+    #[arg(long, env = "MPM_ADMISSION_TIME_LIMIT", default_value_t = config::DEFAULT_ADMISSION_TIME_LIMIT.as_secs_f64())]
+    admission_time_limit: f64,
     /// Lease of a running job, in seconds; a job whose worker died is
     /// claimed again this long after its last renewal.
     #[arg(long, env = "MPM_LEASE_SECONDS", default_value_t = config::DEFAULT_LEASE.as_secs_f64())]
@@ -64,10 +72,17 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
             .build_global()
             .map_err(|e| CliError::failed(e.to_string()))?;
     }
-    if args.workers == 0 || args.lease_seconds <= 0.0 || args.max_attempts == 0 {
+    let durations = (
+        seconds(args.lease_seconds),
+        seconds(args.admission_time_limit),
+    );
+    let (Some(lease), Some(admission_time_limit)) = durations else {
         return Err(CliError::input(
-            "workers, lease-seconds and max-attempts must be positive",
+            "lease-seconds and admission-time-limit must be positive numbers of seconds",
         ));
+    };
+    if args.workers == 0 || args.max_attempts == 0 {
+        return Err(CliError::input("workers and max-attempts must be positive"));
     }
     if args.token.as_deref().is_some_and(|t| t.trim().is_empty()) {
         // An empty token would match no request's, or turn authentication
@@ -79,17 +94,19 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
     let mut config = Config::new(args.database);
     config.workers = args.workers;
     config.token = args.token;
-    config.lease = Duration::from_secs_f64(args.lease_seconds);
+    config.lease = lease;
     config.poll_interval = config.poll_interval.min(config.lease / 3);
     config.max_attempts = args.max_attempts;
     config.limits.max_body_bytes = args.max_body_bytes;
     config.limits.max_points = args.max_points;
     config.limits.max_load_steps = args.max_load_steps;
     config.limits.max_queued = args.max_queued;
+    config.limits.max_job_bytes = args.max_job_bytes;
     config.limits.job_time_limit = Duration::from_secs(args.job_time_limit);
+    config.limits.admission_time_limit = admission_time_limit;
 
     let runtime = tokio::runtime::Runtime::new()?;
-    runtime.block_on(async {
+    let served = runtime.block_on(async {
         let database = config.database.display().to_string();
         let server = Server::start(config, args.addr)
             .await
@@ -100,7 +117,16 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
         tracing::info!("shutting down: running jobs go back to the queue");
         server.shutdown().await;
         Ok(())
-    })
+    });
+    // The workers have stopped; what may still run is a submission's check,
+    // whose client was answered 503. Exit without waiting for it.
+    runtime.shutdown_timeout(Duration::from_millis(100));
+    served
+}
+
+/// A positive, finite number of seconds as a duration.
+fn seconds(s: f64) -> Option<Duration> {
+    Duration::try_from_secs_f64(s).ok().filter(|d| !d.is_zero())
 }
 
 /// Ctrl-C or SIGTERM (what `docker stop` sends).

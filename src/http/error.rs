@@ -9,7 +9,7 @@ use serde_json::{Value, json};
 
 use crate::jobs::admission::Rejection;
 
-/// What a 429 asks a client to wait before it submits again, in seconds.
+/// What a 429 or 503 asks a client to wait before it submits again, in seconds.
 const RETRY_AFTER_SECONDS: &str = "10";
 
 #[derive(Debug, thiserror::Error)]
@@ -27,6 +27,13 @@ pub enum ApiError {
     PayloadTooLarge { limit: usize },
     #[error("invalid query parameter {name}: {message}")]
     BadQuery { name: &'static str, message: String },
+    #[error("invalid header {name}: {message}")]
+    BadHeader { name: &'static str, message: String },
+    #[error(
+        "the Idempotency-Key {key:?} was first used for job {job} with another body; \
+         a new submission needs a new key"
+    )]
+    IdempotencyKeyReused { key: String, job: i64 },
     #[error("{0} not found")]
     NotFound(String),
     #[error("{0}")]
@@ -37,6 +44,9 @@ pub enum ApiError {
     MethodNotAllowed,
     #[error("the queue is full ({limit} jobs wait); try again later")]
     QueueFull { limit: usize },
+    /// Shutting down, or a submission's check ran out of time.
+    #[error("{0}")]
+    Unavailable(String),
     #[error("internal error")]
     Internal(String),
 }
@@ -81,6 +91,16 @@ impl ApiError {
                 "bad_query",
                 json!({ "parameter": name }),
             ),
+            ApiError::BadHeader { name, .. } => (
+                StatusCode::BAD_REQUEST,
+                "bad_header",
+                json!({ "header": name }),
+            ),
+            ApiError::IdempotencyKeyReused { job, .. } => (
+                StatusCode::UNPROCESSABLE_ENTITY,
+                "idempotency_key_reused",
+                json!({ "header": "Idempotency-Key", "job": job }),
+            ),
             ApiError::NotFound(_) => (StatusCode::NOT_FOUND, "not_found", Value::Null),
             ApiError::Conflict(_) => (StatusCode::CONFLICT, "conflict", Value::Null),
             ApiError::Unauthorized => (StatusCode::UNAUTHORIZED, "unauthorized", Value::Null),
@@ -94,6 +114,9 @@ impl ApiError {
                 "method_not_allowed",
                 Value::Null,
             ),
+            ApiError::Unavailable(_) => {
+                (StatusCode::SERVICE_UNAVAILABLE, "unavailable", Value::Null)
+            }
             ApiError::Internal(_) => (StatusCode::INTERNAL_SERVER_ERROR, "internal", Value::Null),
         }
     }
@@ -109,7 +132,10 @@ impl IntoResponse for ApiError {
             json!({ "error": { "code": code, "message": self.to_string(), "details": details } }),
         );
         let mut response = (status, body).into_response();
-        if status == StatusCode::TOO_MANY_REQUESTS {
+        if matches!(
+            status,
+            StatusCode::TOO_MANY_REQUESTS | StatusCode::SERVICE_UNAVAILABLE
+        ) {
             response.headers_mut().insert(
                 axum::http::header::RETRY_AFTER,
                 axum::http::HeaderValue::from_static(RETRY_AFTER_SECONDS),

@@ -14,11 +14,13 @@ use serde_json::{Value, json};
 
 use super::views::{JobView, ResultView};
 use super::{ApiError, AppState};
-use crate::jobs::{CancelOutcome, JobRow, JobStatus, Store, admission};
+use crate::jobs::{CancelOutcome, Earlier, Inserted, JobRow, JobStatus, NewJob, Store, admission};
 
-/// `POST /jobs`: validate, store, queue.
+/// `POST /jobs`: validate, store, queue. With an `Idempotency-Key`, a
+/// retry of the same body returns the job the first request made (200).
 pub async fn submit(
     State(state): State<AppState>,
+    headers: HeaderMap,
     body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ApiError> {
     let body = body.map_err(|rejection| {
@@ -30,6 +32,12 @@ pub async fn submit(
             ApiError::MalformedJson(rejection.body_text())
         }
     })?;
+    let key = idempotency_key(&headers)?;
+    if let Some(key) = key
+        && let Some(earlier) = state.store.by_idempotency_key(key).await?
+    {
+        return replay(&state.store, key, earlier, &body).await;
+    }
     let limits = &state.config.limits;
     if state.store.queued().await? >= limits.max_queued as i64 {
         return Err(ApiError::QueueFull {
@@ -37,45 +45,125 @@ pub async fn submit(
         });
     }
     let (text, case) = admission::read(&body)?;
-    // Seeding a case is CPU work: off the async threads, and no more of it
-    // at once than there are cores. The permit goes with the blocking task,
-    // so a client that hangs up does not free it before the work ends.
-    let permit = state
-        .admissions
-        .clone()
-        .acquire_owned()
-        .await
-        .map_err(|e| ApiError::Internal(format!("admissions: {e}")))?;
-    let admitted = {
-        let config = state.config.clone();
-        tokio::task::spawn_blocking(move || {
+    let admitted = check(&state, case).await?;
+    let inserted = state
+        .store
+        .insert(&NewJob {
+            case_json: text,
+            title: admitted.case.title.as_deref(),
+            points: admitted.points as i64,
+            load_steps: admitted.case.analysis.load_steps as i64,
+            idempotency_key: key,
+        })
+        .await?;
+    let id = match (inserted, key) {
+        (Inserted::New(id), _) => id,
+        (Inserted::Earlier(earlier), Some(key)) => {
+            return replay(&state.store, key, earlier, &body).await;
+        }
+        (Inserted::Earlier(earlier), None) => {
+            return Err(ApiError::Internal(format!(
+                "job {} returned for a submission without a key",
+                earlier.id
+            )));
+        }
+    };
+    state.wake.notify_one();
+    created(StatusCode::CREATED, find(&state.store, id).await?)
+}
+
+/// Seeds a case to check it. That is CPU work: off the async threads, no
+/// more of it at once than there are cores, within the admission time
+/// limit, and given up at shutdown. The permit goes with the blocking task,
+/// so neither a client that hangs up nor a time-out frees it before the
+/// work ends.
+async fn check(state: &AppState, case: mpm::Case) -> Result<admission::Admitted, ApiError> {
+    let limits = state.config.limits.clone();
+    let seeding = async {
+        let permit = state
+            .admissions
+            .clone()
+            .acquire_owned()
+            .await
+            .map_err(|e| ApiError::Internal(format!("admissions: {e}")))?;
+        let checked = tokio::task::spawn_blocking(move || {
             let _permit = permit;
-            admission::admit(case, &config.limits)
+            admission::admit(case, &limits)
         })
         .await
-        .map_err(|e| ApiError::Internal(format!("case check: {e}")))??
+        .map_err(|e| ApiError::Internal(format!("case check: {e}")))?;
+        Ok::<_, ApiError>(checked?)
     };
-    let id = state
-        .store
-        .insert(
-            text,
-            admitted.case.title.as_deref(),
-            admitted.points as i64,
-            admitted.case.analysis.load_steps as i64,
-        )
-        .await?;
-    state.wake.notify_one();
-    let job = state
-        .store
-        .get(id)
-        .await?
-        .ok_or_else(|| ApiError::Internal(format!("job {id} vanished")))?;
+    let limit = state.config.limits.admission_time_limit;
+    let mut stopping = state.stopping.clone();
+    tokio::select! {
+        checked = tokio::time::timeout(limit, seeding) => checked.unwrap_or_else(|_| {
+            Err(ApiError::Unavailable(format!(
+                "checking the case took longer than {:.0} s (the service is busy, or the \
+                 case is near its limits); try again later",
+                limit.as_secs_f64()
+            )))
+        }),
+        _ = stopping.wait_for(|stop| *stop) => Err(ApiError::Unavailable(
+            "the service is shutting down; submit again once it is back".into(),
+        )),
+    }
+}
+
+/// The longest `Idempotency-Key` accepted, in bytes.
+const MAX_IDEMPOTENCY_KEY_BYTES: usize = 255;
+
+/// The `Idempotency-Key` header: 1 to 255 visible ASCII characters.
+fn idempotency_key(headers: &HeaderMap) -> Result<Option<&str>, ApiError> {
+    let Some(value) = headers.get(IDEMPOTENCY_KEY) else {
+        return Ok(None);
+    };
+    let bad = |message: String| ApiError::BadHeader {
+        name: "Idempotency-Key",
+        message,
+    };
+    let key = value
+        .to_str()
+        .ok()
+        .filter(|k| k.bytes().all(|b| b.is_ascii_graphic()))
+        .ok_or_else(|| bad("must be visible ASCII characters, without spaces".into()))?;
+    if key.is_empty() || key.len() > MAX_IDEMPOTENCY_KEY_BYTES {
+        return Err(bad(format!(
+            "must be 1 to {MAX_IDEMPOTENCY_KEY_BYTES} characters long"
+        )));
+    }
+    Ok(Some(key))
+}
+
+const IDEMPOTENCY_KEY: &str = "idempotency-key";
+
+/// A retry with a key already used: the job it made if the body is the
+/// same, 422 if it is not.
+async fn replay(
+    store: &Store,
+    key: &str,
+    earlier: Earlier,
+    body: &[u8],
+) -> Result<Response, ApiError> {
+    if earlier.case_json.as_bytes() != body {
+        return Err(ApiError::IdempotencyKeyReused {
+            key: key.to_owned(),
+            job: earlier.id,
+        });
+    }
+    created(StatusCode::OK, find(store, earlier.id).await?)
+}
+
+/// A job's view with its `Location`.
+fn created(code: StatusCode, job: JobRow) -> Result<Response, ApiError> {
     let mut headers = HeaderMap::new();
     headers.insert(
         header::LOCATION,
-        format!("/jobs/{id}").parse().expect("a valid header value"),
+        format!("/jobs/{}", job.id)
+            .parse()
+            .expect("a valid header value"),
     );
-    Ok((StatusCode::CREATED, headers, Json(JobView::new(&job))).into_response())
+    Ok((code, headers, Json(JobView::new(&job))).into_response())
 }
 
 #[derive(Deserialize)]

@@ -17,7 +17,7 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
 use serde_json::json;
-use tokio::sync::{Notify, Semaphore};
+use tokio::sync::{Notify, Semaphore, watch};
 
 pub use error::ApiError;
 
@@ -38,6 +38,8 @@ pub struct AppState {
     pub running: Arc<RunningJobs>,
     /// Submissions being checked at once: one per core.
     pub admissions: Arc<Semaphore>,
+    /// Becomes true when the server shuts down.
+    pub stopping: watch::Receiver<bool>,
 }
 
 pub fn router(state: AppState) -> Router {

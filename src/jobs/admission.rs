@@ -52,14 +52,14 @@ pub fn read(body: &[u8]) -> Result<(&str, Case), Rejection> {
 pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
     check_load_steps(&case, limits)?;
     check_fill_sizes(&case, limits)?;
-    let points = Seeded::new(&case)
-        .map_err(|e| Rejection::InvalidCase {
-            path: e.path,
-            message: e.message,
-        })?
-        .points
-        .len();
+    let seeded = Seeded::new(&case).map_err(|e| Rejection::InvalidCase {
+        path: e.path,
+        message: e.message,
+    })?;
+    let points = seeded.points.len();
     check_points(points, limits)?;
+    let boundary_points = seeded.loops.iter().map(|l| l.points.len()).sum();
+    check_stored_bytes(points, boundary_points, &case, limits)?;
     Ok(Admitted { case, points })
 }
 
@@ -136,6 +136,58 @@ fn check_points(points: usize, limits: &Limits) -> Result<(), Rejection> {
         });
     }
     Ok(())
+}
+
+/// Bytes one material point takes in a stored step, at most: its columns
+/// (`mpm::report::PointColumns`) are ten numbers of at most 24 characters
+/// (`-1.2345678901234567e-100`), the brackets and commas around them (26)
+/// and a body index.
+pub const STORED_BYTES_PER_POINT: f64 = 270.0;
+/// Bytes one boundary point (a data point of a boundary curve) takes in a
+/// stored step, at most: eight polyline samples (8 x 52), two knots
+/// (2 x 25), two control points (2 x 52) and its index.
+pub const STORED_BYTES_PER_BOUNDARY_POINT: f64 = 600.0;
+/// A step's report: load factor, Newton history, reactions and probes
+/// (about 700 bytes for the built-in cases).
+pub const STORED_BYTES_PER_REPORT: f64 = 4096.0;
+
+/// What a job will store, at most: every load step's points, boundary
+/// curves and report.
+pub fn stored_bytes(points: usize, boundary_points: usize, load_steps: u32) -> f64 {
+    let step = points as f64 * STORED_BYTES_PER_POINT
+        + boundary_points as f64 * STORED_BYTES_PER_BOUNDARY_POINT
+        + STORED_BYTES_PER_REPORT;
+    step * f64::from(load_steps)
+}
+
+/// Refuses a job whose stored steps would pass the limit, naming the field
+/// further over its own limit: the load steps or the bodies' points.
+fn check_stored_bytes(
+    points: usize,
+    boundary_points: usize,
+    case: &Case,
+    limits: &Limits,
+) -> Result<(), Rejection> {
+    let steps = case.analysis.load_steps;
+    let bytes = stored_bytes(points, boundary_points, steps);
+    if bytes <= limits.max_job_bytes as f64 {
+        return Ok(());
+    }
+    let steps_share = f64::from(steps) / limits.max_load_steps as f64;
+    let points_share = points as f64 / limits.max_points as f64;
+    let path = if steps_share >= points_share {
+        "analysis.load_steps"
+    } else {
+        "bodies"
+    };
+    Err(Rejection::LimitExceeded {
+        path: path.into(),
+        message: format!(
+            "{points} material points over {steps} load steps would store up to {bytes:.3e} bytes, \
+             over this service's limit of {} bytes a job: fewer load steps or coarser bodies fit",
+            limits.max_job_bytes
+        ),
+    })
 }
 
 #[cfg(test)]
@@ -224,7 +276,23 @@ mod tests {
         limits.max_load_steps = 5;
         limits.max_points = 10;
         assert!(matches!(
-            admit(case, &limits),
+            admit(case.clone(), &limits),
+            Err(Rejection::LimitExceeded { path, .. }) if path == "bodies"
+        ));
+        limits.max_points = 1000;
+        let points = 400;
+        let stored = stored_bytes(points, 80, case.analysis.load_steps);
+        limits.max_job_bytes = stored as usize;
+        assert!(check_stored_bytes(points, 80, &case, &limits).is_ok());
+        limits.max_job_bytes = stored as usize - 1;
+        // 5 of 5 load steps against 400 of 1000 points: the steps drive it.
+        assert!(matches!(
+            check_stored_bytes(points, 80, &case, &limits),
+            Err(Rejection::LimitExceeded { path, .. }) if path == "analysis.load_steps"
+        ));
+        limits.max_load_steps = 10_000;
+        assert!(matches!(
+            check_stored_bytes(points, 80, &case, &limits),
             Err(Rejection::LimitExceeded { path, .. }) if path == "bodies"
         ));
         assert!(matches!(

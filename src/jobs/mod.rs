@@ -8,4 +8,4 @@ pub mod store;
 
 pub use failure::{Failure, FailureKind};
 pub use status::JobStatus;
-pub use store::{CancelOutcome, Claimed, JobRow, Store};
+pub use store::{CancelOutcome, Claimed, Earlier, Inserted, JobRow, NewJob, Store};

@@ -66,6 +66,32 @@ pub struct Claimed {
     pub attempts: i64,
 }
 
+/// A job to queue.
+#[derive(Debug, Clone, Copy)]
+pub struct NewJob<'a> {
+    pub case_json: &'a str,
+    pub title: Option<&'a str>,
+    pub points: i64,
+    pub load_steps: i64,
+    /// The client's `Idempotency-Key`, if it sent one.
+    pub idempotency_key: Option<&'a str>,
+}
+
+/// The job an idempotency key was first used for, and the body it came with.
+#[derive(Debug, Clone, FromRow)]
+pub struct Earlier {
+    pub id: i64,
+    pub case_json: String,
+}
+
+/// What [`Store::insert`] did.
+#[derive(Debug, Clone)]
+pub enum Inserted {
+    New(i64),
+    /// The key was taken (by a request that raced this one, or earlier).
+    Earlier(Earlier),
+}
+
 /// What `POST /jobs/{id}/cancel` did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CancelOutcome {
@@ -109,26 +135,44 @@ impl Store {
             .map(|_| ())
     }
 
-    pub async fn insert(
-        &self,
-        case_json: &str,
-        title: Option<&str>,
-        points: i64,
-        load_steps: i64,
-    ) -> Result<i64, sqlx::Error> {
-        let id: i64 = sqlx::query_scalar(
-            "INSERT INTO jobs (status, case_json, title, points, load_steps, created_at) \
-             VALUES (?, ?, ?, ?, ?, ?) RETURNING id",
+    /// Queues a job. With an idempotency key already taken, nothing is
+    /// inserted and the job that holds the key is returned instead.
+    pub async fn insert(&self, job: &NewJob<'_>) -> Result<Inserted, sqlx::Error> {
+        let inserted = sqlx::query_scalar(
+            "INSERT INTO jobs (status, case_json, title, points, load_steps, created_at, idempotency_key) \
+             VALUES (?, ?, ?, ?, ?, ?, ?) RETURNING id",
         )
         .bind(JobStatus::Queued)
-        .bind(case_json)
-        .bind(title)
-        .bind(points)
-        .bind(load_steps)
+        .bind(job.case_json)
+        .bind(job.title)
+        .bind(job.points)
+        .bind(job.load_steps)
         .bind(now())
+        .bind(job.idempotency_key)
         .fetch_one(&self.pool)
-        .await?;
-        Ok(id)
+        .await;
+        match (inserted, job.idempotency_key) {
+            (Ok(id), _) => Ok(Inserted::New(id)),
+            (Err(e), Some(key))
+                if e.as_database_error()
+                    .is_some_and(|d| d.is_unique_violation()) =>
+            {
+                match self.by_idempotency_key(key).await? {
+                    Some(earlier) => Ok(Inserted::Earlier(earlier)),
+                    // Its job was deleted between the two statements.
+                    None => Err(e),
+                }
+            }
+            (Err(e), _) => Err(e),
+        }
+    }
+
+    /// The job that holds an idempotency key.
+    pub async fn by_idempotency_key(&self, key: &str) -> Result<Option<Earlier>, sqlx::Error> {
+        sqlx::query_as("SELECT id, case_json FROM jobs WHERE idempotency_key = ?")
+            .bind(key)
+            .fetch_optional(&self.pool)
+            .await
     }
 
     pub async fn get(&self, id: i64) -> Result<Option<JobRow>, sqlx::Error> {
@@ -456,7 +500,20 @@ mod tests {
 
     /// A running job with one finished step, claimed by `owner` with `lease`.
     async fn running_job(store: &Store, owner: &str, lease: Duration) -> i64 {
-        let id = store.insert("{}", None, 1, 10).await.unwrap();
+        let id = match store
+            .insert(&NewJob {
+                case_json: "{}",
+                title: None,
+                points: 1,
+                load_steps: 10,
+                idempotency_key: None,
+            })
+            .await
+            .unwrap()
+        {
+            Inserted::New(id) => id,
+            other => panic!("{other:?}"),
+        };
         let claimed = store.claim(owner, lease).await.unwrap().unwrap();
         assert_eq!(claimed.id, id);
         let step = StoredStep::from_text("{}".into(), "{}".into(), "[]".into()).unwrap();
