@@ -363,18 +363,50 @@ mod tests {
         );
     }
 
+    /// serde reads `null` as a field left out, so `"extent": null` was
+    /// accepted and served back as given; `"geometry": {}` is JSON, but was
+    /// called malformed because serde classed its error as syntax. Both are
+    /// invalid cases with the field named.
+    #[test]
+    fn nulls_and_empty_choices_are_invalid_fields_not_malformed_text() {
+        let mut v = column_json();
+        v["grid"]["extent"] = serde_json::Value::Null;
+        let e = error_for(v);
+        assert_eq!(
+            (e.kind, e.path.as_str()),
+            (CaseErrorKind::Invalid, "grid.extent")
+        );
+        let mut v = column_json();
+        v["supports"][1]["on"]["x"] = serde_json::Value::Null;
+        assert_eq!(error_for(v).path, "supports[1].on.x");
+        let mut v = column_json();
+        v["title"] = "null and void".into();
+        Case::from_json(&v.to_string()).unwrap();
+        for empty in [serde_json::json!({}), serde_json::json!([])] {
+            let mut v = column_json();
+            v["bodies"][0]["geometry"] = empty;
+            let e = error_for(v);
+            assert_eq!(
+                (e.kind, e.path.as_str()),
+                (CaseErrorKind::Invalid, "bodies[0].geometry"),
+                "{}",
+                e.message
+            );
+        }
+    }
+
     /// A tiny cell size, or a body far from the origin, once passed
     /// validation and stopped "after load step 0" with the material off
     /// the grid; the body is now refused, named.
     #[test]
     fn a_body_beyond_the_grids_reach_is_refused() {
         let mut v = column_json();
-        v["grid"]["extent"] = serde_json::Value::Null;
+        v["grid"].as_object_mut().unwrap().remove("extent");
         v["grid"]["cell_size"] = 1e-300.into();
         v["bodies"][0]["points"] = serde_json::json!({"spacing": 0.5});
         assert_eq!(error_for(v).path, "bodies[0].geometry");
         let mut v = column_json();
-        v["grid"]["extent"] = serde_json::Value::Null;
+        v["grid"].as_object_mut().unwrap().remove("extent");
         v["bodies"][0]["geometry"] =
             serde_json::json!({"rectangle": {"min": [1e15, 0], "max": [1.00000001e15, 1]}});
         assert_eq!(error_for(v).path, "bodies[0].geometry");

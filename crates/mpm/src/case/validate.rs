@@ -2,7 +2,7 @@
 //! types cannot check (signs, ranges, consistency). Every error names its
 //! field.
 
-use serde_json::error::Category;
+use serde_json::Value;
 
 use super::*;
 use crate::geometry::{self_crossing, signed_area};
@@ -18,6 +18,33 @@ impl CaseError {
     }
 }
 
+/// No field takes `null`: serde reads it as the field left out, so a case
+/// given with nulls would be stored and served with values it does not
+/// have. The first null found names its path.
+fn reject_nulls(value: &Value, path: String) -> Result<(), CaseError> {
+    let at = |key: String| {
+        if path.is_empty() {
+            key
+        } else {
+            format!("{path}.{key}")
+        }
+    };
+    match value {
+        Value::Null => Err(CaseError::new(
+            if path.is_empty() { "$".into() } else { path },
+            "null is not a value here: leave the field out for its default",
+        )),
+        Value::Array(items) => items
+            .iter()
+            .enumerate()
+            .try_for_each(|(i, v)| reject_nulls(v, format!("{path}[{i}]"))),
+        Value::Object(fields) => fields
+            .iter()
+            .try_for_each(|(k, v)| reject_nulls(v, at(k.clone()))),
+        _ => Ok(()),
+    }
+}
+
 impl Case {
     /// Parses and validates a case from JSON text. Text that is not JSON
     /// (text after the case included) is a [`CaseErrorKind::Syntax`] error.
@@ -29,9 +56,9 @@ impl Case {
             // text not JSON at all: such text is malformed, whatever its
             // start says.
             let out_of_range = e.inner().to_string().starts_with("number out of range");
-            let syntax = !out_of_range
-                && (e.inner().classify() != Category::Data
-                    || serde_json::from_str::<serde_json::Value>(text).is_err());
+            // Not what serde says of the case: `"geometry": {}` is JSON, whose
+            // error serde classifies as syntax ("expected value").
+            let syntax = !out_of_range && serde_json::from_str::<Value>(text).is_err();
             let path = match e.path().to_string() {
                 p if p.is_empty() || p == "." => "$".to_string(),
                 p => p,
@@ -49,6 +76,11 @@ impl Case {
             kind: CaseErrorKind::Syntax,
             ..CaseError::new("$", e.to_string())
         })?;
+        if text.contains("null")
+            && let Ok(value) = serde_json::from_str::<Value>(text)
+        {
+            reject_nulls(&value, String::new())?;
+        }
         case.validate()?;
         Ok(case)
     }
