@@ -39,6 +39,9 @@ pub struct Failure {
     pub iteration: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub residual: Option<f64>,
+    /// The load factor reached when a step failed however far it was cut.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load_factor: Option<f64>,
 }
 
 impl Failure {
@@ -49,6 +52,7 @@ impl Failure {
             step: None,
             iteration: None,
             residual: None,
+            load_factor: None,
         }
     }
 
@@ -60,13 +64,19 @@ impl Failure {
 
 impl From<SolveError> for Failure {
     fn from(e: SolveError) -> Self {
-        let kind = match e {
+        let kind = match e.cause() {
             SolveError::NotConverged { .. } => FailureKind::NotConverged,
             SolveError::Diverged { .. } => FailureKind::Diverged,
             SolveError::Inverted { .. } => FailureKind::InvertedPoint,
             SolveError::LinearSolve { .. } => FailureKind::LinearSolve,
             SolveError::LeftGrid { .. } => FailureKind::LeftGrid,
             SolveError::Cancelled { .. } => FailureKind::Cancelled,
+            // cause() never returns it.
+            SolveError::SubstepsExhausted { .. } => FailureKind::NotConverged,
+        };
+        let load_factor = match e {
+            SolveError::SubstepsExhausted { load_factor, .. } => Some(load_factor),
+            _ => None,
         };
         let (step, iteration, residual) = e.location();
         Failure {
@@ -75,6 +85,7 @@ impl From<SolveError> for Failure {
             step: Some(step),
             iteration,
             residual: residual.filter(|r| r.is_finite()),
+            load_factor,
         }
     }
 }

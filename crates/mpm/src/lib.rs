@@ -43,4 +43,4 @@ pub use newton::{NewtonSettings, SolveError};
 pub use observer::{NoObserver, Observer, StepState};
 pub use particles::MaterialPoints;
 pub use report::{RunReport, StepReport};
-pub use stepper::Simulation;
+pub use stepper::{Simulation, Substepping};

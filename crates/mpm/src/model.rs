@@ -15,7 +15,7 @@ use crate::newton::NewtonSettings;
 use crate::particles::MaterialPoints;
 use crate::particles::seeding::{self, Density, FillSize};
 use crate::probes::Probes;
-use crate::stepper::Simulation;
+use crate::stepper::{Simulation, Substepping};
 use crate::supports::GridSupport;
 
 /// Loop segments per loop, `(loop index, segments)`, that a selector picks.
@@ -146,7 +146,12 @@ impl Simulation {
                 tolerance: newton.tolerance,
                 max_iterations: newton.max_iterations as usize,
                 tangent_regularisation: newton.tangent_regularisation,
+                line_search: newton.line_search,
                 ..Default::default()
+            },
+            substepping: Substepping {
+                min_fraction: case.analysis.substepping.min_fraction,
+                max_cutbacks: case.analysis.substepping.max_cutbacks as usize,
             },
             load_steps: case.analysis.load_steps as usize,
         })

@@ -22,6 +22,8 @@ pub struct NewtonSettings {
     /// Soft-background stiffness in the tangent, relative to the stiffest
     /// material (1e-6); see [`crate::assembly::SoftCells`].
     pub tangent_regularisation: f64,
+    /// Search along each Newton direction (true); see [`solve`].
+    pub line_search: bool,
 }
 
 impl Default for NewtonSettings {
@@ -31,6 +33,7 @@ impl Default for NewtonSettings {
             max_iterations: 30,
             divergence_limit: 1e8,
             tangent_regularisation: 1e-6,
+            line_search: true,
         }
     }
 }
@@ -92,6 +95,20 @@ pub enum SolveError {
         x: f64,
         y: f64,
     },
+    /// A load step's increment failed however far it was cut: `cause` is
+    /// how its smallest sub-increment failed.
+    #[error(
+        "load step {step} failed at load factor {load_factor:.6} in sub-increments of {fraction:.3e} of the step (the smallest allowed): {cause}"
+    )]
+    SubstepsExhausted {
+        step: usize,
+        /// The load factor of the last converged sub-increment.
+        load_factor: f64,
+        /// The size of the sub-increment that failed, as a fraction of the
+        /// step's increment.
+        fraction: f64,
+        cause: Box<SolveError>,
+    },
     #[error("cancelled in load step {step} at iteration {iteration}")]
     Cancelled {
         step: usize,
@@ -101,6 +118,26 @@ pub enum SolveError {
 }
 
 impl SolveError {
+    /// How the solve failed in the end: the error a cut increment's last
+    /// try met, or this one.
+    pub fn cause(&self) -> &SolveError {
+        match self {
+            SolveError::SubstepsExhausted { cause, .. } => cause.cause(),
+            other => other,
+        }
+    }
+
+    /// Whether a smaller load increment may succeed where this failed.
+    pub fn may_pass_when_cut(&self) -> bool {
+        matches!(
+            self,
+            SolveError::NotConverged { .. }
+                | SolveError::Diverged { .. }
+                | SolveError::Inverted { .. }
+                | SolveError::LinearSolve { .. }
+        )
+    }
+
     /// `(step, iteration, residual)` where known, for reports: the
     /// residual is the last finite relative residual of the step (none when
     /// the step stopped before computing one, or left the grid between
@@ -140,6 +177,7 @@ impl SolveError {
                 ..
             } => (step, Some(iteration), residual),
             SolveError::LeftGrid { step, .. } => (step, None, None),
+            SolveError::SubstepsExhausted { ref cause, .. } => return cause.location(),
         };
         (step, iteration, residual.filter(|r| r.is_finite()))
     }
@@ -156,7 +194,79 @@ pub trait Equilibrium {
     fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String>;
 }
 
+/// The line search along a Newton direction `du` from a state with
+/// out-of-balance force `r`. A step length `alpha` is kept when either
+/// - the energy-like projection `s(alpha) = du . r(alpha)` has fallen to
+///   [`SLACK`] of `s(0)` in magnitude (Crisfield's criterion, "Non-linear
+///   Finite Element Analysis of Solids and Structures" vol. 1, sec. 9.3.2:
+///   the step is near the minimum of the potential along `du`; it needs
+///   `s(0) > 0`, a tangent positive along `du`), or
+/// - the residual norm has fallen by Armijo's margin: along a Newton
+///   direction `|r|` has the slope `-|r|` whatever the tangent's symmetry,
+///   so this holds for follower loads too.
+///
+/// A full step that does neither is cut: to the zero of `s` interpolated
+/// linearly when `s` changed sign, else to the minimum of the parabola
+/// through `|r(0)|^2`, its slope and `|r(alpha)|^2`, within [`CUT_BOUNDS`].
+struct Search<'a> {
+    du: &'a [f64],
+    s0: f64,
+    norm0: f64,
+}
+
+const SLACK: f64 = 0.8;
+const ARMIJO: f64 = 1e-4;
+const CUT_BOUNDS: (f64, f64) = (0.1, 0.5);
+/// The shortest step length tried; it is taken whatever it gives.
+const SHORTEST_STEP: f64 = 1.0 / 1024.0;
+
+impl<'a> Search<'a> {
+    fn new(r: &[f64], du: &'a [f64], norm0: f64) -> Self {
+        Self {
+            du,
+            s0: dot(du, r),
+            norm0,
+        }
+    }
+
+    /// `None` to keep the step `alpha` with residual `r` (norm `n`), or the
+    /// shorter step to try instead.
+    fn cut(&self, alpha: f64, r: &[f64], n: f64) -> Option<f64> {
+        let s = dot(self.du, r);
+        let energy = self.s0 > 0.0 && s.abs() <= SLACK * self.s0;
+        let armijo = n <= (1.0 - ARMIJO * alpha) * self.norm0;
+        if energy || armijo {
+            return None;
+        }
+        let (lo, hi) = (CUT_BOUNDS.0 * alpha, CUT_BOUNDS.1 * alpha);
+        let shorter = if self.s0 > 0.0 && s < 0.0 {
+            alpha * self.s0 / (self.s0 - s)
+        } else {
+            let slope = -self.norm0 * self.norm0;
+            let rise = 0.5 * (n * n - self.norm0 * self.norm0) - slope * alpha;
+            -slope * alpha * alpha / (2.0 * rise)
+        };
+        // A trial without a finite residual is halved, as an inverted one.
+        Some(if shorter.is_finite() {
+            shorter.clamp(lo, hi)
+        } else {
+            0.5 * alpha
+        })
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
 /// Solves one load step from `u = 0`; returns the converged increment.
+///
+/// Each Newton direction is searched along: the full step is taken when it
+/// reduces the residual norm by Armijo's margin (or converges), and
+/// otherwise the step is cut, to the minimum of a quadratic fit of
+/// `|r(alpha)|^2` within [`CUT_BOUNDS`]. A trial state with an inverted
+/// point is cut by half. Near the solution the full step always passes,
+/// so convergence stays quadratic.
 pub fn solve(
     eq: &mut impl Equilibrium,
     settings: &NewtonSettings,
@@ -164,21 +274,18 @@ pub fn solve(
     observer: &mut dyn Observer,
 ) -> Result<(Vec<f64>, NewtonInfo), SolveError> {
     let mut u = vec![0.0; eq.n_dofs()];
-    let mut info = NewtonInfo {
-        iterations: 0,
-        residuals: Vec::new(),
-        factorisation: None,
+    let mut info = NewtonInfo::default();
+    let inverted = |iteration, p: InvertedPoint, residual| SolveError::Inverted {
+        step,
+        iteration,
+        point: p.point,
+        jacobian: p.jacobian,
+        residual,
     };
+    let (mut r, mut scale) = eq.out_of_balance(&u).map_err(|p| inverted(0, p, None))?;
     for iteration in 0.. {
         let last_finite = info.residuals.iter().rev().copied().find(|r| r.is_finite());
-        let (r, scale) = eq.out_of_balance(&u).map_err(|p| SolveError::Inverted {
-            step,
-            iteration,
-            point: p.point,
-            jacobian: p.jacobian,
-            residual: last_finite,
-        })?;
-        let norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let norm = norm(&r);
         let residual = if norm == 0.0 { 0.0 } else { norm / scale };
         info.residuals.push(residual);
         observer.newton_iteration(step, iteration, residual);
@@ -217,11 +324,43 @@ pub fn solve(
                 residual,
             })?;
         info.factorisation = Some(kind);
-        for (ui, dui) in u.iter_mut().zip(&du) {
-            *ui += dui;
+        let search = Search::new(&r, &du, norm);
+        let mut alpha = 1.0;
+        let mut trial = u.clone();
+        loop {
+            for ((t, ui), dui) in trial.iter_mut().zip(&u).zip(&du) {
+                *t = ui + alpha * dui;
+            }
+            match eq.out_of_balance(&trial) {
+                Ok((r_trial, scale_trial)) => {
+                    let n = self::norm(&r_trial);
+                    let converged = n <= settings.tolerance * scale_trial;
+                    let cut = if !settings.line_search || converged || alpha <= SHORTEST_STEP {
+                        None
+                    } else {
+                        search.cut(alpha, &r_trial, n)
+                    };
+                    match cut {
+                        None => {
+                            (r, scale) = (r_trial, scale_trial);
+                            info.step_lengths.push(alpha);
+                            break;
+                        }
+                        Some(shorter) => alpha = shorter,
+                    }
+                }
+                // An inadmissible trial state is halved.
+                Err(_) if settings.line_search && alpha > SHORTEST_STEP => alpha *= 0.5,
+                Err(p) => return Err(inverted(iteration + 1, p, Some(residual))),
+            }
         }
+        u = trial;
     }
     unreachable!("the loop returns")
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 /// Observed order of convergence of three successive residuals,
@@ -266,6 +405,76 @@ mod tests {
         let n = r.len();
         let order = observed_order([r[n - 4], r[n - 3], r[n - 2]]);
         assert!(order > 1.8, "{r:?}");
+        // Every full step reduced the residual: the line search took them.
+        assert!(info.step_lengths.iter().all(|&a| a == 1.0), "{info:?}");
+    }
+
+    /// `atan(x) = 0` with its exact derivative: from |x0| > 1.39 full Newton
+    /// steps overshoot further each time and diverge (a textbook case,
+    /// e.g. Dennis & Schnabel, "Numerical Methods for Unconstrained
+    /// Optimization", sec. 6.3); the line search cuts the first steps and
+    /// then converges quadratically to 0 with full steps.
+    struct Arctangent {
+        x: f64,
+    }
+
+    impl Equilibrium for Arctangent {
+        fn n_dofs(&self) -> usize {
+            1
+        }
+        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
+            self.x = 3.0 + u[0];
+            Ok((vec![-self.x.atan()], 1.0))
+        }
+        fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
+            Ok((vec![r[0] * (1.0 + self.x * self.x)], Factorisation::Lu))
+        }
+    }
+
+    #[test]
+    fn a_line_search_turns_a_diverging_newton_into_a_converging_one() {
+        let plain = NewtonSettings {
+            line_search: false,
+            ..Default::default()
+        };
+        let e = solve(&mut Arctangent { x: 3.0 }, &plain, 1, &mut NoObserver).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                SolveError::Diverged { .. } | SolveError::NotConverged { .. }
+            ),
+            "{e}"
+        );
+        let settings = NewtonSettings::default();
+        let (u, info) = solve(&mut Arctangent { x: 3.0 }, &settings, 1, &mut NoObserver).unwrap();
+        assert!((3.0 + u[0]).abs() < 1e-9, "{info:?}");
+        let cut = info.step_lengths.iter().filter(|&&a| a < 1.0).count();
+        assert!(cut >= 1, "{info:?}");
+        // The last steps are full, and quadratic: atan is odd, so its Newton
+        // converges cubically near 0; at least quadratically is asked.
+        let tail = &info.step_lengths[info.step_lengths.len() - 2..];
+        assert_eq!(tail, [1.0, 1.0], "{info:?}");
+        let r = &info.residuals;
+        let n = r.len();
+        assert!(
+            observed_order([r[n - 4], r[n - 3], r[n - 2]]) > 1.8,
+            "{r:?}"
+        );
+    }
+
+    /// A trial state with an inverted point shortens the step instead of
+    /// failing: the full first step from x = 1 goes to 3.33, past the
+    /// refused x > 3; half of it (x = 2.17) is admissible and Newton goes
+    /// on to 2. A trial with a NaN residual is cut the same way.
+    #[test]
+    fn an_inverted_or_nan_trial_state_shortens_the_step() {
+        for nan_past in [false, true] {
+            let mut eq = Fragile { x: 1.0, nan_past };
+            let (u, info) = solve(&mut eq, &NewtonSettings::default(), 1, &mut NoObserver)
+                .unwrap_or_else(|e| panic!("nan_past {nan_past}: {e}"));
+            assert!((1.0 + u[0] - 2.0).abs() < 1e-9, "{info:?}");
+            assert_eq!(info.step_lengths[0], 0.5, "{info:?}");
+        }
     }
 
     #[test]
@@ -319,7 +528,10 @@ mod tests {
     /// the residual before it was |8 - 1| / 8 = 0.875.
     #[test]
     fn failures_report_the_last_finite_residual() {
-        let settings = NewtonSettings::default();
+        let settings = NewtonSettings {
+            line_search: false,
+            ..Default::default()
+        };
         for (nan_past, step) in [(false, 4), (true, 2)] {
             let mut eq = Fragile { x: 1.0, nan_past };
             let e = solve(&mut eq, &settings, step, &mut NoObserver).unwrap_err();

@@ -52,6 +52,13 @@ pub struct StepReport {
     pub step: usize,
     pub load_factor: f64,
     pub newton: NewtonInfo,
+    /// Sub-increments the step was solved in: 1 unless a failed increment
+    /// was cut (see [`crate::Substepping`]).
+    #[serde(default = "one")]
+    pub substeps: usize,
+    /// Sub-increments that failed and were retried at half the size.
+    #[serde(default)]
+    pub cutbacks: usize,
     pub timings: StepTimings,
     pub active_nodes: usize,
     /// Unconstrained degrees of freedom in the system.
@@ -67,6 +74,29 @@ pub struct StepReport {
     /// force). Zero when absent from a stored step.
     #[serde(default)]
     pub applied_load: [f64; 2],
+}
+
+impl StepReport {
+    /// Folds the next sub-increment of the same load step into this one:
+    /// its Newton history and costs add, its state (load factor, probes,
+    /// reactions) replaces.
+    pub fn merge(&mut self, next: StepReport) {
+        let mut newton = std::mem::take(&mut self.newton);
+        newton.extend(next.newton);
+        let mut timings = self.timings;
+        timings += &next.timings;
+        let substeps = self.substeps + next.substeps;
+        *self = StepReport {
+            newton,
+            timings,
+            substeps,
+            ..next
+        };
+    }
+}
+
+fn one() -> usize {
+    1
 }
 
 /// Summary of a whole run.
@@ -111,13 +141,28 @@ impl PointColumns {
     }
 }
 
-/// How a load step's Newton solve went.
-#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
+/// How a load step's Newton solves went (over all its sub-increments, in
+/// order, when it was cut).
+#[derive(Debug, Clone, Default, Serialize, serde::Deserialize, PartialEq)]
 pub struct NewtonInfo {
     /// Linear solves performed.
     pub iterations: usize,
     /// Relative out-of-balance force before each solve and at convergence.
     pub residuals: Vec<f64>,
+    /// Length of each step taken along a Newton direction: 1 for the full
+    /// step, less where the line search cut it.
+    #[serde(default)]
+    pub step_lengths: Vec<f64>,
     /// Factorisation of the last solve (`None` if no solve was needed).
     pub factorisation: Option<Factorisation>,
+}
+
+impl NewtonInfo {
+    /// Appends the solve of the next sub-increment.
+    pub fn extend(&mut self, next: NewtonInfo) {
+        self.iterations += next.iterations;
+        self.residuals.extend(next.residuals);
+        self.step_lengths.extend(next.step_lengths);
+        self.factorisation = next.factorisation.or(self.factorisation);
+    }
 }

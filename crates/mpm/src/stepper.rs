@@ -31,6 +31,29 @@ use crate::probes::Probes;
 use crate::report::{RunReport, StepReport, StepTimings};
 use crate::supports::{GridSupport, HeldDofs};
 
+/// Newton iterations a sub-increment may take and still count as easy, so
+/// that the next one is twice as long.
+const EASY_ITERATIONS: usize = 6;
+
+/// Cutting a load step's increment when it fails.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Substepping {
+    /// The smallest sub-increment tried, as a fraction of the step's
+    /// (1/1024); 1 turns cutting off.
+    pub min_fraction: f64,
+    /// Failed sub-increments allowed in one load step (40).
+    pub max_cutbacks: usize,
+}
+
+impl Default for Substepping {
+    fn default() -> Self {
+        Self {
+            min_fraction: 1.0 / 1024.0,
+            max_cutbacks: 40,
+        }
+    }
+}
+
 /// A case made ready to run: points, grid, loads and supports
 /// ([`crate::model`] builds it from a case).
 pub struct Simulation {
@@ -57,6 +80,7 @@ pub struct Simulation {
     /// Number of supports in the case (grid and IBM), for reactions.
     pub(crate) n_supports: usize,
     pub settings: NewtonSettings,
+    pub substepping: Substepping,
     pub load_steps: usize,
 }
 
@@ -85,15 +109,78 @@ impl Simulation {
         })
     }
 
-    /// One load step, as in the module docs.
+    /// One load step, from load factor `(step - 1) / n` to `step / n`. An
+    /// increment that fails is retried from the last converged state in
+    /// halves, down to [`Substepping::min_fraction`] of the step; after a
+    /// sub-increment that converged easily the size doubles again, up to
+    /// the whole step.
     pub fn load_step(
         &mut self,
         step: usize,
         observer: &mut dyn Observer,
     ) -> Result<StepReport, SolveError> {
+        let n = self.load_steps as f64;
+        let end = step as f64 / n;
+        // Progress through the step, and the size of the next try, as
+        // fractions of its increment.
+        let (mut done, mut size) = (0.0_f64, 1.0_f64);
+        let mut report: Option<StepReport> = None;
+        let mut cutbacks = 0;
+        while done < 1.0 {
+            let last = done + size >= 1.0 - 1e-12;
+            let reach = if last { 1.0 } else { done + size };
+            let load_factor = if last {
+                end
+            } else {
+                (step as f64 - 1.0 + reach) / n
+            };
+            match self.increment(step, load_factor, observer) {
+                Ok(sub) => {
+                    let easy = sub.newton.iterations <= EASY_ITERATIONS;
+                    report = Some(match report.take() {
+                        None => sub,
+                        Some(mut so_far) => {
+                            so_far.merge(sub);
+                            so_far
+                        }
+                    });
+                    done = reach;
+                    if easy {
+                        size = (2.0 * size).min(1.0);
+                    }
+                }
+                Err(e) if e.may_pass_when_cut() && self.substepping.min_fraction < 1.0 => {
+                    cutbacks += 1;
+                    size *= 0.5;
+                    if size < self.substepping.min_fraction
+                        || cutbacks > self.substepping.max_cutbacks
+                    {
+                        return Err(SolveError::SubstepsExhausted {
+                            step,
+                            load_factor: (step as f64 - 1.0 + done) / n,
+                            fraction: 2.0 * size,
+                            cause: Box::new(e),
+                        });
+                    }
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        let mut report = report.expect("the loop converged at least once");
+        report.cutbacks = cutbacks;
+        Ok(report)
+    }
+
+    /// Solves for equilibrium at `load_factor` from the last converged state
+    /// and commits it, as in the module docs.
+    fn increment(
+        &mut self,
+        step: usize,
+        load_factor: f64,
+        observer: &mut dyn Observer,
+    ) -> Result<StepReport, SolveError> {
         let mut clock = Stopwatch::start();
         self.check_inside_extent(step - 1)?;
-        let load_factor = step as f64 / self.load_steps as f64;
 
         let conn = self.reset_grid();
         let mut eq = self.assemble(&conn, load_factor);
@@ -120,6 +207,8 @@ impl Simulation {
             step,
             load_factor,
             newton,
+            substeps: 1,
+            cutbacks: 0,
             timings,
             active_nodes: conn.n_nodes(),
             active_dofs,

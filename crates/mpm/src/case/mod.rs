@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 pub use crate::boundary::Representation;
 pub use crate::geometry::{Geometry, Selector};
 use crate::newton::NewtonSettings;
+use crate::stepper::Substepping;
 pub use crate::supports::{Fix, Rotation};
 
 /// The only case-format version this build reads.
@@ -81,6 +82,39 @@ pub struct Analysis {
     pub load_steps: u32,
     #[serde(default)]
     pub newton: NewtonSpec,
+    #[serde(default)]
+    pub substepping: SubsteppingSpec,
+}
+
+/// Cutting a load step's increment when Newton fails on it: the failed
+/// increment is retried in halves from the last converged state. The load
+/// steps stay the output steps.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SubsteppingSpec {
+    /// The smallest sub-increment, as a fraction of the step's increment
+    /// (default 1/1024); 1 turns cutting off.
+    #[serde(default = "default_min_fraction")]
+    pub min_fraction: f64,
+    /// Failed sub-increments allowed in one load step (default 40).
+    #[serde(default = "default_max_cutbacks")]
+    pub max_cutbacks: u32,
+}
+
+fn default_min_fraction() -> f64 {
+    Substepping::default().min_fraction
+}
+fn default_max_cutbacks() -> u32 {
+    Substepping::default().max_cutbacks as u32
+}
+
+impl Default for SubsteppingSpec {
+    fn default() -> Self {
+        Self {
+            min_fraction: default_min_fraction(),
+            max_cutbacks: default_max_cutbacks(),
+        }
+    }
 }
 
 /// Newton-Raphson controls.
@@ -103,6 +137,10 @@ pub struct NewtonSpec {
     /// amount of its size.
     #[serde(default = "default_tangent_regularisation")]
     pub tangent_regularisation: f64,
+    /// Search along each Newton direction, cutting steps that do not reduce
+    /// the out-of-balance force or that invert a point (default true).
+    #[serde(default = "default_line_search")]
+    pub line_search: bool,
 }
 
 fn default_tolerance() -> f64 {
@@ -114,6 +152,9 @@ fn default_max_iterations() -> u32 {
 fn default_tangent_regularisation() -> f64 {
     NewtonSettings::default().tangent_regularisation
 }
+fn default_line_search() -> bool {
+    NewtonSettings::default().line_search
+}
 
 impl Default for NewtonSpec {
     fn default() -> Self {
@@ -121,6 +162,7 @@ impl Default for NewtonSpec {
             tolerance: default_tolerance(),
             max_iterations: default_max_iterations(),
             tangent_regularisation: default_tangent_regularisation(),
+            line_search: default_line_search(),
         }
     }
 }

@@ -107,6 +107,19 @@ impl Case {
                 "must be at least 1",
             ));
         }
+        let sub = &a.substepping;
+        if !(sub.min_fraction > 0.0 && sub.min_fraction <= 1.0) {
+            return Err(CaseError::new(
+                "analysis.substepping.min_fraction",
+                "must be in (0, 1]",
+            ));
+        }
+        if sub.max_cutbacks > MAX_CUTBACKS {
+            return Err(CaseError::new(
+                "analysis.substepping.max_cutbacks",
+                format!("must be at most {MAX_CUTBACKS}"),
+            ));
+        }
         positive("grid.cell_size", self.grid.cell_size)?;
         finite_pair("grid.origin", self.grid.origin)?;
         if let Some(b) = &self.grid.extent {
@@ -473,6 +486,10 @@ fn check_ring(path: &str, ring: &[[f64; 2]]) -> Result<(), CaseError> {
     }
     Ok(())
 }
+
+/// Failed sub-increments a load step may allow: each costs up to a Newton
+/// solve.
+const MAX_CUTBACKS: u32 = 1000;
 
 /// Vertices a polygon's ring may have: the simplicity check is quadratic in
 /// them (5e7 edge pairs at this size, a fraction of a second).
