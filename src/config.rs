@@ -20,7 +20,7 @@ pub const DEFAULT_MAX_LOAD_STEPS: usize = 10_000;
 pub const DEFAULT_MAX_QUEUED: usize = 1_000;
 /// What one job may store (its steps' points), in bytes: 4 GiB, e.g.
 /// 100,000 points over 150 load steps.
-pub const DEFAULT_MAX_JOB_BYTES: usize = 1 << 32;
+pub const DEFAULT_MAX_JOB_BYTES: u64 = 1 << 32;
 /// How long checking one submission (seeding its bodies) may take: far
 /// more than a case within the point limit needs (about 1.2 s a million
 /// points).
@@ -54,7 +54,7 @@ pub struct Limits {
     pub max_load_steps: usize,
     pub max_queued: usize,
     /// What one job's stored steps may take, estimated before it is queued.
-    pub max_job_bytes: usize,
+    pub max_job_bytes: u64,
     pub job_time_limit: Duration,
     /// How long checking one submission may take; 503 past it.
     pub admission_time_limit: Duration,

@@ -41,7 +41,7 @@ pub struct ServeArgs {
     /// Bytes one job may store (its steps' points, estimated from the
     /// points and load steps before it is queued).
     #[arg(long, env = "MPM_MAX_JOB_BYTES", default_value_t = config::DEFAULT_MAX_JOB_BYTES)]
-    max_job_bytes: usize,
+    max_job_bytes: u64,
     /// Wall-time limit of one job, in seconds; a job over it fails.
     #[arg(long, env = "MPM_JOB_TIME_LIMIT", default_value_t = config::DEFAULT_JOB_TIME_LIMIT.as_secs())]
     job_time_limit: u64,
@@ -72,13 +72,14 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
             .build_global()
             .map_err(|e| CliError::failed(e.to_string()))?;
     }
-    let durations = (
-        seconds(args.lease_seconds),
-        seconds(args.admission_time_limit),
-    );
-    let (Some(lease), Some(admission_time_limit)) = durations else {
+    let Some(lease) = seconds(args.lease_seconds) else {
         return Err(CliError::input(
-            "lease-seconds and admission-time-limit must be positive numbers of seconds",
+            "--lease-seconds must be a positive number of seconds",
+        ));
+    };
+    let Some(admission_time_limit) = seconds(args.admission_time_limit) else {
+        return Err(CliError::input(
+            "--admission-time-limit must be a positive number of seconds",
         ));
     };
     if args.workers == 0 || args.max_attempts == 0 {

@@ -32,20 +32,37 @@ pub async fn submit(
             ApiError::MalformedJson(rejection.body_text())
         }
     })?;
-    let key = idempotency_key(&headers)?;
-    if let Some(key) = key
-        && let Some(earlier) = state.store.by_idempotency_key(key).await?
-    {
+    let Some(key) = idempotency_key(&headers)? else {
+        return queue(&state, body, None).await;
+    };
+    if let Some(earlier) = state.store.by_idempotency_key(key).await? {
         return replay(&state.store, key, earlier, &body).await;
     }
+    match queue(&state, body.clone(), Some(key)).await {
+        // A request with the same key that raced this one may have queued
+        // the job meanwhile (and filled the queue, or held up the check).
+        Err(e @ (ApiError::QueueFull { .. } | ApiError::Unavailable(_))) => {
+            match state.store.by_idempotency_key(key).await? {
+                Some(earlier) => replay(&state.store, key, earlier, &body).await,
+                None => Err(e),
+            }
+        }
+        done => done,
+    }
+}
+
+/// Checks a new submission and queues it (201), or, if its key was taken
+/// meanwhile, answers as a replay.
+async fn queue(state: &AppState, body: Bytes, key: Option<&str>) -> Result<Response, ApiError> {
     let limits = &state.config.limits;
     if state.store.queued().await? >= limits.max_queued as i64 {
         return Err(ApiError::QueueFull {
             limit: limits.max_queued,
         });
     }
-    let (text, case) = admission::read(&body)?;
-    let admitted = check(&state, case).await?;
+    let admitted = check(state, body.clone()).await?;
+    let text = std::str::from_utf8(&body)
+        .map_err(|e| ApiError::Internal(format!("checked body is not UTF-8: {e}")))?;
     let inserted = state
         .store
         .insert(&NewJob {
@@ -56,28 +73,27 @@ pub async fn submit(
             idempotency_key: key,
         })
         .await?;
-    let id = match (inserted, key) {
-        (Inserted::New(id), _) => id,
-        (Inserted::Earlier(earlier), Some(key)) => {
-            return replay(&state.store, key, earlier, &body).await;
+    match (inserted, key) {
+        (Inserted::New(id), _) => {
+            state.wake.notify_one();
+            job_response(StatusCode::CREATED, find(&state.store, id).await?)
         }
-        (Inserted::Earlier(earlier), None) => {
-            return Err(ApiError::Internal(format!(
-                "job {} returned for a submission without a key",
-                earlier.id
-            )));
-        }
-    };
-    state.wake.notify_one();
-    created(StatusCode::CREATED, find(&state.store, id).await?)
+        (Inserted::Earlier(earlier), Some(key)) => replay(&state.store, key, earlier, &body).await,
+        (Inserted::Earlier(earlier), None) => Err(ApiError::Internal(format!(
+            "job {} returned for a submission without a key",
+            earlier.id
+        ))),
+    }
 }
 
-/// Seeds a case to check it. That is CPU work: off the async threads, no
-/// more of it at once than there are cores, within the admission time
-/// limit, and given up at shutdown. The permit goes with the blocking task,
-/// so neither a client that hangs up nor a time-out frees it before the
-/// work ends.
-async fn check(state: &AppState, case: mpm::Case) -> Result<admission::Admitted, ApiError> {
+/// Reads and seeds a case to check it. That is CPU work (reading a case
+/// checks its polygons, in time quadratic in their vertices; seeding
+/// scans lattices): off the async threads, no more of it at once than
+/// there are cores, within the admission time limit (the wait for a core
+/// included), and given up at shutdown. The permit goes with the blocking
+/// task, so neither a client that hangs up nor a time-out frees it before
+/// the work ends.
+async fn check(state: &AppState, body: Bytes) -> Result<admission::Admitted, ApiError> {
     let limits = state.config.limits.clone();
     let seeding = async {
         let permit = state
@@ -88,6 +104,7 @@ async fn check(state: &AppState, case: mpm::Case) -> Result<admission::Admitted,
             .map_err(|e| ApiError::Internal(format!("admissions: {e}")))?;
         let checked = tokio::task::spawn_blocking(move || {
             let _permit = permit;
+            let (_, case) = admission::read(&body)?;
             admission::admit(case, &limits)
         })
         .await
@@ -99,9 +116,8 @@ async fn check(state: &AppState, case: mpm::Case) -> Result<admission::Admitted,
     tokio::select! {
         checked = tokio::time::timeout(limit, seeding) => checked.unwrap_or_else(|_| {
             Err(ApiError::Unavailable(format!(
-                "checking the case took longer than {:.0} s (the service is busy, or the \
-                 case is near its limits); try again later",
-                limit.as_secs_f64()
+                "checking the case took longer than {limit:?} (the service is busy, or the \
+                 case is near its limits); try again later"
             )))
         }),
         _ = stopping.wait_for(|stop| *stop) => Err(ApiError::Unavailable(
@@ -110,6 +126,7 @@ async fn check(state: &AppState, case: mpm::Case) -> Result<admission::Admitted,
     }
 }
 
+const IDEMPOTENCY_KEY: &str = "idempotency-key";
 /// The longest `Idempotency-Key` accepted, in bytes.
 const MAX_IDEMPOTENCY_KEY_BYTES: usize = 255;
 
@@ -135,8 +152,6 @@ fn idempotency_key(headers: &HeaderMap) -> Result<Option<&str>, ApiError> {
     Ok(Some(key))
 }
 
-const IDEMPOTENCY_KEY: &str = "idempotency-key";
-
 /// A retry with a key already used: the job it made if the body is the
 /// same, 422 if it is not.
 async fn replay(
@@ -151,11 +166,11 @@ async fn replay(
             job: earlier.id,
         });
     }
-    created(StatusCode::OK, find(store, earlier.id).await?)
+    job_response(StatusCode::OK, find(store, earlier.id).await?)
 }
 
 /// A job's view with its `Location`.
-fn created(code: StatusCode, job: JobRow) -> Result<Response, ApiError> {
+fn job_response(code: StatusCode, job: JobRow) -> Result<Response, ApiError> {
     let mut headers = HeaderMap::new();
     headers.insert(
         header::LOCATION,

@@ -58,8 +58,12 @@ pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
     })?;
     let points = seeded.points.len();
     check_points(points, limits)?;
-    let boundary_points = seeded.loops.iter().map(|l| l.points.len()).sum();
-    check_stored_bytes(points, boundary_points, &case, limits)?;
+    let footprint = Footprint {
+        points,
+        boundary_points: seeded.loops.iter().map(|l| l.points.len()).sum(),
+        loops: seeded.loops.len(),
+    };
+    check_stored_bytes(footprint, &case, limits)?;
     Ok(Admitted { case, points })
 }
 
@@ -140,36 +144,52 @@ fn check_points(points: usize, limits: &Limits) -> Result<(), Rejection> {
 
 /// Bytes one material point takes in a stored step, at most: its columns
 /// (`mpm::report::PointColumns`) are ten numbers of at most 24 characters
-/// (`-1.2345678901234567e-100`), the brackets and commas around them (26)
-/// and a body index.
+/// (`-1.2345678901234567e-100`), the commas and brackets around them (17)
+/// and a body index (a test serialises the worst case).
 pub const STORED_BYTES_PER_POINT: f64 = 270.0;
 /// Bytes one boundary point (a data point of a boundary curve) takes in a
-/// stored step, at most: eight polyline samples (8 x 52), two knots
-/// (2 x 25), two control points (2 x 52) and its index.
-pub const STORED_BYTES_PER_BOUNDARY_POINT: f64 = 600.0;
-/// A step's report: load factor, Newton history, reactions and probes
-/// (about 700 bytes for the built-in cases).
-pub const STORED_BYTES_PER_REPORT: f64 = 4096.0;
+/// stored step, at most: eight polyline samples (8 x 52), up to three knots
+/// and three control points (at a corner; 3 x 25 + 3 x 52) and its index.
+pub const STORED_BYTES_PER_BOUNDARY_POINT: f64 = 700.0;
+/// A boundary curve's own bytes: its end knots, closing samples and keys.
+pub const STORED_BYTES_PER_LOOP: f64 = 512.0;
 
-/// What a job will store, at most: every load step's points, boundary
-/// curves and report.
-pub fn stored_bytes(points: usize, boundary_points: usize, load_steps: u32) -> f64 {
-    let step = points as f64 * STORED_BYTES_PER_POINT
-        + boundary_points as f64 * STORED_BYTES_PER_BOUNDARY_POINT
-        + STORED_BYTES_PER_REPORT;
-    step * f64::from(load_steps)
+/// What seeding a case made, as far as its stored size goes.
+#[derive(Debug, Clone, Copy)]
+pub struct Footprint {
+    pub points: usize,
+    /// Data points of all boundary curves.
+    pub boundary_points: usize,
+    pub loops: usize,
+}
+
+/// What a job will store: every load step's points and boundary curves (at
+/// most), and its report, whose size grows with the probes, the supports
+/// and the Newton history (one solve's worth: a step cut into pieces adds
+/// about 50 bytes an iteration of each).
+pub fn stored_bytes(case: &Case, seeded: Footprint) -> f64 {
+    let probes: f64 = case
+        .probes
+        .iter()
+        .map(|p| serde_json::to_string(&p.name).map_or(0, |n| n.len()) as f64 + 160.0)
+        .sum();
+    let report = 1024.0
+        + probes
+        + 60.0 * case.supports.len() as f64
+        + 50.0 * f64::from(case.analysis.newton.max_iterations + 1);
+    let step = seeded.points as f64 * STORED_BYTES_PER_POINT
+        + seeded.boundary_points as f64 * STORED_BYTES_PER_BOUNDARY_POINT
+        + seeded.loops as f64 * STORED_BYTES_PER_LOOP
+        + report;
+    step * f64::from(case.analysis.load_steps)
 }
 
 /// Refuses a job whose stored steps would pass the limit, naming the field
-/// further over its own limit: the load steps or the bodies' points.
-fn check_stored_bytes(
-    points: usize,
-    boundary_points: usize,
-    case: &Case,
-    limits: &Limits,
-) -> Result<(), Rejection> {
-    let steps = case.analysis.load_steps;
-    let bytes = stored_bytes(points, boundary_points, steps);
+/// with the larger share of its own limit: the load steps or the bodies'
+/// points.
+fn check_stored_bytes(seeded: Footprint, case: &Case, limits: &Limits) -> Result<(), Rejection> {
+    let (points, steps) = (seeded.points, case.analysis.load_steps);
+    let bytes = stored_bytes(case, seeded);
     if bytes <= limits.max_job_bytes as f64 {
         return Ok(());
     }
@@ -264,6 +284,32 @@ mod tests {
         }
     }
 
+    /// The per-point bound holds for the longest numbers JSON can give:
+    /// a point whose every value is `-1.2345678901234567e-100` and whose
+    /// body index is the largest.
+    #[test]
+    fn a_stored_point_takes_at_most_its_bound() {
+        let worst = -1.2345678901234567e-100;
+        let one = |n: usize| mpm::report::PointColumns {
+            position: vec![[worst; 2]; n],
+            displacement: vec![[worst; 2]; n],
+            stress: vec![[worst; 4]; n],
+            volume: vec![worst; n],
+            jacobian: vec![worst; n],
+            body: vec![u32::MAX; n],
+        };
+        let per_point = |n| serde_json::to_string(&one(n)).unwrap().len();
+        let marginal = (per_point(1001) - per_point(1)) as f64 / 1000.0;
+        assert!(
+            marginal <= STORED_BYTES_PER_POINT,
+            "{marginal} bytes a point"
+        );
+        assert!(
+            marginal > 0.9 * STORED_BYTES_PER_POINT,
+            "{marginal}: a loose bound"
+        );
+    }
+
     #[test]
     fn limits_name_the_field() {
         let mut limits = Config::new("unused".into()).limits;
@@ -280,19 +326,23 @@ mod tests {
             Err(Rejection::LimitExceeded { path, .. }) if path == "bodies"
         ));
         limits.max_points = 1000;
-        let points = 400;
-        let stored = stored_bytes(points, 80, case.analysis.load_steps);
-        limits.max_job_bytes = stored as usize;
-        assert!(check_stored_bytes(points, 80, &case, &limits).is_ok());
-        limits.max_job_bytes = stored as usize - 1;
+        let seeded = Footprint {
+            points: 400,
+            boundary_points: 80,
+            loops: 1,
+        };
+        let stored = stored_bytes(&case, seeded);
+        limits.max_job_bytes = stored as u64;
+        assert!(check_stored_bytes(seeded, &case, &limits).is_ok());
+        limits.max_job_bytes = stored as u64 - 1;
         // 5 of 5 load steps against 400 of 1000 points: the steps drive it.
         assert!(matches!(
-            check_stored_bytes(points, 80, &case, &limits),
+            check_stored_bytes(seeded, &case, &limits),
             Err(Rejection::LimitExceeded { path, .. }) if path == "analysis.load_steps"
         ));
         limits.max_load_steps = 10_000;
         assert!(matches!(
-            check_stored_bytes(points, 80, &case, &limits),
+            check_stored_bytes(seeded, &case, &limits),
             Err(Rejection::LimitExceeded { path, .. }) if path == "bodies"
         ));
         assert!(matches!(

@@ -159,7 +159,7 @@ impl Store {
             {
                 match self.by_idempotency_key(key).await? {
                     Some(earlier) => Ok(Inserted::Earlier(earlier)),
-                    // Its job was deleted between the two statements.
+                    // Jobs are never deleted: the key's holder is there.
                     None => Err(e),
                 }
             }
@@ -555,5 +555,30 @@ mod tests {
             assert_eq!(job.status, JobStatus::Cancelled, "job {id}");
             assert_eq!(store.step_reports(id).await.unwrap().len(), 1, "job {id}");
         }
+    }
+
+    /// The second insert with a key gets the first's job, not an error:
+    /// what a request that lost a race with its own retry sees.
+    #[tokio::test]
+    async fn an_idempotency_key_taken_returns_the_job_that_holds_it() {
+        let store = store("idempotency").await;
+        let job = |case_json| NewJob {
+            case_json,
+            title: None,
+            points: 1,
+            load_steps: 1,
+            idempotency_key: Some("k"),
+        };
+        let Inserted::New(first) = store.insert(&job("{\"a\": 1}")).await.unwrap() else {
+            panic!("the first insert makes a job");
+        };
+        match store.insert(&job("{\"b\": 2}")).await.unwrap() {
+            Inserted::Earlier(earlier) => {
+                assert_eq!(earlier.id, first);
+                assert_eq!(earlier.case_json, "{\"a\": 1}");
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(store.list(None, 10, 0).await.unwrap().1, 1);
     }
 }

@@ -222,6 +222,7 @@ impl Case {
                 ));
             }
         }
+        let mut names = std::collections::HashSet::new();
         for (i, p) in self.probes.iter().enumerate() {
             if p.name.trim().is_empty() {
                 return Err(CaseError::new(
@@ -229,7 +230,7 @@ impl Case {
                     "must not be empty",
                 ));
             }
-            if self.probes[..i].iter().any(|q| q.name == p.name) {
+            if !names.insert(p.name.as_str()) {
                 return Err(CaseError::new(
                     format!("probes[{i}].name"),
                     format!("duplicate probe name {:?}", p.name),
