@@ -8,7 +8,7 @@ use std::time::Instant;
 use nalgebra::Matrix2;
 use rayon::prelude::*;
 
-use crate::assembly::{self, Pattern, SoftCells};
+use crate::assembly::{self, GhostFaces, Pattern, SoftCells};
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
 use crate::configuration::Configuration;
@@ -30,6 +30,7 @@ pub struct StepTerms<'a> {
     pub loading: BoundaryLoading<'a>,
     pub band: BandTerms,
     pub soft: Option<SoftCells>,
+    pub ghost: Option<GhostFaces>,
 }
 
 impl StepTerms<'_> {
@@ -38,6 +39,9 @@ impl StepTerms<'_> {
     pub fn pattern(&self, conn: &Connectivity) -> Pattern {
         let mut groups = self.loading.coupling_groups();
         groups.extend(self.band.coupling_groups());
+        if let Some(ghost) = &self.ghost {
+            groups.extend(ghost.coupling_groups());
+        }
         Pattern::build(conn, &groups)
     }
 }
@@ -50,6 +54,7 @@ pub struct StepEquilibrium<'a> {
     /// DOFs the grid supports hold.
     held: HeldDofs,
     soft: Option<SoftCells>,
+    ghost: Option<GhostFaces>,
     /// Boundary loads, evaluated on the trial boundary.
     loading: BoundaryLoading<'a>,
     /// Implicit-boundary supports.
@@ -82,6 +87,7 @@ impl<'a> StepEquilibrium<'a> {
             loading,
             band,
             soft,
+            ghost,
         } = terms;
         Self {
             conn,
@@ -89,6 +95,7 @@ impl<'a> StepEquilibrium<'a> {
             points: start.points,
             held,
             soft,
+            ghost,
             loading,
             band_load: band.load_norm(conn.n_dofs()),
             f_band: vec![0.0; conn.n_dofs()],
@@ -180,6 +187,9 @@ impl Equilibrium for StepEquilibrium<'_> {
         if let Some(soft) = &self.soft {
             soft.add_force(u, &mut self.f_int);
         }
+        if let Some(ghost) = &self.ghost {
+            ghost.add_force(u, &mut self.f_int);
+        }
         self.f_band.fill(0.0);
         self.band.add_forces(u, &mut self.f_band);
         let scale = norm(&self.f_ext)
@@ -204,6 +214,9 @@ impl Equilibrium for StepEquilibrium<'_> {
         let mut k = assembly::stiffness(self.conn, &self.pattern, self.points, &self.responses);
         if let Some(soft) = &self.soft {
             soft.add_to(&self.pattern, &mut k);
+        }
+        if let Some(ghost) = &self.ghost {
+            ghost.add_to(&self.pattern, &mut k);
         }
         self.band.add_stiffness(&self.pattern, &mut k);
         // Boundary loads move with the boundary: their load stiffness makes

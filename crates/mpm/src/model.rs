@@ -147,6 +147,7 @@ impl Simulation {
                 max_iterations: newton.max_iterations as usize,
                 tangent_regularisation: newton.tangent_regularisation,
                 line_search: newton.line_search,
+                ghost_penalty: newton.ghost_penalty,
                 ..Default::default()
             },
             substepping: Substepping {

@@ -24,6 +24,10 @@ pub struct NewtonSettings {
     pub tangent_regularisation: f64,
     /// Search along each Newton direction (true); see [`solve`].
     pub line_search: bool,
+    /// Ghost penalty on the faces of the cells at the material's edge,
+    /// relative to the stiffest material's P-wave modulus (0: none); see
+    /// [`crate::assembly::GhostFaces`].
+    pub ghost_penalty: f64,
 }
 
 impl Default for NewtonSettings {
@@ -34,6 +38,7 @@ impl Default for NewtonSettings {
             divergence_limit: 1e8,
             tangent_regularisation: 1e-6,
             line_search: true,
+            ghost_penalty: 0.0,
         }
     }
 }

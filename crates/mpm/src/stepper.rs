@@ -16,14 +16,14 @@ use nalgebra::Matrix2;
 use rayon::prelude::*;
 
 use crate::assembly;
-use crate::assembly::SoftCells;
+use crate::assembly::{GhostFaces, SoftCells};
 use crate::boundary::BoundaryLoop;
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::{BoundaryLoading, LoadedStretch};
 use crate::configuration::Configuration;
 use crate::equilibrium::{StepEquilibrium, StepTerms, increment};
 use crate::grid::{Basis, Connectivity, Grid, NodeKey};
-use crate::material::Response;
+use crate::material::{Elastic, Response};
 use crate::newton::{self, NewtonSettings, SolveError};
 use crate::observer::{Observer, StepState};
 use crate::particles::MaterialPoints;
@@ -245,6 +245,7 @@ impl Simulation {
             loading: BoundaryLoading::new(&start, loops, &self.boundary_loads, load_factor),
             band: BandTerms::new(&start, loops, &self.anchors, self.band_width, load_factor),
             soft: self.soft_cells(&start),
+            ghost: self.ghost_faces(&start),
         };
         let pattern = terms.pattern(conn);
         StepEquilibrium::new(&start, terms, pattern)
@@ -289,13 +290,28 @@ impl Simulation {
         if ratio == 0.0 {
             return None;
         }
-        let stiffest = self
-            .points
+        Some(SoftCells::new(start, self.basis, &self.stiffest()?, ratio))
+    }
+
+    /// The ghost penalty on the faces of the cells at the material's edge,
+    /// with the stiffest material's P-wave modulus.
+    fn ghost_faces(&self, start: &Configuration) -> Option<GhostFaces> {
+        let gamma = self.settings.ghost_penalty;
+        if gamma == 0.0 {
+            return None;
+        }
+        let e = self.stiffest()?;
+        Some(GhostFaces::new(start, self.basis, e.lambda + 2.0 * e.mu, gamma))
+    }
+
+    /// The elastic constants of the material with the largest P-wave
+    /// modulus `lambda + 2 mu`.
+    fn stiffest(&self) -> Option<Elastic> {
+        self.points
             .materials
             .iter()
             .map(|m| m.elastic())
-            .max_by(|a, b| (a.lambda + 2.0 * a.mu).total_cmp(&(b.lambda + 2.0 * b.mu)))?;
-        Some(SoftCells::new(start, self.basis, &stiffest, ratio))
+            .max_by(|a, b| (a.lambda + 2.0 * a.mu).total_cmp(&(b.lambda + 2.0 * b.mu)))
     }
 
     /// Body force and point loads, scaled by the load factor.

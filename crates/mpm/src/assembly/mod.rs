@@ -10,11 +10,13 @@
 //! the position of `a` in `b`'s neighbour list.
 
 pub mod forces;
+pub mod ghost_faces;
 pub mod pattern;
 pub mod soft_cells;
 pub mod stiffness;
 
 pub use forces::{body_force, internal_force};
+pub use ghost_faces::GhostFaces;
 pub use pattern::{Pattern, constrain};
 pub use soft_cells::SoftCells;
 pub use stiffness::stiffness;

@@ -37,25 +37,8 @@ impl SoftCells {
     /// the linear basis), with `ratio` times the Lame constants of the
     /// `stiffest` material.
     pub fn new(start: &Configuration, basis: Basis, stiffest: &Elastic, ratio: f64) -> Self {
-        let Configuration { grid, conn, points } = *start;
-        let mut keys: Vec<(i64, i64)> = (0..points.len())
-            .into_par_iter()
-            .flat_map_iter(|p| {
-                let x = points.position[p];
-                let lp = match basis {
-                    Basis::Linear => [0.0, 0.0],
-                    // As in `Basis::eval`, which caps the domain at a cell.
-                    Basis::Gimp => points.half_width(p).map(|l| l.min(grid.h)),
-                };
-                let lo = grid.cell_of([x[0] - lp[0], x[1] - lp[1]]);
-                let hi = grid.cell_of([x[0] + lp[0], x[1] + lp[1]]);
-                let range = |d: usize| lo[d]..=hi[d];
-                let ys = range(1);
-                range(0).flat_map(move |i| ys.clone().map(move |j| (i, j)))
-            })
-            .collect();
-        keys.par_sort_unstable();
-        keys.dedup();
+        let conn = start.conn;
+        let keys = overlapped_cells(start, basis);
         let node = |i: i64, j: i64| {
             conn.nodes
                 .binary_search(&node_key(i, j))
@@ -113,6 +96,31 @@ impl SoftCells {
             }
         }
     }
+}
+
+/// The cells (`(i, j)`, sorted) that any point's domain overlaps (its
+/// containing cell for the linear basis).
+pub(crate) fn overlapped_cells(start: &Configuration, basis: Basis) -> Vec<(i64, i64)> {
+    let Configuration { grid, points, .. } = *start;
+    let mut keys: Vec<(i64, i64)> = (0..points.len())
+        .into_par_iter()
+        .flat_map_iter(|p| {
+            let x = points.position[p];
+            let lp = match basis {
+                Basis::Linear => [0.0, 0.0],
+                // As in `Basis::eval`, which caps the domain at a cell.
+                Basis::Gimp => points.half_width(p).map(|l| l.min(grid.h)),
+            };
+            let lo = grid.cell_of([x[0] - lp[0], x[1] - lp[1]]);
+            let hi = grid.cell_of([x[0] + lp[0], x[1] + lp[1]]);
+            let range = |d: usize| lo[d]..=hi[d];
+            let ys = range(1);
+            range(0).flat_map(move |i| ys.clone().map(move |j| (i, j)))
+        })
+        .collect();
+    keys.par_sort_unstable();
+    keys.dedup();
+    keys
 }
 
 /// Plane-strain stiffness of a square bilinear cell, 2x2 Gauss quadrature:

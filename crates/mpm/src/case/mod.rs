@@ -141,6 +141,10 @@ pub struct NewtonSpec {
     /// the out-of-balance force or that invert a point (default true).
     #[serde(default = "default_line_search")]
     pub line_search: bool,
+    /// Ghost penalty on the faces of the cells at the material's edge,
+    /// relative to the stiffest material's P-wave modulus (default 0: off).
+    #[serde(default = "default_ghost_penalty")]
+    pub ghost_penalty: f64,
 }
 
 fn default_tolerance() -> f64 {
@@ -151,6 +155,9 @@ fn default_max_iterations() -> u32 {
 }
 fn default_tangent_regularisation() -> f64 {
     NewtonSettings::default().tangent_regularisation
+}
+fn default_ghost_penalty() -> f64 {
+    NewtonSettings::default().ghost_penalty
 }
 fn default_line_search() -> bool {
     NewtonSettings::default().line_search
@@ -163,6 +170,7 @@ impl Default for NewtonSpec {
             max_iterations: default_max_iterations(),
             tangent_regularisation: default_tangent_regularisation(),
             line_search: default_line_search(),
+            ghost_penalty: default_ghost_penalty(),
         }
     }
 }

@@ -107,6 +107,12 @@ impl Case {
                 "must be at least 1",
             ));
         }
+        if !(a.newton.ghost_penalty >= 0.0 && a.newton.ghost_penalty.is_finite()) {
+            return Err(CaseError::new(
+                "analysis.newton.ghost_penalty",
+                "must be a finite number, 0 or more",
+            ));
+        }
         let sub = &a.substepping;
         if !(sub.min_fraction > 0.0 && sub.min_fraction <= 1.0) {
             return Err(CaseError::new(

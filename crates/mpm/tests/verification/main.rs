@@ -6,6 +6,7 @@ mod common;
 
 mod cantilever;
 mod column;
+mod ghost;
 mod hard_cases;
 mod ibm;
 mod lame;

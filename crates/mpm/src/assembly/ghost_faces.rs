@@ -1,0 +1,173 @@
+//! Ghost stabilisation of the cut cells at the material's edge: a penalty
+//! on the jump of the normal derivative of the step's displacement
+//! increment across the faces of those cells (Burman 2010, "Ghost
+//! penalty", C. R. Math. 348; for implicit MPM, Coombs 2023, "Ghost
+//! stabilisation of the material point method for stable quasi-static and
+//! dynamic analysis of large deformation problems", IJNME 124).
+//!
+//! A node that only a sliver of material reaches has almost no stiffness,
+//! and its spurious motion is written into the points as they cross into
+//! its cells. The penalty ties such a node to its neighbours through the
+//! smoothness of the bilinear grid field across faces: it vanishes for any
+//! field linear over the two cells of a face, so it leaves rigid motion and
+//! homogeneous deformation alone, and elsewhere it is as small as the jump
+//! of the gradient, which is O(h) for a smooth increment.
+//!
+//! On a face between two cells, with `a` and `b` the second differences
+//! `u_0 - 2 u_1 + u_2` of the increment along the two node lines that cross
+//! the face (bottom and top for a vertical face), the bilinear field's
+//! jump of normal derivative is `(a (1 - eta) + b eta) / h` along it, and
+//! the penalty `1/2 gamma M h int [[du/dn]]^2 ds` is
+//! `gamma M / 6 (a^2 + a b + b^2)` per component, whatever `h` (2D).
+//! `M = lambda + 2 mu` of the stiffest material.
+
+use super::Pattern;
+use crate::configuration::Configuration;
+use crate::grid::{Basis, node_key};
+
+/// The faces to stabilise and the penalty's weight.
+pub struct GhostFaces {
+    /// Per face, its six active nodes: the node line crossing it on one side
+    /// of its midpoint (three nodes across the face), then the other.
+    faces: Vec<[u32; 6]>,
+    /// `gamma M / 3`: `K = weight (D D^T (x) [[1, 1/2], [1/2, 1]])` per
+    /// component, with `D = (1, -2, 1)`.
+    weight: f64,
+}
+
+/// The second difference across a face.
+const D: [f64; 3] = [1.0, -2.0, 1.0];
+
+impl GhostFaces {
+    /// The faces between two cells the material overlaps of which at least
+    /// one is at the material's edge (a cell with a neighbour, sides or
+    /// corners, that no point reaches), weighted by `gamma` times the
+    /// stiffest material's P-wave modulus `m`.
+    pub fn new(start: &Configuration, basis: Basis, m: f64, gamma: f64) -> Self {
+        let Configuration { grid: _, conn, .. } = *start;
+        let cells = super::soft_cells::overlapped_cells(start, basis);
+        let active = |c: (i64, i64)| cells.binary_search(&c).is_ok();
+        let at_edge =
+            |(i, j): (i64, i64)| (-1..=1).any(|di| (-1..=1).any(|dj| !active((i + di, j + dj))));
+        let node = |i: i64, j: i64| {
+            conn.nodes
+                .binary_search(&node_key(i, j))
+                .ok()
+                .map(|a| a as u32)
+        };
+        let mut faces = Vec::new();
+        for &(i, j) in &cells {
+            let edge = at_edge((i, j));
+            // The face to the right: node rows j and j + 1, columns i..=i+2.
+            if active((i + 1, j)) && (edge || at_edge((i + 1, j))) {
+                let row = |r: i64| [node(i, r), node(i + 1, r), node(i + 2, r)];
+                if let Some(f) = collect(row(j), row(j + 1)) {
+                    faces.push(f);
+                }
+            }
+            // The face above: node columns i and i + 1, rows j..=j+2.
+            if active((i, j + 1)) && (edge || at_edge((i, j + 1))) {
+                let column = |c: i64| [node(c, j), node(c, j + 1), node(c, j + 2)];
+                if let Some(f) = collect(column(i), column(i + 1)) {
+                    faces.push(f);
+                }
+            }
+        }
+        Self {
+            faces,
+            weight: gamma * m / 3.0,
+        }
+    }
+
+    /// The node groups each face couples (for the stiffness pattern).
+    pub fn coupling_groups(&self) -> Vec<Vec<u32>> {
+        self.faces.iter().map(|f| f.to_vec()).collect()
+    }
+
+    /// Adds the penalty's force `K u` to `f`.
+    pub fn add_force(&self, u: &[f64], f: &mut [f64]) {
+        for nodes in &self.faces {
+            for c in 0..2 {
+                let second = |line: &[u32]| -> f64 {
+                    line.iter()
+                        .zip(D)
+                        .map(|(&n, d)| d * u[2 * n as usize + c])
+                        .sum()
+                };
+                let (a, b) = (second(&nodes[..3]), second(&nodes[3..]));
+                for k in 0..3 {
+                    f[2 * nodes[k] as usize + c] += self.weight * D[k] * (a + 0.5 * b);
+                    f[2 * nodes[3 + k] as usize + c] += self.weight * D[k] * (b + 0.5 * a);
+                }
+            }
+        }
+    }
+
+    /// Adds the penalty's stiffness to tangent values in `pattern`'s layout
+    /// (which must hold [`GhostFaces::coupling_groups`]).
+    pub fn add_to(&self, pattern: &Pattern, values: &mut [f64]) {
+        for nodes in &self.faces {
+            for (p, &a) in nodes.iter().enumerate() {
+                for (q, &b) in nodes.iter().enumerate() {
+                    let lines = if (p < 3) == (q < 3) { 1.0 } else { 0.5 };
+                    let k = self.weight * lines * D[p % 3] * D[q % 3];
+                    let (base, stride) = pattern.block(a, b);
+                    for c in 0..2 {
+                        values[base + c + c * stride] += k;
+                    }
+                }
+            }
+        }
+    }
+
+}
+
+/// Six nodes, if all are active.
+fn collect(first: [Option<u32>; 3], second: [Option<u32>; 3]) -> Option<[u32; 6]> {
+    let mut out = [0; 6];
+    for (o, n) in out.iter_mut().zip(first.into_iter().chain(second)) {
+        *o = n?;
+    }
+    Some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The face's penalty on a field given at the six nodes.
+    fn energy(weight: f64, u: [[f64; 2]; 6]) -> f64 {
+        let faces = GhostFaces {
+            faces: vec![[0, 1, 2, 3, 4, 5]],
+            weight,
+        };
+        let flat: Vec<f64> = u.iter().flatten().copied().collect();
+        let mut f = vec![0.0; 12];
+        faces.add_force(&flat, &mut f);
+        0.5 * f.iter().zip(&flat).map(|(a, b)| a * b).sum::<f64>()
+    }
+
+    /// Nodes of a vertical face at x = 1 between cells [0, 1] and [1, 2]
+    /// (unit cells): bottom row (0,0), (1,0), (2,0), then the top row.
+    const NODES: [[f64; 2]; 6] = [
+        [0.0, 0.0],
+        [1.0, 0.0],
+        [2.0, 0.0],
+        [0.0, 1.0],
+        [1.0, 1.0],
+        [2.0, 1.0],
+    ];
+
+    /// Any field linear over the two cells (rigid motion, homogeneous
+    /// strain) costs nothing; a kink at the face costs what the integral
+    /// of the jump squared gives: a jump of 1 in du_x/dx all along the
+    /// face (u_x = max(x - 1, 0)) costs gamma M / 2 with weight gamma M / 3.
+    #[test]
+    fn linear_fields_cost_nothing_and_a_kink_costs_its_jump_squared() {
+        let linear = NODES.map(|[x, y]| [0.3 + 0.2 * x - 0.7 * y, -0.1 + 0.5 * x + 0.4 * y]);
+        assert!(energy(1.0, linear).abs() < 1e-14);
+        let kink = NODES.map(|[x, _]| [(x - 1.0).max(0.0), 0.0]);
+        // 1/2 gamma M h int_0^1 1^2 ds with h = 1, gamma M = 3 weight.
+        assert!((energy(1.0 / 3.0, kink) - 0.5).abs() < 1e-14);
+    }
+}
