@@ -8,7 +8,7 @@ use std::time::Instant;
 use nalgebra::Matrix2;
 use rayon::prelude::*;
 
-use crate::assembly::{self, GhostFaces, Pattern, SoftCells};
+use crate::assembly::{self, FbarCells, FbarTrial, GhostFaces, Pattern, SoftCells};
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
 use crate::configuration::Configuration;
@@ -31,6 +31,8 @@ pub struct StepTerms<'a> {
     pub band: BandTerms,
     pub soft: Option<SoftCells>,
     pub ghost: Option<GhostFaces>,
+    /// F-bar's averaging cells, when the case asks for it.
+    pub fbar: Option<FbarCells>,
 }
 
 impl StepTerms<'_> {
@@ -41,6 +43,9 @@ impl StepTerms<'_> {
         groups.extend(self.band.coupling_groups());
         if let Some(ghost) = &self.ghost {
             groups.extend(ghost.coupling_groups());
+        }
+        if let Some(fbar) = &self.fbar {
+            groups.extend(fbar.coupling_groups());
         }
         Pattern::build(conn, &groups)
     }
@@ -55,6 +60,9 @@ pub struct StepEquilibrium<'a> {
     held: HeldDofs,
     soft: Option<SoftCells>,
     ghost: Option<GhostFaces>,
+    fbar: Option<FbarCells>,
+    /// F-bar's coupling terms at the last trial state.
+    fbar_trial: Option<FbarTrial>,
     /// Boundary loads, evaluated on the trial boundary.
     loading: BoundaryLoading<'a>,
     /// Implicit-boundary supports.
@@ -88,6 +96,7 @@ impl<'a> StepEquilibrium<'a> {
             band,
             soft,
             ghost,
+            fbar,
         } = terms;
         Self {
             conn,
@@ -96,6 +105,8 @@ impl<'a> StepEquilibrium<'a> {
             held,
             soft,
             ghost,
+            fbar,
+            fbar_trial: None,
             loading,
             band_load: band.load_norm(conn.n_dofs()),
             f_band: vec![0.0; conn.n_dofs()],
@@ -159,19 +170,25 @@ impl Equilibrium for StepEquilibrium<'_> {
         self.u.clear();
         self.u.extend_from_slice(u);
         let (conn, mp) = (self.conn, self.points);
-        self.responses = (0..mp.len())
-            .into_par_iter()
-            .map(|p| {
-                let (_, grad_u) = increment(conn.point_links(p), u);
-                let j_start = mp.deformation[p].determinant();
-                let jacobian = j_start * (Matrix2::identity() + grad_u).determinant();
-                if jacobian.is_nan() || jacobian <= 0.0 {
-                    return Err(InvertedPoint { point: p, jacobian });
-                }
-                let material = &mp.materials[mp.material[p] as usize];
-                Ok(material.respond(&mp.history[p], &grad_u, j_start))
-            })
-            .collect::<Result<_, _>>()?;
+        if let Some(fbar) = &self.fbar {
+            let (responses, trial) = fbar_responses(fbar, conn, mp, u)?;
+            self.responses = responses;
+            self.fbar_trial = Some(trial);
+        } else {
+            self.responses = (0..mp.len())
+                .into_par_iter()
+                .map(|p| {
+                    let (_, grad_u) = increment(conn.point_links(p), u);
+                    let j_start = mp.deformation[p].determinant();
+                    let jacobian = j_start * (Matrix2::identity() + grad_u).determinant();
+                    if jacobian.is_nan() || jacobian <= 0.0 {
+                        return Err(InvertedPoint { point: p, jacobian });
+                    }
+                    let material = &mp.materials[mp.material[p] as usize];
+                    Ok(material.respond(&mp.history[p], &grad_u, j_start))
+                })
+                .collect::<Result<_, _>>()?;
+        }
         self.f_int = assembly::internal_force(conn, mp, &self.responses);
         // Forces are measured against the material's own internal force
         // (which includes the reactions), the loads, and what prescribed
@@ -218,11 +235,14 @@ impl Equilibrium for StepEquilibrium<'_> {
         if let Some(ghost) = &self.ghost {
             ghost.add_to(&self.pattern, &mut k);
         }
+        if let (Some(fbar), Some(trial)) = (&self.fbar, &self.fbar_trial) {
+            fbar.add_to(self.conn, self.points, trial, &self.pattern, &mut k);
+        }
         self.band.add_stiffness(&self.pattern, &mut k);
         // Boundary loads move with the boundary: their load stiffness makes
-        // the tangent non-symmetric. Hyperelastic materials under loads that
-        // do not move have a symmetric tangent.
-        let symmetric = self.loading.is_empty();
+        // the tangent non-symmetric, and so does F-bar's. Hyperelastic
+        // materials under loads that do not move have a symmetric tangent.
+        let symmetric = self.loading.is_empty() && self.fbar.is_none();
         for (row, col, value) in self.loading.stiffness(&self.u) {
             self.pattern.add(&mut k, row, col, value);
         }
@@ -236,6 +256,48 @@ impl Equilibrium for StepEquilibrium<'_> {
         }
         Ok((du, kind))
     }
+}
+
+/// The point loop with F-bar: every point's `dJ`, its cell's average, then
+/// each point's response to its `dF_bar` (see [`crate::assembly::fbar`]).
+fn fbar_responses(
+    fbar: &FbarCells,
+    conn: &Connectivity,
+    mp: &MaterialPoints,
+    u: &[f64],
+) -> Result<(Vec<Response>, FbarTrial), InvertedPoint> {
+    let grads: Vec<Matrix2<f64>> = (0..mp.len())
+        .into_par_iter()
+        .map(|p| increment(conn.point_links(p), u).1)
+        .collect();
+    let dj: Vec<f64> = grads
+        .iter()
+        .map(|g| (Matrix2::identity() + g).determinant())
+        .collect();
+    let averages = fbar.averages(&dj);
+    let (responses, shares): (Vec<Response>, Vec<_>) = (0..mp.len())
+        .into_par_iter()
+        .map(|p| {
+            let j_start = mp.deformation[p].determinant();
+            let dj_bar = fbar.of(&averages, p);
+            for jacobian in [j_start * dj[p], j_start * dj_bar] {
+                if jacobian.is_nan() || jacobian <= 0.0 {
+                    return Err(InvertedPoint { point: p, jacobian });
+                }
+            }
+            let df = Matrix2::identity() + grads[p];
+            let alpha = (dj_bar / dj[p]).sqrt();
+            // alpha dF - I, without losing small strains to round-off.
+            let grad_bar = Matrix2::identity() * (alpha - 1.0) + grads[p] * alpha;
+            let material = &mp.materials[mp.material[p] as usize];
+            let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
+            let share = fbar.adjust(p, &mut response, &df, dj[p], dj_bar);
+            Ok((response, share))
+        })
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .unzip();
+    Ok((responses, FbarTrial::new(shares)))
 }
 
 /// Displacement `sum_a N_a u_a` and displacement gradient

@@ -150,6 +150,7 @@ impl Simulation {
                 ghost_penalty: newton.ghost_penalty,
                 ..Default::default()
             },
+            fbar: case.analysis.volumetric == crate::case::Volumetric::Fbar,
             substepping: Substepping {
                 min_fraction: case.analysis.substepping.min_fraction,
                 max_cutbacks: case.analysis.substepping.max_cutbacks as usize,

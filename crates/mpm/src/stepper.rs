@@ -16,7 +16,7 @@ use nalgebra::Matrix2;
 use rayon::prelude::*;
 
 use crate::assembly;
-use crate::assembly::{GhostFaces, SoftCells};
+use crate::assembly::{FbarCells, GhostFaces, SoftCells};
 use crate::boundary::BoundaryLoop;
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::{BoundaryLoading, LoadedStretch};
@@ -81,6 +81,8 @@ pub struct Simulation {
     pub(crate) n_supports: usize,
     pub settings: NewtonSettings,
     pub substepping: Substepping,
+    /// F-bar against volumetric locking ([`crate::assembly::fbar`]).
+    pub fbar: bool,
     pub load_steps: usize,
 }
 
@@ -246,6 +248,7 @@ impl Simulation {
             band: BandTerms::new(&start, loops, &self.anchors, self.band_width, load_factor),
             soft: self.soft_cells(&start),
             ghost: self.ghost_faces(&start),
+            fbar: self.fbar.then(|| FbarCells::new(&start)),
         };
         let pattern = terms.pattern(conn);
         StepEquilibrium::new(&start, terms, pattern)
@@ -301,7 +304,12 @@ impl Simulation {
             return None;
         }
         let e = self.stiffest()?;
-        Some(GhostFaces::new(start, self.basis, e.lambda + 2.0 * e.mu, gamma))
+        Some(GhostFaces::new(
+            start,
+            self.basis,
+            e.lambda + 2.0 * e.mu,
+            gamma,
+        ))
     }
 
     /// The elastic constants of the material with the largest P-wave

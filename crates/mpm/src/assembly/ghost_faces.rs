@@ -119,7 +119,6 @@ impl GhostFaces {
             }
         }
     }
-
 }
 
 /// Six nodes, if all are active.

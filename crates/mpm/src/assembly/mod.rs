@@ -9,12 +9,14 @@
 //! entry `(2a + r, 2b + c)` sits at `col_ptr[2b + c] + 2k + r` where `k` is
 //! the position of `a` in `b`'s neighbour list.
 
+pub mod fbar;
 pub mod forces;
 pub mod ghost_faces;
 pub mod pattern;
 pub mod soft_cells;
 pub mod stiffness;
 
+pub use fbar::{FbarCells, FbarTrial};
 pub use forces::{body_force, internal_force};
 pub use ghost_faces::GhostFaces;
 pub use pattern::{Pattern, constrain};

@@ -84,6 +84,18 @@ pub struct Analysis {
     pub newton: NewtonSpec,
     #[serde(default)]
     pub substepping: SubsteppingSpec,
+    /// How a point's volume change enters its stress: its own (`standard`)
+    /// or its cell's average (`fbar`, against volumetric locking).
+    #[serde(default)]
+    pub volumetric: Volumetric,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Volumetric {
+    #[default]
+    Standard,
+    Fbar,
 }
 
 /// Cutting a load step's increment when Newton fails on it: the failed

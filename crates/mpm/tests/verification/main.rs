@@ -10,5 +10,6 @@ mod ghost;
 mod hard_cases;
 mod ibm;
 mod lame;
+mod locking;
 mod newton_convergence;
 mod pressure;

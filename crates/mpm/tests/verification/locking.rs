@@ -1,0 +1,101 @@
+//! Volumetric locking and F-bar (`analysis.volumetric: "fbar"`).
+//!
+//! A slender plane-strain cantilever (10 m x 0.5 m, clamped on the grid
+//! nodes at x = 0, self-weight, small strain, one step) against beam
+//! theory with the plane-strain modulus E' = E / (1 - nu^2) and
+//! Timoshenko's shear term (shear coefficient 5/6):
+//! `v = q L^4 / (8 E' I) + q L^2 / (2 k G A)`. The 2D continuum differs from
+//! that by terms of order (d / L)^2 = 0.25%.
+//!
+//! Measured tip deflection errors (GIMP, 2x2 points per cell; h = 0.25,
+//! 0.125, 0.0625 m; tolerance 1e-8):
+//!
+//! | nu | standard | F-bar |
+//! |---|---|---|
+//! | 0.25 | -3.3%, -1.0%, -0.36% | +12%, +2.6%, +0.53% |
+//! | 0.49 | -70%, -38%, -14% | +16%, +2.6%, -0.14% |
+//! | 0.4999 | -99.3%, -98.1%, -93.6% | -17%, -2.9%, -1.7% |
+//!
+//! At nu = 0.4999 (bulk modulus 5000 times the shear modulus) the relative
+//! residual cannot fall much below 1e-9: Newton stalls at 1.2e-9 after
+//! converging quadratically to it, so these runs ask for 1e-8.
+
+use crate::common::run;
+use mpm::newton::observed_order;
+
+const L: f64 = 10.0;
+const D: f64 = 0.5;
+const E: f64 = 1.0e6;
+const RHO_G: f64 = 10.0;
+
+fn beam(nu: f64) -> f64 {
+    let e_plane = E / (1.0 - nu * nu);
+    let g = E / (2.0 * (1.0 + nu));
+    let q = RHO_G * D;
+    -(q * L.powi(4) / (8.0 * e_plane * D.powi(3) / 12.0) + q * L * L / (2.0 * 5.0 / 6.0 * g * D))
+}
+
+fn tip(nu: f64, volumetric: &str, h: f64) -> f64 {
+    let case = serde_json::json!({
+        "version": 1,
+        "analysis": { "load_steps": 1, "volumetric": volumetric, "newton": { "tolerance": 1e-8 } },
+        "grid": { "cell_size": h },
+        "basis": "gimp",
+        "bodies": [{
+            "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [L, D] } },
+            "points": { "per_cell": 2 },
+            "material": { "model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": nu, "density": 1.0 }
+        }],
+        "loads": { "gravity": [0.0, -RHO_G] },
+        "supports": [ { "on": { "x": 0.0 }, "fix": "xy" } ],
+        "probes": [ { "name": "tip", "at": [L, D / 2.0] } ]
+    });
+    let (_, report) = run(&case);
+    report.steps[0].probes[0].displacement[1]
+}
+
+#[test]
+fn fbar_unlocks_a_nearly_incompressible_cantilever() {
+    let nu = 0.4999;
+    let exact = beam(nu);
+    let error = |volumetric, h| ((tip(nu, volumetric, h) - exact) / exact).abs();
+    // Locked: the standard formulation stays more than 90% too stiff.
+    assert!(error("standard", 0.0625) > 0.9);
+    let (coarse, fine) = (error("fbar", 0.125), error("fbar", 0.0625));
+    assert!(fine < coarse && fine < 0.03, "{coarse} {fine}");
+}
+
+/// F-bar's tangent is the consistent one: Newton stays quadratic on the
+/// large-deformation cantilever (Hencky, GIMP, 5 steps). Observed orders
+/// where the residuals are in the asymptotic range (below 5e-2, falling,
+/// above the round-off floor of 1e-11), measured at nu = 0.25: 1.70, 2.11,
+/// 2.46, 2.78 (the standard formulation: 2.08, 2.41, 2.64); asserted: their
+/// median is above 1.8. (Solved as if symmetric, the tangent converged
+/// linearly, r = 3.8e-3, 7.5e-6, 1.8e-6, 4.7e-7, ...; without its coupling
+/// term, the test fails.) Nearer incompressibility the
+/// round-off floor rises (about 1e-10 at nu = 0.49, for either
+/// formulation) and hides the rate.
+#[test]
+fn fbar_keeps_newton_quadratic() {
+    let mut case = crate::common::example("cantilever-grid");
+    case["basis"] = "gimp".into();
+    case["analysis"]["volumetric"] = "fbar".into();
+    case["analysis"]["newton"] = serde_json::json!({"line_search": false});
+    let (_, report) = run(&case);
+    let mut orders: Vec<f64> = report
+        .steps
+        .iter()
+        .flat_map(|step| {
+            let r = step.newton.residuals.clone();
+            (0..r.len().saturating_sub(2))
+                .map(move |k| [r[k], r[k + 1], r[k + 2]])
+                .filter(|w| w[0] < 5e-2 && w[1] < w[0] && w[2] > 1e-11)
+                .map(observed_order)
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    assert!(orders.len() >= 3, "{orders:?}");
+    orders.sort_by(f64::total_cmp);
+    let median = orders[orders.len() / 2];
+    assert!(median > 1.8, "{orders:?}");
+}
