@@ -270,28 +270,30 @@ fn fbar_responses(
         .into_par_iter()
         .map(|p| increment(conn.point_links(p), u).1)
         .collect();
-    let dj: Vec<f64> = grads
-        .iter()
-        .map(|g| (Matrix2::identity() + g).determinant())
-        .collect();
-    let averages = fbar.averages(&dj);
+    // Volume changes as dJ - 1 = tr g + det g: the volumetric strains of
+    // small increments stay exact to round-off, which matters where the
+    // bulk modulus is thousands of times the shear modulus.
+    let growth: Vec<f64> = grads.iter().map(|g| g.trace() + g.determinant()).collect();
+    let averages = fbar.averages(&growth);
     let (responses, shares): (Vec<Response>, Vec<_>) = (0..mp.len())
         .into_par_iter()
         .map(|p| {
             let j_start = mp.deformation[p].determinant();
-            let dj_bar = fbar.of(&averages, p);
-            for jacobian in [j_start * dj[p], j_start * dj_bar] {
+            let (a, b) = (growth[p], fbar.of(&averages, p));
+            let (dj, dj_bar) = (1.0 + a, 1.0 + b);
+            for jacobian in [j_start * dj, j_start * dj_bar] {
                 if jacobian.is_nan() || jacobian <= 0.0 {
                     return Err(InvertedPoint { point: p, jacobian });
                 }
             }
             let df = Matrix2::identity() + grads[p];
-            let alpha = (dj_bar / dj[p]).sqrt();
-            // alpha dF - I, without losing small strains to round-off.
-            let grad_bar = Matrix2::identity() * (alpha - 1.0) + grads[p] * alpha;
+            let alpha = (dj_bar / dj).sqrt();
+            // alpha dF - I, with alpha - 1 = (b - a) / (dJ (alpha + 1)).
+            let grad_bar =
+                Matrix2::identity() * ((b - a) / (dj * (alpha + 1.0))) + grads[p] * alpha;
             let material = &mp.materials[mp.material[p] as usize];
             let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
-            let share = fbar.adjust(p, &mut response, &df, dj[p], dj_bar);
+            let share = fbar.adjust(p, &mut response, &df, dj, dj_bar);
             Ok((response, share))
         })
         .collect::<Result<Vec<_>, _>>()?

@@ -118,7 +118,8 @@ impl FbarCells {
         &self.points[self.start[c]..self.start[c + 1]]
     }
 
-    /// Each cell's `dJ_bar` from the points' `dJ`.
+    /// Each cell's volume-weighted mean of a per-point value (of `dJ - 1`,
+    /// for `dJ_bar - 1`: the weights add up to one).
     pub fn averages(&self, dj: &[f64]) -> Vec<f64> {
         (0..self.cells())
             .map(|c| {
@@ -130,7 +131,7 @@ impl FbarCells {
             .collect()
     }
 
-    /// The `dJ_bar` of point `p`'s cell.
+    /// The average of point `p`'s cell.
     pub fn of(&self, averages: &[f64], p: usize) -> f64 {
         averages[self.cell_of[p] as usize]
     }
