@@ -25,7 +25,7 @@ pub struct NewtonSettings {
     /// Search along each Newton direction (true); see [`solve`].
     pub line_search: bool,
     /// Ghost penalty on the faces of the cells at the material's edge,
-    /// relative to the stiffest material's P-wave modulus (0: none); see
+    /// relative to twice the largest shear modulus (0: none); see
     /// [`crate::assembly::GhostFaces`].
     pub ghost_penalty: f64,
 }
@@ -101,17 +101,18 @@ pub enum SolveError {
         y: f64,
     },
     /// A load step's increment failed however far it was cut: `cause` is
-    /// how its smallest sub-increment failed.
+    /// how its last try failed.
     #[error(
-        "load step {step} failed at load factor {load_factor:.6} in sub-increments of {fraction:.3e} of the step (the smallest allowed): {cause}"
+        "load step {step} failed at load factor {load_factor:.6} after {tries} failed tries, the last of {fraction:.3e} of the step's increment: {cause}"
     )]
     SubstepsExhausted {
         step: usize,
         /// The load factor of the last converged sub-increment.
         load_factor: f64,
-        /// The size of the sub-increment that failed, as a fraction of the
-        /// step's increment.
+        /// The size of the last try, as a fraction of the step's increment.
         fraction: f64,
+        /// Failed tries in the step.
+        tries: usize,
         cause: Box<SolveError>,
     },
     #[error("cancelled in load step {step} at iteration {iteration}")]
@@ -205,7 +206,9 @@ pub trait Equilibrium {
 ///   [`SLACK`] of `s(0)` in magnitude (Crisfield's criterion, "Non-linear
 ///   Finite Element Analysis of Solids and Structures" vol. 1, sec. 9.3.2:
 ///   the step is near the minimum of the potential along `du`; it needs
-///   `s(0) > 0`, a tangent positive along `du`), or
+///   `s(0) > 0`, a tangent positive along `du`) and the trial is not one
+///   Newton would call diverged (where there is no potential, as with
+///   follower loads or F-bar, the slack alone proves less), or
 /// - the residual norm has fallen by Armijo's margin: along a Newton
 ///   direction `|r|` has the slope `-|r|` whatever the tangent's symmetry,
 ///   so this holds for follower loads too.
@@ -217,6 +220,8 @@ struct Search<'a> {
     du: &'a [f64],
     s0: f64,
     norm0: f64,
+    /// [`NewtonSettings::divergence_limit`].
+    divergence_limit: f64,
 }
 
 const SLACK: f64 = 0.8;
@@ -226,19 +231,21 @@ const CUT_BOUNDS: (f64, f64) = (0.1, 0.5);
 const SHORTEST_STEP: f64 = 1.0 / 1024.0;
 
 impl<'a> Search<'a> {
-    fn new(r: &[f64], du: &'a [f64], norm0: f64) -> Self {
+    fn new(r: &[f64], du: &'a [f64], norm0: f64, divergence_limit: f64) -> Self {
         Self {
             du,
             s0: dot(du, r),
             norm0,
+            divergence_limit,
         }
     }
 
-    /// `None` to keep the step `alpha` with residual `r` (norm `n`), or the
-    /// shorter step to try instead.
-    fn cut(&self, alpha: f64, r: &[f64], n: f64) -> Option<f64> {
+    /// `None` to keep the step `alpha` with residual `r` (norm `n`, relative
+    /// residual `relative`), or the shorter step to try instead.
+    fn cut(&self, alpha: f64, r: &[f64], n: f64, relative: f64) -> Option<f64> {
         let s = dot(self.du, r);
-        let energy = self.s0 > 0.0 && s.abs() <= SLACK * self.s0;
+        let energy =
+            self.s0 > 0.0 && s.abs() <= SLACK * self.s0 && relative <= self.divergence_limit;
         let armijo = n <= (1.0 - ARMIJO * alpha) * self.norm0;
         if energy || armijo {
             return None;
@@ -266,12 +273,11 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 /// Solves one load step from `u = 0`; returns the converged increment.
 ///
-/// Each Newton direction is searched along: the full step is taken when it
-/// reduces the residual norm by Armijo's margin (or converges), and
-/// otherwise the step is cut, to the minimum of a quadratic fit of
-/// `|r(alpha)|^2` within [`CUT_BOUNDS`]. A trial state with an inverted
-/// point is cut by half. Near the solution the full step always passes,
-/// so convergence stays quadratic.
+/// Each Newton direction is searched along (see [`Search`]): the full step
+/// is taken when it passes the energy slack or Armijo's decrease of the
+/// residual norm (or converges), and is cut otherwise. A trial state with
+/// an inverted point is halved. Near the solution the full step always
+/// passes Armijo's test, so convergence stays quadratic.
 pub fn solve(
     eq: &mut impl Equilibrium,
     settings: &NewtonSettings,
@@ -329,7 +335,7 @@ pub fn solve(
                 residual,
             })?;
         info.factorisation = Some(kind);
-        let search = Search::new(&r, &du, norm);
+        let search = Search::new(&r, &du, norm, settings.divergence_limit);
         let mut alpha = 1.0;
         let mut trial = u.clone();
         loop {
@@ -343,7 +349,7 @@ pub fn solve(
                     let cut = if !settings.line_search || converged || alpha <= SHORTEST_STEP {
                         None
                     } else {
-                        search.cut(alpha, &r_trial, n)
+                        search.cut(alpha, &r_trial, n, n / scale_trial)
                     };
                     match cut {
                         None => {

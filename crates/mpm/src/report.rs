@@ -59,6 +59,10 @@ pub struct StepReport {
     /// Sub-increments that failed and were retried at half the size.
     #[serde(default)]
     pub cutbacks: usize,
+    /// Linear solves spent on the failed tries (not in `newton`, which
+    /// holds the converged sub-increments').
+    #[serde(default)]
+    pub failed_iterations: usize,
     pub timings: StepTimings,
     pub active_nodes: usize,
     /// Unconstrained degrees of freedom in the system.
@@ -90,6 +94,8 @@ impl StepReport {
             newton,
             timings,
             substeps,
+            cutbacks: self.cutbacks,
+            failed_iterations: self.failed_iterations,
             ..next
         };
     }

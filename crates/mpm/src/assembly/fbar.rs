@@ -8,6 +8,12 @@
 //! step. The material sees `dF_bar`; the point's own volume still changes
 //! by `dJ`.
 //!
+//! For Hencky, the history a point keeps (its elastic `b`) is the model's
+//! at `dF_bar`, so its volume is the product of the cell averages of the
+//! steps, while the point's own `J` (which sets its Cauchy stress and its
+//! volume) is the product of its own `dJ`: the two part over many steps,
+//! by as much as the points of a cell deform unlike each other.
+//!
 //! The averaging domain is the grid cell holding the point at the start of
 //! the step, for either basis: with GIMP a point's domain may reach into
 //! neighbouring cells, but its volume is counted once, where its centre is.
@@ -161,7 +167,8 @@ impl FbarCells {
                 .sum()
         });
         let b = (a_df - p_point) * 0.5;
-        let df_inv_t = df.try_inverse().expect("dJ > 0 was checked").transpose();
+        // dF^-T = cof(dF) / dJ, with the dJ > 0 the caller checked.
+        let df_inv_t = Matrix2::new(df[(1, 1)], -df[(1, 0)], -df[(0, 1)], df[(0, 0)]) / dj;
         let local =
             Matrix4::from_fn(|r, c| a[(r, c)] - b[(r / 2, r % 2)] * df_inv_t[(c / 2, c % 2)]);
         response.p = p_point;

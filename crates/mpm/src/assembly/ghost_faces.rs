@@ -18,8 +18,10 @@
 //! the face (bottom and top for a vertical face), the bilinear field's
 //! jump of normal derivative is `(a (1 - eta) + b eta) / h` along it, and
 //! the penalty `1/2 gamma M h int [[du/dn]]^2 ds` is
-//! `gamma M / 6 (a^2 + a b + b^2)` per component, whatever `h` (2D).
-//! `M = lambda + 2 mu` of the stiffest material.
+//! `gamma M / 6 (a^2 + a b + b^2)` per component, whatever `h` (2D), with
+//! `M = 2 mu` of the stiffest material (twice its shear modulus, `E` at
+//! `nu = 0`): the jumps are shear-like, and a bulk modulus near
+//! incompressibility would lock the edges again.
 
 use super::Pattern;
 use crate::configuration::Configuration;
@@ -41,20 +43,27 @@ const D: [f64; 3] = [1.0, -2.0, 1.0];
 impl GhostFaces {
     /// The faces between two cells the material overlaps of which at least
     /// one is at the material's edge (a cell with a neighbour, sides or
-    /// corners, that no point reaches), weighted by `gamma` times the
-    /// stiffest material's P-wave modulus `m`.
+    /// corners, that no point reaches), weighted by `gamma m`. A cell
+    /// counts as reached when a point's domain overlaps it and its four
+    /// corners are active nodes (a domain that ends on a grid line does
+    /// not reach the cell beyond).
     pub fn new(start: &Configuration, basis: Basis, m: f64, gamma: f64) -> Self {
         let Configuration { grid: _, conn, .. } = *start;
-        let cells = super::soft_cells::overlapped_cells(start, basis);
-        let active = |c: (i64, i64)| cells.binary_search(&c).is_ok();
-        let at_edge =
-            |(i, j): (i64, i64)| (-1..=1).any(|di| (-1..=1).any(|dj| !active((i + di, j + dj))));
         let node = |i: i64, j: i64| {
             conn.nodes
                 .binary_search(&node_key(i, j))
                 .ok()
                 .map(|a| a as u32)
         };
+        let mut cells = super::soft_cells::overlapped_cells(start, basis);
+        cells.retain(|&(i, j)| {
+            [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
+                .iter()
+                .all(|&(a, b)| node(a, b).is_some())
+        });
+        let active = |c: (i64, i64)| cells.binary_search(&c).is_ok();
+        let at_edge =
+            |(i, j): (i64, i64)| (-1..=1).any(|di| (-1..=1).any(|dj| !active((i + di, j + dj))));
         let mut faces = Vec::new();
         for &(i, j) in &cells {
             let edge = at_edge((i, j));

@@ -108,7 +108,7 @@ pub struct SubsteppingSpec {
     /// (default 1/1024); 1 turns cutting off.
     #[serde(default = "default_min_fraction")]
     pub min_fraction: f64,
-    /// Failed sub-increments allowed in one load step (default 40).
+    /// Failed tries allowed in one load step (default 40).
     #[serde(default = "default_max_cutbacks")]
     pub max_cutbacks: u32,
 }
@@ -154,7 +154,7 @@ pub struct NewtonSpec {
     #[serde(default = "default_line_search")]
     pub line_search: bool,
     /// Ghost penalty on the faces of the cells at the material's edge,
-    /// relative to the stiffest material's P-wave modulus (default 0: off).
+    /// relative to twice the largest shear modulus (default 0: off).
     #[serde(default = "default_ghost_penalty")]
     pub ghost_penalty: f64,
 }
