@@ -4,11 +4,16 @@
 //!    the step's active nodes ([`Connectivity`]);
 //! 2. assemble the step's system on that configuration: supports, loads,
 //!    boundary loads and IBM band terms on the B-spline, the soft background
-//!    and the stiffness pattern ([`StepEquilibrium`]);
-//! 3. Newton-Raphson for the incremental nodal displacements ([`newton`]);
+//!    or the ghost penalty, F-bar's averaging cells, and the stiffness
+//!    pattern ([`StepEquilibrium`]);
+//! 3. Newton-Raphson with a line search for the incremental nodal
+//!    displacements ([`newton`]);
 //! 4. reactions, then move the points, probes and IBM anchors with the
 //!    converged grid displacement and commit the points' deformation,
 //!    history and stress.
+//!
+//! An increment that fails in 3 commits nothing and is tried again in
+//! halves from the same state ([`Simulation::load_step`], [`Substepping`]).
 
 use std::time::Instant;
 
