@@ -60,6 +60,9 @@ pub enum SolveError {
         step: usize,
         iteration: usize,
         residual: f64,
+        /// The residual fell by less than tenfold over the last two
+        /// iterations: Newton had stopped making progress.
+        stalled: bool,
     },
     #[error(
         "Newton diverged in load step {step} at iteration {iteration}: relative residual {residual:.3e}"
@@ -154,6 +157,7 @@ impl SolveError {
                 step,
                 iteration,
                 residual,
+                ..
             }
             | SolveError::LinearSolve {
                 step,
@@ -313,10 +317,16 @@ pub fn solve(
             return Ok((u, info));
         }
         if iteration >= settings.max_iterations {
+            let earlier = info
+                .residuals
+                .len()
+                .checked_sub(3)
+                .map(|k| info.residuals[k]);
             return Err(SolveError::NotConverged {
                 step,
                 iteration,
                 residual,
+                stalled: earlier.is_some_and(|r| residual > 0.1 * r),
             });
         }
         if observer.should_cancel() {
@@ -500,6 +510,7 @@ mod tests {
                 step: 7,
                 iteration: 2,
                 residual,
+                ..
             }) => assert!(residual > 1e-9),
             other => panic!("{other:?}"),
         }

@@ -40,6 +40,10 @@ use crate::supports::{GridSupport, HeldDofs};
 /// two easy ones in a row and the next is twice as long.
 const EASY_ITERATIONS: usize = 6;
 
+/// How close to its tolerance a Newton solve that stalled counts as at
+/// the round-off floor rather than failing for the increment's size.
+const ROUND_OFF_MARGIN: f64 = 100.0;
+
 /// Cutting a load step's increment when it fails.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Substepping {
@@ -164,7 +168,7 @@ impl Simulation {
                         easy_in_a_row = 0;
                     }
                 }
-                Err(e) if e.may_pass_when_cut() && self.substepping.min_fraction < 1.0 => {
+                Err(e) if self.worth_cutting(&e) => {
                     cutbacks += 1;
                     failed_iterations += e.location().1.unwrap_or(0);
                     easy_in_a_row = 0;
@@ -188,6 +192,18 @@ impl Simulation {
         report.cutbacks = cutbacks;
         report.failed_iterations = failed_iterations;
         Ok(report)
+    }
+
+    /// Whether a smaller increment may succeed where this try failed: not
+    /// when cutting is off, and not when Newton stalled (no tenfold fall
+    /// over its last two iterations) within [`ROUND_OFF_MARGIN`] of its
+    /// tolerance. There it has reached the residual's round-off floor (as at nu = 0.4999, where it stalls
+    /// at 1.2e-9 against the default 1e-9), which no load increment lowers:
+    /// cutting would only repeat the stall some 40 times.
+    fn worth_cutting(&self, e: &SolveError) -> bool {
+        let stalled = matches!(e, SolveError::NotConverged { residual, stalled: true, .. }
+            if *residual < ROUND_OFF_MARGIN * self.settings.tolerance);
+        e.may_pass_when_cut() && self.substepping.min_fraction < 1.0 && !stalled
     }
 
     /// Solves for equilibrium at `load_factor` from the last converged state

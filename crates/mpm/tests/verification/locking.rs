@@ -99,3 +99,32 @@ fn fbar_keeps_newton_quadratic() {
     let median = orders[orders.len() / 2];
     assert!(median > 1.8, "{orders:?}");
 }
+
+/// With the default tolerance (1e-9) the nu = 0.4999 cantilever at 0.0625
+/// m cells cannot converge: Newton reaches its round-off floor, 1.2e-9.
+/// That is reported at once as a failure near the tolerance, not cut 40
+/// times over (each cut meets the same floor).
+#[test]
+fn a_stall_at_round_off_is_not_cut() {
+    let case = serde_json::json!({
+        "version": 1,
+        "analysis": { "load_steps": 1, "volumetric": "fbar" },
+        "grid": { "cell_size": 0.0625 },
+        "basis": "gimp",
+        "bodies": [{
+            "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [L, D] } },
+            "points": { "per_cell": 2 },
+            "material": { "model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": 0.4999, "density": 1.0 }
+        }],
+        "loads": { "gravity": [0.0, -RHO_G] },
+        "supports": [ { "on": { "x": 0.0 }, "fix": "xy" } ]
+    });
+    let case = mpm::Case::from_json(&case.to_string()).unwrap();
+    let mut sim = mpm::Simulation::new(&case).unwrap();
+    match sim.run(&mut mpm::NoObserver) {
+        Err(mpm::SolveError::NotConverged { residual, .. }) => {
+            assert!(residual < 1e-7, "{residual}")
+        }
+        other => panic!("expected a stall near the tolerance, got {other:?}"),
+    }
+}
