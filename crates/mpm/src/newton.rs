@@ -19,13 +19,14 @@ pub struct NewtonSettings {
     pub max_iterations: usize,
     /// A relative residual above this (or not finite) is divergence (1e8).
     pub divergence_limit: f64,
-    /// Soft-background stiffness in the tangent, relative to the stiffest
-    /// material (1e-6); see [`crate::assembly::SoftCells`].
+    /// Soft-background stiffness, relative to the stiffest material: the
+    /// fallback stabilisation, off by default (0); see
+    /// [`crate::assembly::SoftCells`].
     pub tangent_regularisation: f64,
     /// Search along each Newton direction (true); see [`solve`].
     pub line_search: bool,
     /// Ghost penalty on the faces of the cells at the material's edge,
-    /// relative to twice the largest shear modulus (0: none); see
+    /// relative to twice the largest shear modulus (1e-3; 0: none); see
     /// [`crate::assembly::GhostFaces`].
     pub ghost_penalty: f64,
 }
@@ -36,9 +37,9 @@ impl Default for NewtonSettings {
             tolerance: 1e-9,
             max_iterations: 30,
             divergence_limit: 1e8,
-            tangent_regularisation: 1e-6,
+            tangent_regularisation: 0.0,
             line_search: true,
-            ghost_penalty: 0.0,
+            ghost_penalty: 1e-3,
         }
     }
 }

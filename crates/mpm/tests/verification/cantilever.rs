@@ -81,10 +81,10 @@ fn small_load_cantilever_converges_to_the_finite_element_reference() {
         }
     }
     // Measured (edge, h = 1, 0.5, 0.25, 0.125): relative deflection errors
-    // 3.3e-2, 8.8e-3, 2.2e-3, 3.7e-4 (second order: the bilinear cells'
-    // bending error); u_x within 6e-6 of the exact value at every h (the
+    // 3.5e-2, 9.1e-3, 2.3e-3, 3.8e-4 (second order: the bilinear cells'
+    // bending error); u_x within 5e-6 of the exact value at every h (the
     // follower pressure's push along the beam, module docs). Through the
-    // points: 9.7e-2 .. 9.0e-3 and u_x 25% .. 2.8% low (first order: the
+    // points: 9.9e-2 .. 9.0e-3 and u_x 25% .. 2.8% low (first order: the
     // loaded curve is half a spacing short of the edge at each end and half
     // a spacing low).
     let of = |r: &str| {
@@ -124,7 +124,7 @@ fn clamped_cantilever_converges_to_the_finite_element_reference() {
         eprintln!("clamped h {h:<6} tip deflection {tip:.5} ({e:+.2e})");
         errors.push(e.abs());
     }
-    // Measured: 4.05e-2, 1.25e-2, 3.84e-3, 1.22e-3 (order 1.7, a little below
+    // Measured: 4.22e-2, 1.28e-2, 3.89e-3, 1.23e-3 (order 1.7, a little below
     // the pinned case's relative deflection).
     for w in errors.windows(2) {
         assert!(w[1] < w[0], "{errors:?}");
@@ -157,12 +157,12 @@ fn measure_case(mut case: serde_json::Value, h: f64, shift: [f64; 2]) -> (f64, f
 /// same references as above. With the grid's lines where the body's are
 /// not, the IBM is the only way to hold it. Measured (linear basis,
 /// h = 1 .. 0.125, relative errors of the relative deflection | tip u_x):
-/// - aligned grid: 3.4e-2, 8.2e-3, 1.8e-3, 2.0e-4 | 1.6e-2, 4.5e-3, 1.2e-3,
-///   3.0e-4 (grid-node supports: 3.3e-2 .. 3.7e-4 | 6e-6 throughout; the
+/// - aligned grid: 3.6e-2, 8.5e-3, 1.8e-3, 2.0e-4 | 1.6e-2, 4.5e-3, 1.2e-3,
+///   3.0e-4 (grid-node supports: 3.5e-2 .. 3.8e-4 | 5e-6 throughout; the
 ///   IBM fixes a stretch one point spacing long where the reference pins a
 ///   point, and its penalty gives a little: 1e-3 of the relative deflection
 ///   at delta = h/100, see docs/ibm.md);
-/// - grid moved by half a cell both ways: 2.8e-2 .. 3.3e-4 | 1.0e-2 ..
+/// - grid moved by half a cell both ways: 3.0e-2 .. 3.4e-4 | 1.0e-2 ..
 ///   1.8e-4.
 ///
 /// Moved by 0.21 of a cell vertically, the relative deflection converges
@@ -199,9 +199,9 @@ fn ibm_supported_cantilever_converges_to_the_finite_element_reference() {
 
 /// The clamped beam (whole left edge fixed by the IBM) on grids cutting the
 /// left edge inside a cell, GIMP, against the reference above (-2.745340 m).
-/// Measured, h = 0.5 .. 0.0625: moved (0.37, 0.21) cells 1.0e-2, 2.8e-3,
-/// 8.3e-4, 2.9e-4; moved half a cell 1.05e-2, 2.9e-3, 8.2e-4, 2.2e-4
-/// (grid-node clamp on the aligned grid: 1.25e-2, 3.8e-3, 1.2e-3 at 0.5 ..
+/// Measured, h = 0.5 .. 0.0625: moved (0.37, 0.21) cells 9.6e-3, 2.7e-3,
+/// 8.0e-4, 2.8e-4; moved half a cell 1.08e-2, 3.0e-3, 8.3e-4, 2.2e-4
+/// (grid-node clamp on the aligned grid: 1.28e-2, 3.9e-3, 1.2e-3 at 0.5 ..
 /// 0.125).
 #[test]
 fn ibm_clamped_cantilever_on_a_cut_grid_converges() {
