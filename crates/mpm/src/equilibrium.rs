@@ -14,7 +14,7 @@ use crate::boundary::loading::BoundaryLoading;
 use crate::configuration::Configuration;
 use crate::grid::{Connectivity, Link};
 use crate::linsolve::{Factorisation, SparseSolver};
-use crate::material::Response;
+use crate::material::{Material, Response};
 use crate::newton::{Equilibrium, InvertedPoint};
 use crate::particles::MaterialPoints;
 use crate::report::StepTimings;
@@ -270,28 +270,53 @@ fn fbar_responses(
         .into_par_iter()
         .map(|p| increment(conn.point_links(p), u).1)
         .collect();
+    let small_strain = |p: usize| {
+        matches!(
+            mp.materials[mp.material[p] as usize],
+            Material::LinearElastic(_)
+        )
+    };
     // Volume changes as dJ - 1 = tr g + det g: the volumetric strains of
     // small increments stay exact to round-off, which matters where the
-    // bulk modulus is thousands of times the shear modulus.
-    let growth: Vec<f64> = grads.iter().map(|g| g.trace() + g.determinant()).collect();
+    // bulk modulus is thousands of times the shear modulus. The small-strain
+    // model averages its own volumetric strain, tr g.
+    let growth: Vec<f64> = (0..mp.len())
+        .map(|p| {
+            let g = &grads[p];
+            g.trace()
+                + if small_strain(p) {
+                    0.0
+                } else {
+                    g.determinant()
+                }
+        })
+        .collect();
     let averages = fbar.averages(&growth);
     let (responses, shares): (Vec<Response>, Vec<_>) = (0..mp.len())
         .into_par_iter()
         .map(|p| {
             let j_start = mp.deformation[p].determinant();
             let (a, b) = (growth[p], fbar.of(&averages, p));
-            let (dj, dj_bar) = (1.0 + a, 1.0 + b);
+            let g = &grads[p];
+            let (dj, dj_bar) = (1.0 + g.trace() + g.determinant(), 1.0 + b);
             for jacobian in [j_start * dj, j_start * dj_bar] {
                 if jacobian.is_nan() || jacobian <= 0.0 {
                     return Err(InvertedPoint { point: p, jacobian });
                 }
             }
-            let df = Matrix2::identity() + grads[p];
+            let material = &mp.materials[mp.material[p] as usize];
+            if small_strain(p) {
+                // B-bar, F-bar's linearisation: the volumetric strain
+                // replaced by the cell's, g_bar = g + (b - a) / 2 I.
+                let grad_bar = g + Matrix2::identity() * ((b - a) / 2.0);
+                let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
+                let share = fbar.adjust_small_strain(p, &mut response);
+                return Ok((response, share));
+            }
+            let df = Matrix2::identity() + g;
             let alpha = (dj_bar / dj).sqrt();
             // alpha dF - I, with alpha - 1 = (b - a) / (dJ (alpha + 1)).
-            let grad_bar =
-                Matrix2::identity() * ((b - a) / (dj * (alpha + 1.0))) + grads[p] * alpha;
-            let material = &mp.materials[mp.material[p] as usize];
+            let grad_bar = Matrix2::identity() * ((b - a) / (dj * (alpha + 1.0))) + g * alpha;
             let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
             let share = fbar.adjust(p, &mut response, &df, dj, dj_bar);
             Ok((response, share))

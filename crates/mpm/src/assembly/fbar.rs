@@ -29,6 +29,13 @@
 //! B  = (A^ : dF - P) / 2,   w_q = V_q / sum V
 //! ```
 //!
+//! The small-strain model takes F-bar's linearisation, B-bar:
+//! `g_bar = g + (b - a) / 2 I` with `a = tr g` and `b` its cell average
+//! ([`FbarCells::adjust_small_strain`]). F-bar's `alpha dF` would make that
+//! model nonlinear, with second-order terms scaled by the bulk modulus:
+//! near incompressibility those outgrow the shear response at strains of
+//! `mu / K`, and Newton did not converge on Cook's membrane.
+//!
 //! The second term couples each point with every point of its cell; in the
 //! stiffness it is, per cell, the outer product of two nodal vectors (the
 //! sums over the cell's points of `V0_p g_pa . B_p / dJ_bar` and of
@@ -174,6 +181,27 @@ impl FbarCells {
         response.p = p_point;
         response.tangent = local;
         (b / dj_bar, df_inv_t * (self.weight[p] * dj))
+    }
+
+    /// The small-strain model's F-bar, B-bar: `g_bar = g + (b - a) / 2 I`
+    /// with `a = tr g` and `b` its cell average, so the stress is linear in
+    /// the increments and its tangent is `A^ - B (x) I` locally plus
+    /// `B (x) sum_q w_q I : d(g_q)`, `B = A^ : I / 2`. Returns the point's
+    /// share of the coupling as [`FbarCells::adjust`] does.
+    pub fn adjust_small_strain(
+        &self,
+        p: usize,
+        response: &mut Response,
+    ) -> (Matrix2<f64>, Matrix2<f64>) {
+        if self.members(self.cell_of[p] as usize).len() == 1 {
+            return (Matrix2::zeros(), Matrix2::zeros());
+        }
+        let a = &response.tangent;
+        let b = Matrix2::from_fn(|i, ii| 0.5 * (a[(2 * i + ii, 0)] + a[(2 * i + ii, 3)]));
+        let identity = Matrix2::<f64>::identity();
+        response.tangent =
+            Matrix4::from_fn(|r, c| a[(r, c)] - b[(r / 2, r % 2)] * identity[(c / 2, c % 2)]);
+        (b, identity * self.weight[p])
     }
 
     /// Adds the coupling term's stiffness to tangent values in `pattern`'s
