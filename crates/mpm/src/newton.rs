@@ -221,6 +221,21 @@ pub trait Equilibrium {
 /// A full step that does neither is cut: to the zero of `s` interpolated
 /// linearly when `s` changed sign, else to the minimum of the parabola
 /// through `|r(0)|^2`, its slope and `|r(alpha)|^2`, within [`CUT_BOUNDS`].
+///
+/// Except that an admissible full step is taken anyway, up to
+/// [`FREE_STEPS`] times in a row, when its relative residual is within
+/// [`GROWTH`] of the lowest the step has reached or at most 2 (an
+/// out-of-balance force no larger than the applied and internal forces
+/// together, which only a diverging state exceeds): a non-monotone search
+/// (Grippo, Lampariello & Lucidi 1986, SIAM J. Numer. Anal. 23). The count
+/// of free steps returns with each new lowest residual. Near
+/// incompressibility the residual along a Newton direction is dominated by
+/// the volume change of a linearised rotation, which is largest part way
+/// along it: the full step raises the residual and then converges, while
+/// cut steps stay on that hump. The paper's cantilever at nu = 0.499
+/// (GIMP, 0.25 m cells) took 78 iterations with the monotone search
+/// (F-bar: 161, and 10 cut increments) against 26 (30) for plain Newton; it
+/// now takes plain Newton's path.
 struct Search<'a> {
     du: &'a [f64],
     s0: f64,
@@ -234,6 +249,11 @@ const ARMIJO: f64 = 1e-4;
 const CUT_BOUNDS: (f64, f64) = (0.1, 0.5);
 /// The shortest step length tried; it is taken whatever it gives.
 const SHORTEST_STEP: f64 = 1.0 / 1024.0;
+/// Full steps in a row that may raise the residual norm ([`Search`]).
+const FREE_STEPS: u32 = 2;
+/// How far above the lowest relative residual of the step a free full
+/// step may go.
+const GROWTH: f64 = 10.0;
 
 impl<'a> Search<'a> {
     fn new(r: &[f64], du: &'a [f64], norm0: f64, divergence_limit: f64) -> Self {
@@ -299,6 +319,8 @@ pub fn solve(
         residual,
     };
     let (mut r, mut scale) = eq.out_of_balance(&u).map_err(|p| inverted(0, p, None))?;
+    // The lowest relative residual of the step, for the free full steps.
+    let (mut lowest, mut free_steps) = (f64::INFINITY, FREE_STEPS);
     for iteration in 0.. {
         let last_finite = info.residuals.iter().rev().copied().find(|r| r.is_finite());
         let norm = norm(&r);
@@ -316,6 +338,9 @@ pub fn solve(
         if residual <= settings.tolerance {
             info.iterations = iteration;
             return Ok((u, info));
+        }
+        if residual < lowest {
+            (lowest, free_steps) = (residual, FREE_STEPS);
         }
         if iteration >= settings.max_iterations {
             let earlier = info
@@ -357,11 +382,19 @@ pub fn solve(
                 Ok((r_trial, scale_trial)) => {
                     let n = self::norm(&r_trial);
                     let converged = n <= settings.tolerance * scale_trial;
-                    let cut = if !settings.line_search || converged || alpha <= SHORTEST_STEP {
+                    let mut cut = if !settings.line_search || converged || alpha <= SHORTEST_STEP {
                         None
                     } else {
                         search.cut(alpha, &r_trial, n, n / scale_trial)
                     };
+                    if cut.is_some()
+                        && alpha == 1.0
+                        && free_steps > 0
+                        && n / scale_trial <= (GROWTH * lowest).max(2.0)
+                    {
+                        free_steps -= 1;
+                        cut = None;
+                    }
                     match cut {
                         None => {
                             (r, scale) = (r_trial, scale_trial);
