@@ -30,6 +30,13 @@ pub enum Geometry {
         inner_radius: f64,
         outer_radius: f64,
     },
+    /// A convex quadrilateral (vertices in order, either orientation),
+    /// filled on its own mapped lattice: the bilinear map of a grid on the
+    /// unit square, so its four edges are rows of points whatever their
+    /// slope.
+    Quadrilateral {
+        vertices: [[f64; 2]; 4],
+    },
     /// The part of an annulus between two angles (degrees, counter-clockwise
     /// from +x, less than a full turn apart), filled on a polar lattice so
     /// that its arcs are rows of points.
@@ -47,17 +54,8 @@ impl Geometry {
     pub fn bounding_box(&self) -> ([f64; 2], [f64; 2]) {
         match self {
             Geometry::Rectangle { min, max } => (*min, *max),
-            Geometry::Polygon { vertices, .. } => {
-                let mut lo = [f64::INFINITY; 2];
-                let mut hi = [f64::NEG_INFINITY; 2];
-                for v in vertices {
-                    for d in 0..2 {
-                        lo[d] = lo[d].min(v[d]);
-                        hi[d] = hi[d].max(v[d]);
-                    }
-                }
-                (lo, hi)
-            }
+            Geometry::Polygon { vertices, .. } => vertex_box(vertices),
+            Geometry::Quadrilateral { vertices } => vertex_box(vertices),
             Geometry::Circle { center, radius: r }
             | Geometry::Annulus {
                 center,
@@ -85,6 +83,7 @@ impl Geometry {
             Geometry::Polygon { vertices, holes } => {
                 inside_ring(vertices, p) && !holes.iter().any(|h| inside_ring(h, p))
             }
+            Geometry::Quadrilateral { vertices } => inside_ring(vertices, p),
             Geometry::Circle { center, radius } => dist(center) < *radius,
             Geometry::Annulus {
                 center,
@@ -108,6 +107,19 @@ impl Geometry {
             }
         }
     }
+}
+
+/// Axis-aligned bounding box of a list of vertices.
+fn vertex_box(vertices: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for v in vertices {
+        for d in 0..2 {
+            lo[d] = lo[d].min(v[d]);
+            hi[d] = hi[d].max(v[d]);
+        }
+    }
+    (lo, hi)
 }
 
 /// A geometric selection in the reference configuration: every given

@@ -32,12 +32,11 @@ pub enum Representation {
 
 /// Sets each loop's data-point offsets for the chosen representation: zero
 /// through the points; for the material edge, out along the reference
-/// normal to the edge of the point's rectangular domain: in the domain's
-/// frame (half-widths `(h1, h2)`, normal `(n1, n2)`) the offset is
-/// `(h1 n1, h2 n2) / max(|n1|, |n2|)`, which reaches the middle of a
-/// domain's side on a straight edge and its corner at a corner (where `n` is
-/// the mean of the two normals). Polar fills' domains are turned with their
-/// angle, and the offset is taken in that frame.
+/// normal to the edge of the point's cell in the body's lattice
+/// ([`crate::particles::seeding::Domain::edge_offset`]), which reaches the middle of
+/// the cell's side on a straight edge and its corner at a corner (where `n`
+/// is the mean of the two normals). Polar and mapped cells are turned and
+/// sheared with their lattice, and the offset follows them.
 pub fn set_offsets(
     loops: &mut [BoundaryLoop],
     points: &MaterialPoints,
@@ -55,20 +54,7 @@ pub fn set_offsets(
                         .into_iter()
                         .zip(&l.points)
                         .map(|((n_in, n_out), &p)| {
-                            let n = [n_in[0] + n_out[0], n_in[1] + n_out[1]];
-                            // In the domain's own frame (radial/tangential
-                            // on a polar lattice).
-                            let domain = &points.domain[p];
-                            let (s, c) = domain.angle.sin_cos();
-                            let n = [c * n[0] + s * n[1], -s * n[0] + c * n[1]];
-                            let m = n[0].abs().max(n[1].abs());
-                            let hw = domain.half_width;
-                            if m > 0.0 {
-                                let d = [hw[0] * n[0] / m, hw[1] * n[1] / m];
-                                [c * d[0] - s * d[1], s * d[0] + c * d[1]]
-                            } else {
-                                [0.0, 0.0]
-                            }
+                            points.domain[p].edge_offset([n_in[0] + n_out[0], n_in[1] + n_out[1]])
                         })
                         .collect()
                 }
@@ -99,8 +85,8 @@ pub fn selected_segments(
             let n = lp.points.len();
             let ring = reference_ring(lp, points);
             let on = |k: usize| {
-                let hw = points.domain[lp.points[k]].half_width;
-                selector.contains(ring[k], 1.5 * hw[0].max(hw[1]) + 1e-9 * h)
+                let reach = points.domain[lp.points[k]].reach();
+                selector.contains(ring[k], 1.5 * reach + 1e-9 * h)
             };
             let segments: Vec<usize> = (0..n).filter(|&k| on(k) && on((k + 1) % n)).collect();
             (!segments.is_empty()).then_some((l, segments))

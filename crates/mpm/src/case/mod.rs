@@ -486,6 +486,38 @@ mod tests {
         assert!(e.message.contains("crosses itself"), "{e}");
     }
 
+    /// A quadrilateral must be strictly convex, in order round it: a
+    /// crossed ("bow tie"), reflex or flattened one has no one-to-one
+    /// bilinear map; three vertices are not a quadrilateral.
+    #[test]
+    fn a_quadrilateral_that_is_not_convex_is_refused() {
+        for vertices in [
+            serde_json::json!([[0, 0], [4, 2], [4, 0], [0, 1]]),
+            serde_json::json!([[0, 0], [4, 0], [1, 1], [0, 4]]),
+            serde_json::json!([[0, 0], [2, 0], [4, 0], [0, 4]]),
+        ] {
+            let mut v = column_json();
+            v["bodies"][0]["geometry"] =
+                serde_json::json!({"quadrilateral": {"vertices": vertices}});
+            let e = error_for(v);
+            assert_eq!(e.path, "bodies[0].geometry.quadrilateral.vertices", "{e}");
+            assert!(e.message.contains("convex"), "{e}");
+        }
+        let mut v = column_json();
+        v["bodies"][0]["geometry"] =
+            serde_json::json!({"quadrilateral": {"vertices": [[0, 0], [4, 0], [0, 4]]}});
+        assert!(
+            error_for(v)
+                .path
+                .starts_with("bodies[0].geometry.quadrilateral.vertices"),
+            "three vertices"
+        );
+        // Either orientation is accepted.
+        let mut v = column_json();
+        v["bodies"][0]["geometry"] = serde_json::json!({"quadrilateral": {"vertices": [[0, 0], [0, 50], [3.125, 50], [3.125, 0]]}});
+        Case::from_json(&v.to_string()).unwrap();
+    }
+
     #[test]
     fn poisson_ratio_of_one_half_names_the_field() {
         let mut v = column_json();

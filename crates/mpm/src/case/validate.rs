@@ -290,6 +290,9 @@ impl Body {
                     check_ring(&format!("{g}.polygon.holes[{k}]"), h)?;
                 }
             }
+            Geometry::Quadrilateral { vertices } => {
+                check_convex_quadrilateral(&format!("{g}.quadrilateral.vertices"), vertices)?
+            }
             Geometry::Circle { center, radius } => {
                 finite_pair(&format!("{g}.circle.center"), *center)?;
                 positive(&format!("{g}.circle.radius"), *radius)?;
@@ -342,10 +345,13 @@ impl Body {
             positive(&format!("{path}.points.spacing"), s)?;
         }
         if let Some(c) = p.count {
-            if !matches!(self.geometry, Geometry::Rectangle { .. }) {
+            if !matches!(
+                self.geometry,
+                Geometry::Rectangle { .. } | Geometry::Quadrilateral { .. }
+            ) {
                 return Err(CaseError::new(
                     format!("{path}.points.count"),
-                    "only for rectangles; use per_cell or spacing",
+                    "only for rectangles and quadrilaterals; use per_cell or spacing",
                 ));
             }
             if c[0] == 0 || c[1] == 0 {
@@ -489,6 +495,34 @@ fn check_ring(path: &str, ring: &[[f64; 2]]) -> Result<(), CaseError> {
         return Err(CaseError::new(
             path,
             format!("crosses itself: edges {i} and {j} meet (a polygon must be simple)"),
+        ));
+    }
+    Ok(())
+}
+
+/// A quadrilateral's vertices must be finite and make a strictly convex
+/// quadrilateral, in order (either orientation), so that its bilinear map
+/// is one-to-one: every turn the same way, none straight.
+fn check_convex_quadrilateral(path: &str, v: &[[f64; 2]; 4]) -> Result<(), CaseError> {
+    for (i, p) in v.iter().enumerate() {
+        finite_pair(&format!("{path}[{i}]"), *p)?;
+    }
+    let size = (0..4)
+        .map(|k| (v[(k + 1) % 4][0] - v[k][0]).hypot(v[(k + 1) % 4][1] - v[k][1]))
+        .fold(0.0, f64::max);
+    let turns: Vec<f64> = (0..4)
+        .map(|k| {
+            let (a, b, c) = (v[k], v[(k + 1) % 4], v[(k + 2) % 4]);
+            (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0])
+        })
+        .collect();
+    let tiny = 1e-9 * size * size;
+    let all = |f: fn(f64, f64) -> bool| turns.iter().all(|&t| f(t, tiny));
+    if !(size.is_finite() && size > 0.0 && (all(|t, e| t > e) || all(|t, e| t < -e))) {
+        return Err(CaseError::new(
+            path,
+            "must be the corners of a strictly convex quadrilateral, in order round it \
+             (no straight or reflex corner, no crossing edges)",
         ));
     }
     Ok(())

@@ -2,10 +2,12 @@
 //!
 //! Rectangles are divided exactly: `n = round(width / spacing)` points per
 //! direction at the centres of equal sub-cells, so the points' volumes add up
-//! to the area. Other shapes keep the points of a lattice aligned with the
-//! grid (offset half a spacing from the grid lines) that fall inside; each
-//! point has the volume of its lattice square, so the total volume differs
-//! from the area by the staircase error along curved edges.
+//! to the area. Quadrilaterals are divided the same way in the parameters of
+//! their bilinear map, and annulus sectors on a polar lattice; each point has
+//! the exact area of its cell. Other shapes keep the points of a lattice
+//! aligned with the grid (offset half a spacing from the grid lines) that
+//! fall inside; each point has the volume of its lattice square, so the total
+//! volume differs from the area by the staircase error along curved edges.
 
 use crate::geometry::Geometry;
 
@@ -18,17 +20,79 @@ pub struct SeedPoint {
     pub volume: f64,
     pub half_width: [f64; 2],
     pub lattice: [i64; 2],
-    /// The point's domain as a rectangle in its own frame: half-widths and
-    /// the frame's angle (radians; radial/tangential for polar fills). The
-    /// boundary's offset to the material edge uses it.
+    /// The point's cell of the body's own lattice, which the boundary's
+    /// offset to the material edge uses.
     pub domain: Domain,
 }
 
-/// A point's rectangular domain in a rotated frame.
+/// A point's cell as the bilinear image of a square,
+/// `x + s a + t b + s t c` for `|s|, |t| <= 1`: `axes` `[a, b]` are the
+/// half-axes from the point to the middles of the cell's sides along the
+/// lattice directions (`i`, then `j`), and `twist` `c` moves the corners
+/// where the cell is not a parallelogram. A rectangle's axes are its
+/// half-widths along x and y; a polar cell's are radial and tangential; a
+/// quadrilateral's follow its mapped lattice.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Domain {
-    pub half_width: [f64; 2],
-    pub angle: f64,
+    pub axes: [[f64; 2]; 2],
+    pub twist: [f64; 2],
+}
+
+impl Domain {
+    /// An axis-aligned rectangle of these half-widths, turned by `angle`
+    /// (radians).
+    pub fn turned(half_width: [f64; 2], angle: f64) -> Self {
+        let (s, c) = angle.sin_cos();
+        Self {
+            axes: [
+                [half_width[0] * c, half_width[0] * s],
+                [-half_width[1] * s, half_width[1] * c],
+            ],
+            twist: [0.0, 0.0],
+        }
+    }
+
+    /// The longer half-axis.
+    pub fn reach(&self) -> f64 {
+        let [a, b] = self.axes;
+        a[0].hypot(a[1]).max(b[0].hypot(b[1]))
+    }
+
+    /// From the point to the cell's edge in the direction of the outward
+    /// normal `n`: `n` is written on the unit normals of the sides of the
+    /// parallelogram `(a, b)`, `n = alpha nu_i + beta nu_j`, and with
+    /// `(s, t) = (alpha, beta) / max(|alpha|, |beta|)` the offset is
+    /// `s a + t b + s t c`. On a side (`n` its normal) that reaches the
+    /// side's middle; at a corner (`n` the sum of the two sides' normals)
+    /// the corner itself. For a rectangle, `(alpha, beta)` is `n` in its
+    /// frame.
+    pub fn edge_offset(&self, n: [f64; 2]) -> [f64; 2] {
+        let [a, b] = self.axes;
+        let det = a[0] * b[1] - a[1] * b[0];
+        if det == 0.0 {
+            return [0.0, 0.0];
+        }
+        // The outward normals of the sides s_i = +1 and s_j = +1 are the
+        // rows of A^-1, (b_y, -b_x) / det and (-a_y, a_x) / det, normalised.
+        let nu_i = [b[1] / det, -b[0] / det];
+        let nu_j = [-a[1] / det, a[0] / det];
+        let (li, lj) = (nu_i[0].hypot(nu_i[1]), nu_j[0].hypot(nu_j[1]));
+        let nu_i = [nu_i[0] / li, nu_i[1] / li];
+        let nu_j = [nu_j[0] / lj, nu_j[1] / lj];
+        let d = nu_i[0] * nu_j[1] - nu_i[1] * nu_j[0];
+        let alpha = (n[0] * nu_j[1] - n[1] * nu_j[0]) / d;
+        let beta = (nu_i[0] * n[1] - nu_i[1] * n[0]) / d;
+        let m = alpha.abs().max(beta.abs());
+        if m == 0.0 {
+            return [0.0, 0.0];
+        }
+        let (s, t) = (alpha / m, beta / m);
+        let c = self.twist;
+        [
+            s * a[0] + t * b[0] + s * t * c[0],
+            s * a[1] + t * b[1] + s * t * c[1],
+        ]
+    }
 }
 
 /// How densely a region is filled.
@@ -36,7 +100,7 @@ pub struct Domain {
 pub enum Density {
     /// Points this far apart (metres).
     Spacing(f64),
-    /// `[nx, ny]` points; rectangles only.
+    /// `[nx, ny]` points; rectangles and quadrilaterals only.
     Count([u32; 2]),
 }
 
@@ -45,7 +109,7 @@ pub enum Density {
 pub fn fill(geometry: &Geometry, density: Density, origin: [f64; 2]) -> Vec<SeedPoint> {
     let (spacing, count) = match density {
         Density::Spacing(s) => (s, None),
-        Density::Count(c) => (f64::NAN, Some(c)), // rectangles only
+        Density::Count(c) => (f64::NAN, Some(c)), // rectangles and quadrilaterals
     };
     match geometry {
         Geometry::Rectangle { min, max } => {
@@ -63,10 +127,7 @@ pub fn fill(geometry: &Geometry, density: Density, origin: [f64; 2]) -> Vec<Seed
                         volume: step[0] * step[1],
                         half_width: [step[0] / 2.0, step[1] / 2.0],
                         lattice: [i as i64, j as i64],
-                        domain: Domain {
-                            half_width: [step[0] / 2.0, step[1] / 2.0],
-                            angle: 0.0,
-                        },
+                        domain: Domain::turned([step[0] / 2.0, step[1] / 2.0], 0.0),
                     });
                 }
             }
@@ -86,12 +147,87 @@ pub fn fill(geometry: &Geometry, density: Density, origin: [f64; 2]) -> Vec<Seed
             end_angle.to_radians(),
             spacing,
         ),
+        Geometry::Quadrilateral { vertices } => {
+            mapped_quadrilateral(&counter_clockwise(vertices), spacing, count)
+        }
         geometry => {
             let (lo, hi) = geometry.bounding_box();
             let inside = |p: [f64; 2]| geometry.contains(p);
             lattice_inside(lo, hi, spacing, origin, inside)
         }
     }
+}
+
+/// The vertices in counter-clockwise order (the first kept), so that the
+/// mapped lattice's `(i, j)` keeps the orientation loop detection expects.
+fn counter_clockwise(v: &[[f64; 2]; 4]) -> [[f64; 2]; 4] {
+    if crate::geometry::signed_area(v) >= 0.0 {
+        *v
+    } else {
+        [v[0], v[3], v[2], v[1]]
+    }
+}
+
+/// A quadrilateral `v` (counter-clockwise) divided as the unit square is
+/// by `n_i x n_j` equal cells, through the bilinear map
+/// `x(u, w) = (1-u)(1-w) v0 + u(1-w) v1 + u w v2 + (1-u) w v3`. Lines of
+/// constant `u` or `w` map to straight lines, so every cell is a straight
+/// sided quadrilateral and its area is exact. A point sits at the image of
+/// its cell's centre, its domain is the cell itself (half-axes half the
+/// mid-lines, and the twist), and its GIMP domain is the square of its
+/// cell's area.
+fn mapped_quadrilateral(v: &[[f64; 2]; 4], s: f64, count: Option<[u32; 2]>) -> Vec<SeedPoint> {
+    let [n_i, n_j] = quadrilateral_counts(v, s, count).map(|n| n as usize);
+    let map = |u: f64, w: f64| {
+        let c = [(1.0 - u) * (1.0 - w), u * (1.0 - w), u * w, (1.0 - u) * w];
+        [0, 1].map(|d| (0..4).map(|k| c[k] * v[k][d]).sum::<f64>())
+    };
+    let (du, dw) = (1.0 / n_i as f64, 1.0 / n_j as f64);
+    let mut out = Vec::with_capacity(n_i * n_j);
+    for j in 0..n_j {
+        for i in 0..n_i {
+            let (u0, w0) = (i as f64 * du, j as f64 * dw);
+            let corners = [
+                map(u0, w0),
+                map(u0 + du, w0),
+                map(u0 + du, w0 + dw),
+                map(u0, w0 + dw),
+            ];
+            let volume = crate::geometry::signed_area(&corners);
+            let centre = map(u0 + du / 2.0, w0 + dw / 2.0);
+            let half = |p: [f64; 2], q: [f64; 2]| [(q[0] - p[0]) / 2.0, (q[1] - p[1]) / 2.0];
+            let along_i = half(map(u0, w0 + dw / 2.0), map(u0 + du, w0 + dw / 2.0));
+            let along_j = half(map(u0 + du / 2.0, w0), map(u0 + du / 2.0, w0 + dw));
+            let square = volume.sqrt() / 2.0;
+            out.push(SeedPoint {
+                position: centre,
+                volume,
+                half_width: [square, square],
+                lattice: [i as i64, j as i64],
+                domain: Domain {
+                    axes: [along_i, along_j],
+                    twist: [0, 1].map(|d| {
+                        (corners[2][d] - corners[1][d] - corners[3][d] + corners[0][d]) / 4.0
+                    }),
+                },
+            });
+        }
+    }
+    out
+}
+
+/// `[n_i, n_j]` of a quadrilateral's mapped lattice: the given `count`, or
+/// the mean lengths of its opposite edges over the spacing, rounded, at
+/// least one each.
+fn quadrilateral_counts(v: &[[f64; 2]; 4], s: f64, count: Option<[u32; 2]>) -> [f64; 2] {
+    if let Some(c) = count {
+        return c.map(f64::from);
+    }
+    let len = |a: usize, b: usize| (v[b][0] - v[a][0]).hypot(v[b][1] - v[a][1]);
+    [
+        (0.5 * (len(0, 1) + len(3, 2)) / s).round().max(1.0),
+        (0.5 * (len(0, 3) + len(1, 2)) / s).round().max(1.0),
+    ]
 }
 
 /// A polar lattice on an annulus sector: `n_r` rings of equal width and
@@ -115,10 +251,7 @@ fn polar_sector(c: [f64; 2], a: f64, b: f64, t0: f64, t1: f64, s: f64) -> Vec<Se
                 volume,
                 half_width: [square, square],
                 lattice: [i as i64, j as i64],
-                domain: Domain {
-                    half_width: [dr / 2.0, r * dt / 2.0],
-                    angle: t,
-                },
+                domain: Domain::turned([dr / 2.0, r * dt / 2.0], t),
             });
         }
     }
@@ -147,10 +280,7 @@ fn lattice_inside(
                     volume: s * s,
                     half_width: [s / 2.0, s / 2.0],
                     lattice: [i, j],
-                    domain: Domain {
-                        half_width: [s / 2.0, s / 2.0],
-                        angle: 0.0,
-                    },
+                    domain: Domain::turned([s / 2.0, s / 2.0], 0.0),
                 });
             }
         }
@@ -188,11 +318,12 @@ fn lattice_range(lo: [f64; 2], hi: [f64; 2], s: f64, origin: [f64; 2], d: usize)
 /// How many lattice sites [`fill`] visits, found without visiting them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FillSize {
-    /// Sites visited: for rectangles and annulus sectors every site is a
-    /// point; the other shapes scan the lattice over their bounding box and
+    /// Sites visited: for rectangles, quadrilaterals and annulus sectors
+    /// every site is a point; the other shapes scan the lattice over their bounding box and
     /// keep the sites inside.
     pub sites: f64,
-    /// Whether every site is a point (rectangles and annulus sectors), so
+    /// Whether every site is a point (rectangles, quadrilaterals and
+    /// annulus sectors), so
     /// that `sites` is the number of points, not a bound on it.
     pub exact: bool,
 }
@@ -210,6 +341,9 @@ pub fn size(geometry: &Geometry, density: Density, origin: [f64; 2]) -> FillSize
             rectangle_counts([max[0] - min[0], max[1] - min[1]], spacing, count),
             true,
         ),
+        Geometry::Quadrilateral { vertices } => {
+            (quadrilateral_counts(vertices, spacing, count), true)
+        }
         Geometry::AnnulusSector {
             inner_radius,
             outer_radius,
@@ -256,6 +390,69 @@ mod tests {
         assert_eq!(pts.len(), 896);
         let area: f64 = pts.iter().map(|p| p.volume).sum();
         assert!((area - 20.0).abs() < 1e-12);
+    }
+
+    /// Cook's membrane, (0, 0), (48, 44), (48, 60), (0, 44): area 1440 (a
+    /// trapezoid, parallel sides 44 and 16, 48 apart). At spacing 2 its
+    /// mapped lattice has round(57.86 / 2) = 29 by round(30 / 2) = 15
+    /// cells; their areas add up to the whole, and the cells of the outer
+    /// points reach the true edges: their outer sides lie on the
+    /// quadrilateral's edges and their corners at its vertices.
+    #[test]
+    fn a_quadrilateral_is_divided_exactly_and_its_cells_reach_its_edges() {
+        let v = [[0.0, 0.0], [48.0, 44.0], [48.0, 60.0], [0.0, 44.0]];
+        for vertices in [v, [v[0], v[3], v[2], v[1]]] {
+            let q = Geometry::Quadrilateral { vertices };
+            let pts = fill(&q, Density::Spacing(2.0), [0.0, 0.0]);
+            assert_eq!(pts.len(), 29 * 15);
+            let counted = size(&q, Density::Spacing(2.0), [0.0, 0.0]);
+            assert_eq!((counted.sites, counted.exact), (435.0, true));
+            let area: f64 = pts.iter().map(|p| p.volume).sum();
+            assert!((area - 1440.0).abs() < 1e-9, "{area}");
+            let at = |i: i64, j: i64| pts.iter().find(|p| p.lattice == [i, j]).unwrap();
+            let reach = |p: &SeedPoint, n: [f64; 2]| {
+                let d = p.domain.edge_offset(n);
+                [p.position[0] + d[0], p.position[1] + d[1]]
+            };
+            // The loaded edge x = 48 (lattice column 28): each point's side.
+            for j in 0..15 {
+                let x = reach(at(28, j), [1.0, 0.0]);
+                assert!((x[0] - 48.0).abs() < 1e-12, "{x:?}");
+            }
+            // The slanted bottom edge y = 44 x / 48 (row 0), normal
+            // (44, -48) / |.|.
+            let n = [44.0 / 65.1153, -48.0 / 65.1153];
+            for i in 0..29 {
+                let x = reach(at(i, 0), n);
+                assert!((x[1] - 44.0 * x[0] / 48.0).abs() < 1e-9, "{x:?}");
+            }
+            // The top right corner, with the normals the boundary's data
+            // ring gives there: of the last column's line of points
+            // (x = const) and of the top row's, the line of constant
+            // w = 1 - 1/30 of the map, along (1 - w)(v1 - v0) + w (v2 - v3).
+            let w = 1.0 - 1.0 / 30.0;
+            let row: [f64; 2] = [48.0, (1.0 - w) * 44.0 + w * 16.0];
+            let length = row[0].hypot(row[1]);
+            let corner = reach(at(28, 14), [1.0 - row[1] / length, row[0] / length]);
+            assert!(
+                (corner[0] - 48.0).abs() < 1e-12 && (corner[1] - 60.0).abs() < 1e-12,
+                "{corner:?}"
+            );
+        }
+    }
+
+    /// A turned rectangle's cell gives the half-width along the normal
+    /// of a side and its corner at a corner, whatever the turn.
+    #[test]
+    fn a_turned_cells_edge_offsets_are_its_sides_and_corners() {
+        let angle = 0.4f64;
+        let (s, c) = angle.sin_cos();
+        let d = Domain::turned([0.3, 0.1], angle);
+        let side = d.edge_offset([c, s]);
+        assert!((side[0] - 0.3 * c).abs() < 1e-15 && (side[1] - 0.3 * s).abs() < 1e-15);
+        let corner = d.edge_offset([c - s, s + c]);
+        let exact = [0.3 * c - 0.1 * s, 0.3 * s + 0.1 * c];
+        assert!((corner[0] - exact[0]).abs() < 1e-15 && (corner[1] - exact[1]).abs() < 1e-15);
     }
 
     #[test]
