@@ -188,7 +188,7 @@ fn top_displacement_converges_to_the_exact_value() {
 #[test]
 fn small_strain_column_matches_linear_theory() {
     for cells in [8usize, 16, 32] {
-        let mut case = linear_column(cells, 0.0, 0.0);
+        let case = linear_column(cells, 0.0, 0.0);
         let (sim, report) = run(&case);
         let mp = &sim.points;
         let v0: f64 = mp.volume0.iter().sum();
