@@ -86,8 +86,8 @@ fn check_load_steps(case: &Case, limits: &Limits) -> Result<(), Rejection> {
 const SITES_PER_POINT: f64 = 4.0;
 
 /// Refuses a case over the point limit before seeding anything, from the
-/// per-direction counts of every body's lattice: exact for rectangles and
-/// annulus sectors, and for other shapes the sites their seeding would
+/// per-direction counts of every body's lattice: exact for rectangles,
+/// quadrilaterals and annulus sectors, and for other shapes the sites their seeding would
 /// scan. Microseconds, whatever the case asks for.
 fn check_fill_sizes(case: &Case, limits: &Limits) -> Result<(), Rejection> {
     let max = limits.max_points as f64;

@@ -125,6 +125,7 @@ impl Simulation {
             .map(|l| (nearest_point(&points, l.at), l.force))
             .collect();
         let newton = &case.analysis.newton;
+        let free_step_growth = 10.0 * p_wave_to_shear(&points);
         Ok(Self {
             grid,
             basis: basis(case.basis),
@@ -148,6 +149,7 @@ impl Simulation {
                 tangent_regularisation: newton.tangent_regularisation,
                 line_search: newton.line_search,
                 ghost_penalty: newton.ghost_penalty,
+                free_step_growth,
                 ..Default::default()
             },
             fbar: case.analysis.volumetric == crate::case::Volumetric::Fbar,
@@ -176,6 +178,21 @@ fn material_points(case: &Case) -> MaterialPoints {
 }
 
 /// The constitutive model of a material spec.
+/// The largest ratio of P-wave to shear modulus, `(lambda + 2 mu) / mu`,
+/// over the materials (2 at nu = 0, 5001 at nu = 0.4999): how much more a
+/// spurious volume change costs than a shear, which bounds how far a
+/// converging Newton step may raise the residual (`newton::Search`).
+fn p_wave_to_shear(points: &MaterialPoints) -> f64 {
+    points
+        .materials
+        .iter()
+        .map(|m| {
+            let c = m.elastic();
+            (c.lambda + 2.0 * c.mu) / c.mu
+        })
+        .fold(1.0, f64::max)
+}
+
 fn material(spec: &MaterialSpec) -> Material {
     let (e, nu, _) = spec.constants();
     let constants = Elastic::from_young_poisson(e, nu);

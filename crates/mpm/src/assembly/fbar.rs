@@ -17,7 +17,8 @@
 //! The averaging domain is the grid cell holding the point at the start of
 //! the step, for either basis: with GIMP a point's domain may reach into
 //! neighbouring cells, but its volume is counted once, where its centre is.
-//! A cell at the boundary averages over the points it holds, however few.
+//! A cell at the boundary averages over the points it holds, however few;
+//! points of different materials in one cell average separately.
 //!
 //! With the model's stress `P^(dF_bar)` and tangent `A^`, the stress that
 //! pairs with the point's own `dF` is `P = P^ / alpha` (its Cauchy stress
@@ -76,10 +77,14 @@ impl FbarCells {
     pub fn new(start: &Configuration) -> Self {
         let Configuration { grid, conn, points } = *start;
         let n = points.len();
-        let mut keyed: Vec<((i64, i64), u32)> = (0..n)
+        // Keyed by cell and material: points of different materials in one
+        // cell average apart (a small-strain and a finite-strain model
+        // measure their volume change differently, and an interface is not
+        // to be smeared).
+        let mut keyed: Vec<((i64, i64, u32), u32)> = (0..n)
             .map(|p| {
                 let [i, j] = grid.cell_of(points.position[p]);
-                ((i, j), p as u32)
+                ((i, j, points.material[p]), p as u32)
             })
             .collect();
         keyed.sort_unstable();

@@ -62,10 +62,12 @@ impl Domain {
     /// normal `n`: `n` is written on the unit normals of the sides of the
     /// parallelogram `(a, b)`, `n = alpha nu_i + beta nu_j`, and with
     /// `(s, t) = (alpha, beta) / max(|alpha|, |beta|)` the offset is
-    /// `s a + t b + s t c`. On a side (`n` its normal) that reaches the
-    /// side's middle; at a corner (`n` the sum of the two sides' normals)
-    /// the corner itself. For a rectangle, `(alpha, beta)` is `n` in its
-    /// frame.
+    /// `s a + t b + s t c`. With `n` the normal of a row or column of
+    /// points, as the boundary's data ring gives, that reaches the middle
+    /// of the cell's side; at a corner (`n` the sum of the two) the corner
+    /// itself. With `n` a little off (the true edge of a tapered cell), it
+    /// still ends on that side, off its middle. For a rectangle,
+    /// `(alpha, beta)` is `n` in its frame.
     pub fn edge_offset(&self, n: [f64; 2]) -> [f64; 2] {
         let [a, b] = self.axes;
         let det = a[0] * b[1] - a[1] * b[0];
@@ -193,7 +195,14 @@ fn mapped_quadrilateral(v: &[[f64; 2]; 4], s: f64, count: Option<[u32; 2]>) -> V
                 map(u0 + du, w0 + dw),
                 map(u0, w0 + dw),
             ];
-            let volume = crate::geometry::signed_area(&corners);
+            // Half the cross product of the diagonals: the area of any
+            // quadrilateral, and free of the cancellation the shoelace sum
+            // suffers far from the origin.
+            let (d1, d2) = (
+                [corners[2][0] - corners[0][0], corners[2][1] - corners[0][1]],
+                [corners[3][0] - corners[1][0], corners[3][1] - corners[1][1]],
+            );
+            let volume = 0.5 * (d1[0] * d2[1] - d1[1] * d2[0]);
             let centre = map(u0 + du / 2.0, w0 + dw / 2.0);
             let half = |p: [f64; 2], q: [f64; 2]| [(q[0] - p[0]) / 2.0, (q[1] - p[1]) / 2.0];
             let along_i = half(map(u0, w0 + dw / 2.0), map(u0 + du, w0 + dw / 2.0));

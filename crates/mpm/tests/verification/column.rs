@@ -228,12 +228,13 @@ fn linear_column(cells: usize, ghost: f64, soft: f64) -> serde_json::Value {
 ///
 /// - The ghost penalty (default, gamma = 1e-3) acts on the second
 ///   difference of u_y, `(rho g / E) h^2` in every cell. Its forces cancel
-///   in the interior and leave a pair on the top two node rows, of size
-///   `1.5 (gamma E / 3) (rho g / E) h^2` per node: the top cell's stress
-///   moves by about `gamma rho g h` (measured 2.50 Pa against
-///   `rho g h` = 2500 Pa). The top displacement does not move at all: the
-///   response to a load at the top is linear in Y, which the penalty does
-///   not see (measured 0 to round-off).
+///   in the interior and leave a pair on the top two node rows and another
+///   at the base, of size `1.5 (gamma E / 3) (rho g / E) h^2` per node:
+///   the top cell's stress moves by about `gamma rho g h` (measured 2.50 Pa
+///   against `rho g h` = 2500 Pa). The top displacement does not move at
+///   all: by reciprocity it is the work of the penalty's forces on the
+///   response to a load at the top, which is linear in Y and which the
+///   penalty does not see (measured 0 to round-off).
 /// - The soft background (the fallback, ratio 1e-6) stiffens every
 ///   increment by its ratio: the top moves by a relative 1e-6.
 #[test]

@@ -210,8 +210,8 @@ fn a_body_carried_across_twenty_cells_stays_unstressed() {
 ///   1.2%; 5.2%, 0.79%; 3.0%, 0.54% (10, 4 and 11 cut-backs; the drift of
 ///   many cell crossings);
 /// - ghost penalty 1e-3 (the default, as run here): 2.6%, 0.51%; 1.1%,
-///   0.28%; 0.56%, 0.17% (order about 1.1 in u/L; 117, 116 and 116
-///   iterations, 0.5 s, 2.9 s and 12.8 s with `mpm run`; with the monotone
+///   0.28%; 0.55%, 0.17% (order about 1.1 in u/L; 155, 139 and 151
+///   iterations, 0.8 s, 2.5 s and 17.6 s with `mpm run`; with the monotone
 ///   line search before its free full steps, 398, 275 and 374 iterations and
 ///   2.6 s, 7.3 s and 58 s);
 /// - ghost penalty 1e-2: 2.1%, 0.44%; 0.82%, 0.24%; 0.38%, 0.15% (9, 14
