@@ -149,6 +149,23 @@ pub struct Selector {
 }
 
 impl Selector {
+    /// The point `(x, y)` when the selector is one (both coordinates given,
+    /// nothing else).
+    pub fn point(&self) -> Option<[f64; 2]> {
+        match *self {
+            Selector {
+                x: Some(x),
+                y: Some(y),
+                x_between: None,
+                y_between: None,
+                center: None,
+                radius: None,
+                segment: None,
+            } => Some([x, y]),
+            _ => None,
+        }
+    }
+
     /// Whether `p` is selected; `tol` is the distance that counts as "on" a
     /// line or inside a range.
     pub fn contains(&self, p: [f64; 2], tol: f64) -> bool {

@@ -16,7 +16,7 @@ use crate::particles::MaterialPoints;
 use crate::particles::seeding::{self, Density, FillSize};
 use crate::probes::Probes;
 use crate::stepper::{Simulation, Substepping};
-use crate::supports::GridSupport;
+use crate::supports::{GridSupport, HeldDofs};
 
 /// Loop segments per loop, `(loop index, segments)`, that a selector picks.
 type Selection = Vec<(usize, Vec<usize>)>;
@@ -73,8 +73,8 @@ impl Seeded {
 impl Simulation {
     /// Builds the initial state of a validated case. Fails, naming the
     /// field, when a boundary load or an IBM support selects no stretch of
-    /// any body's boundary (which could not be told before the points were
-    /// generated).
+    /// any body's boundary, or a grid-node support no node the material
+    /// reaches (which could not be told before the points were generated).
     pub fn new(case: &Case) -> Result<Self, CaseError> {
         let Seeded {
             points,
@@ -126,7 +126,7 @@ impl Simulation {
             .collect();
         let newton = &case.analysis.newton;
         let free_step_growth = 10.0 * p_wave_to_shear(&points);
-        Ok(Self {
+        let sim = Self {
             grid,
             basis: basis(case.basis),
             extent: case.grid.extent.map(|b| (b.min, b.max)),
@@ -158,7 +158,33 @@ impl Simulation {
                 max_cutbacks: case.analysis.substepping.max_cutbacks as usize,
             },
             load_steps: case.analysis.load_steps as usize,
-        })
+        };
+        sim.check_grid_supports()?;
+        Ok(sim)
+    }
+
+    /// A grid-node support must hold some node the material reaches at the
+    /// start: one that holds none (a point between nodes, a line between
+    /// grid lines) would leave the body free there, and the run would fail
+    /// later with an inverted point or a stalled Newton that does not say
+    /// why.
+    fn check_grid_supports(&self) -> Result<(), CaseError> {
+        if self.grid_supports.is_empty() {
+            return Ok(());
+        }
+        let held = HeldDofs::find(&self.grid_supports, &self.grid, &self.reset_grid());
+        match held.first_idle() {
+            Some(index) => Err(CaseError::new(
+                format!("supports[{index}].on"),
+                format!(
+                    "selects none of the grid nodes the material reaches (grid-node supports hold \
+                     nodes, which lie at grid.origin + k * {} m); move it onto a node or grid line, \
+                     or use \"method\": \"ibm\" to hold the boundary curve itself",
+                    self.grid.h
+                ),
+            )),
+            None => Ok(()),
+        }
     }
 }
 
@@ -232,4 +258,38 @@ fn nearest_point(points: &MaterialPoints, x: [f64; 2]) -> usize {
     (0..points.len())
         .min_by(|&a, &b| d2(&points.position[a]).total_cmp(&d2(&points.position[b])))
         .unwrap_or(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::case::Case;
+    use crate::stepper::Simulation;
+
+    /// The paper's fixed point (0, 1) on grid nodes with 1.5 m cells
+    /// selects no node (they lie at y = 0 and 1.5) and is refused, naming
+    /// the support; on a grid with origin (0, 1) it holds a node.
+    #[test]
+    fn a_grid_support_that_holds_no_node_is_refused() {
+        let with_origin = |origin: [f64; 2]| {
+            let case = serde_json::json!({
+                "version": 1,
+                "analysis": { "load_steps": 1 },
+                "grid": { "cell_size": 1.5, "origin": origin },
+                "bodies": [{
+                    "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [10.0, 2.0] } },
+                    "points": { "count": [56, 16] },
+                    "material": { "model": "hencky", "youngs_modulus": 1e6, "poisson_ratio": 0.25, "density": 0.0 }
+                }],
+                "supports": [
+                    { "on": { "x": 0.0 }, "fix": "x" },
+                    { "on": { "x": 0.0, "y": 1.0 }, "fix": "xy" }
+                ]
+            });
+            Simulation::new(&Case::from_json(&case.to_string()).unwrap())
+        };
+        let e = with_origin([0.0, 0.0]).err().expect("refused");
+        assert_eq!(e.path, "supports[1].on", "{e}");
+        assert!(e.message.contains("grid nodes"), "{e}");
+        with_origin([0.0, 1.0]).expect("a node at (0, 1)");
+    }
 }

@@ -83,6 +83,14 @@ impl HeldDofs {
         Self { fixed, held }
     }
 
+    /// The case index of the first grid support that holds no DOF.
+    pub fn first_idle(&self) -> Option<usize> {
+        self.held
+            .iter()
+            .find(|(_, dofs)| dofs.is_empty())
+            .map(|&(index, _)| index)
+    }
+
     /// Number of held DOFs.
     pub fn count(&self) -> usize {
         self.fixed.iter().filter(|f| **f).count()

@@ -88,9 +88,44 @@ pub fn selected_segments(
                 let reach = points.domain[lp.points[k]].reach();
                 selector.contains(ring[k], 1.5 * reach + 1e-9 * h)
             };
-            let segments: Vec<usize> = (0..n).filter(|&k| on(k) && on((k + 1) % n)).collect();
+            let segments: Vec<usize> = match selector.point() {
+                Some(x) => nearest_segments(&ring, x, |k| {
+                    1.5 * points.domain[lp.points[k]].reach() + 1e-9 * h
+                }),
+                None => (0..n).filter(|&k| on(k) && on((k + 1) % n)).collect(),
+            };
             (!segments.is_empty()).then_some((l, segments))
         })
+        .collect()
+}
+
+/// The segments of a closed `ring` nearest the point `x`, if their chord
+/// passes within `tol(k)` of it: one segment when `x` falls inside a chord's
+/// span, both segments meeting at a data point when `x` is that data point
+/// (to 1e-9 of the ring's scale). A point selects a stretch of boundary about
+/// it, wherever the data points fall; asking both ends of a segment to be
+/// within `tol` of it, as for lines, selected nothing when a data point sat
+/// on the point and its neighbours were a spacing away.
+fn nearest_segments(ring: &[[f64; 2]], x: [f64; 2], tol: impl Fn(usize) -> f64) -> Vec<usize> {
+    let n = ring.len();
+    let distance = |k: usize| {
+        let (a, b) = (ring[k], ring[(k + 1) % n]);
+        let (d, r) = ([b[0] - a[0], b[1] - a[1]], [x[0] - a[0], x[1] - a[1]]);
+        let length2 = d[0] * d[0] + d[1] * d[1];
+        let t = if length2 > 0.0 {
+            ((r[0] * d[0] + r[1] * d[1]) / length2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (r[0] - t * d[0]).hypot(r[1] - t * d[1])
+    };
+    let distances: Vec<f64> = (0..n).map(distance).collect();
+    let Some(nearest) = distances.iter().copied().reduce(f64::min) else {
+        return Vec::new();
+    };
+    let tie = 1e-9 * tol(0);
+    (0..n)
+        .filter(|&k| distances[k] <= nearest + tie && distances[k] <= tol(k))
         .collect()
 }
 
@@ -165,4 +200,55 @@ pub fn outputs(loops: &[BoundaryLoop], points: &MaterialPoints) -> Vec<BoundaryO
             polyline: c.polyline(POLYLINE_SAMPLES_PER_SEGMENT),
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use proptest::prelude::*;
+
+    use crate::case::Case;
+    use crate::stepper::Simulation;
+
+    /// The paper's cantilever (10 m x 2 m) with an IBM fixed point on its
+    /// left edge, `count` points, cells of `h`.
+    fn pinned_at(y: f64, count: [u32; 2], h: f64) -> Result<Simulation, String> {
+        let case = serde_json::json!({
+            "version": 1,
+            "analysis": { "load_steps": 1 },
+            "grid": { "cell_size": h },
+            "bodies": [{
+                "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [10.0, 2.0] } },
+                "points": { "count": count },
+                "material": { "model": "hencky", "youngs_modulus": 1e6, "poisson_ratio": 0.25, "density": 0.0 }
+            }],
+            "supports": [
+                { "on": { "x": 0.0 }, "fix": "normal", "method": "ibm" },
+                { "on": { "x": 0.0, "y": y }, "fix": "xy", "method": "ibm" }
+            ]
+        });
+        let case = Case::from_json(&case.to_string()).map_err(|e| e.to_string())?;
+        Simulation::new(&case).map_err(|e| e.to_string())
+    }
+
+    /// The cantilever on 0.75 m cells with 2 points per cell has a data
+    /// point at y = 1 on its left edge, with its neighbours 0.4 m away; the
+    /// fixed point (0, 1) once selected nothing there ("selects no stretch
+    /// of any body's boundary"), and at 0.375 and 0.1875 m too.
+    #[test]
+    fn a_point_on_a_data_point_selects_the_stretch_about_it() {
+        for (h, count) in [(0.75, [27, 5]), (0.375, [53, 11]), (0.1875, [107, 21])] {
+            pinned_at(1.0, count, h).unwrap_or_else(|e| panic!("h {h}: {e}"));
+        }
+    }
+
+    proptest! {
+        /// A point selector anywhere on a body's edge selects a stretch,
+        /// for any point counts.
+        #[test]
+        fn a_point_on_the_edge_always_selects_a_stretch(
+            y in 0.0..2.0f64, nx in 2u32..60, ny in 2u32..24
+        ) {
+            prop_assert!(pinned_at(y, [nx, ny], 0.5).is_ok(), "y {} count [{}, {}]", y, nx, ny);
+        }
+    }
 }
