@@ -11,9 +11,16 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum Geometry {
+    /// The box `min`..`max`, turned by `angle` (degrees, counter-clockwise)
+    /// about `about` (default: its centre). A turned rectangle is filled on
+    /// its own lattice, as a quadrilateral is.
     Rectangle {
         min: [f64; 2],
         max: [f64; 2],
+        #[serde(default)]
+        angle: f64,
+        #[serde(default)]
+        about: Option<[f64; 2]>,
     },
     /// A simple polygon (either orientation) with optional polygonal holes.
     Polygon {
@@ -50,10 +57,27 @@ pub enum Geometry {
 }
 
 impl Geometry {
+    /// A turned rectangle's corners, counter-clockwise; `None` for any
+    /// other geometry and for a rectangle that is not turned.
+    pub fn turned_corners(&self) -> Option<[[f64; 2]; 4]> {
+        match *self {
+            Geometry::Rectangle {
+                min,
+                max,
+                angle,
+                about,
+            } if angle != 0.0 => Some(turned_rectangle(min, max, angle, about)),
+            _ => None,
+        }
+    }
+
     /// Axis-aligned bounding box of a geometry.
     pub fn bounding_box(&self) -> ([f64; 2], [f64; 2]) {
         match self {
-            Geometry::Rectangle { min, max } => (*min, *max),
+            Geometry::Rectangle { min, max, .. } => match self.turned_corners() {
+                Some(corners) => vertex_box(&corners),
+                None => (*min, *max),
+            },
             Geometry::Polygon { vertices, .. } => vertex_box(vertices),
             Geometry::Quadrilateral { vertices } => vertex_box(vertices),
             Geometry::Circle { center, radius: r }
@@ -77,9 +101,10 @@ impl Geometry {
     pub fn contains(&self, p: [f64; 2]) -> bool {
         let dist = |c: &[f64; 2]| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)).sqrt();
         match self {
-            Geometry::Rectangle { min, max } => {
-                p[0] > min[0] && p[0] < max[0] && p[1] > min[1] && p[1] < max[1]
-            }
+            Geometry::Rectangle { min, max, .. } => match self.turned_corners() {
+                Some(corners) => inside_ring(&corners, p),
+                None => p[0] > min[0] && p[0] < max[0] && p[1] > min[1] && p[1] < max[1],
+            },
             Geometry::Polygon { vertices, holes } => {
                 inside_ring(vertices, p) && !holes.iter().any(|h| inside_ring(h, p))
             }
@@ -107,6 +132,28 @@ impl Geometry {
             }
         }
     }
+}
+
+/// The corners of the box `min`..`max` turned by `angle` degrees about
+/// `about` (default: its centre), counter-clockwise from the turned `min`.
+pub fn turned_rectangle(
+    min: [f64; 2],
+    max: [f64; 2],
+    angle: f64,
+    about: Option<[f64; 2]>,
+) -> [[f64; 2]; 4] {
+    let c = about.unwrap_or([(min[0] + max[0]) / 2.0, (min[1] + max[1]) / 2.0]);
+    let (sin, cos) = angle.to_radians().sin_cos();
+    [
+        [min[0], min[1]],
+        [max[0], min[1]],
+        [max[0], max[1]],
+        [min[0], max[1]],
+    ]
+    .map(|[x, y]| {
+        let (dx, dy) = (x - c[0], y - c[1]);
+        [c[0] + cos * dx - sin * dy, c[1] + sin * dx + cos * dy]
+    })
 }
 
 /// Axis-aligned bounding box of a list of vertices.

@@ -277,13 +277,29 @@ impl Body {
     fn validate(&self, path: &str) -> Result<(), CaseError> {
         let g = format!("{path}.geometry");
         match &self.geometry {
-            Geometry::Rectangle { min, max } => check_box(
-                &format!("{g}.rectangle"),
-                &BoxSpec {
-                    min: *min,
-                    max: *max,
-                },
-            )?,
+            Geometry::Rectangle {
+                min,
+                max,
+                angle,
+                about,
+            } => {
+                check_box(
+                    &format!("{g}.rectangle"),
+                    &BoxSpec {
+                        min: *min,
+                        max: *max,
+                    },
+                )?;
+                if !angle.is_finite() {
+                    return Err(CaseError::new(
+                        format!("{g}.rectangle.angle"),
+                        "must be finite",
+                    ));
+                }
+                if let Some(c) = about {
+                    finite_pair(&format!("{g}.rectangle.about"), *c)?;
+                }
+            }
             Geometry::Polygon { vertices, holes } => {
                 check_ring(&format!("{g}.polygon.vertices"), vertices)?;
                 for (k, h) in holes.iter().enumerate() {

@@ -113,8 +113,11 @@ pub fn fill(geometry: &Geometry, density: Density, origin: [f64; 2]) -> Vec<Seed
         Density::Spacing(s) => (s, None),
         Density::Count(c) => (f64::NAN, Some(c)), // rectangles and quadrilaterals
     };
+    if let Some(corners) = geometry.turned_corners() {
+        return mapped_quadrilateral(&corners, spacing, count);
+    }
     match geometry {
-        Geometry::Rectangle { min, max } => {
+        Geometry::Rectangle { min, max, .. } => {
             let size = [max[0] - min[0], max[1] - min[1]];
             let n = rectangle_counts(size, spacing, count).map(|n| n as usize);
             let step = [size[0] / n[0] as f64, size[1] / n[1] as f64];
@@ -346,7 +349,7 @@ pub fn size(geometry: &Geometry, density: Density, origin: [f64; 2]) -> FillSize
         Density::Count(c) => (f64::NAN, Some(c)),
     };
     let (counts, exact) = match geometry {
-        Geometry::Rectangle { min, max } => (
+        Geometry::Rectangle { min, max, .. } => (
             rectangle_counts([max[0] - min[0], max[1] - min[1]], spacing, count),
             true,
         ),
@@ -394,6 +397,8 @@ mod tests {
         let b = Geometry::Rectangle {
             min: [0.0, 0.0],
             max: [10.0, 2.0],
+            angle: 0.0,
+            about: None,
         };
         let pts = fill(&b, Density::Count([56, 16]), [0.0, 0.0]);
         assert_eq!(pts.len(), 896);
@@ -501,6 +506,8 @@ mod tests {
             Geometry::Rectangle {
                 min: [0.0, 0.0],
                 max: [1.3, 0.7],
+                angle: 0.0,
+                about: None,
             },
             Geometry::AnnulusSector {
                 center: [0.5, 0.5],
@@ -535,6 +542,8 @@ mod tests {
         let thin = Geometry::Rectangle {
             min: [0.0, 0.0],
             max: [1e-9, 5000.0],
+            angle: 0.0,
+            about: None,
         };
         assert_eq!(size(&thin, Density::Spacing(1e-3), [0.0, 0.0]).sites, 5e6);
         // A sliver polygon scans a column of 1e9 sites for a handful of
@@ -549,6 +558,8 @@ mod tests {
         let huge = Geometry::Rectangle {
             min: [0.0, 0.0],
             max: [1e300, 1e300],
+            angle: 0.0,
+            about: None,
         };
         assert!(size(&huge, Density::Spacing(1e-3), [0.0, 0.0]).sites > 1e300);
     }

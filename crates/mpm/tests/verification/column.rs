@@ -18,14 +18,16 @@ const L: f64 = 50.0;
 const E: f64 = 1.0e4;
 const RHO_G: f64 = 80.0 * 10.0;
 
-/// Stretch lambda in (0, 1] solving E ln(lambda)/lambda = -rho0 g (L - Y),
-/// by bisection (the left side is increasing on (0, e)).
-fn exact_stretch(y: f64) -> f64 {
-    let target = -RHO_G * (L - y);
+/// Stretch lambda in (0, 1] solving M ln(lambda)/lambda = -rho0 g (L - Y)
+/// for a column of height `length` whose uniaxial-strain modulus is
+/// `modulus` (E at nu = 0; lambda + 2 mu with the sides on rollers), by
+/// bisection (the left side is increasing on (0, e)).
+fn stretch_under_weight(modulus: f64, rho_g: f64, length: f64, y: f64) -> f64 {
+    let target = -rho_g * (length - y);
     let (mut lo, mut hi) = (1e-6f64, 1.0f64);
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if E * mid.ln() / mid > target {
+        if modulus * mid.ln() / mid > target {
             hi = mid;
         } else {
             lo = mid;
@@ -34,15 +36,21 @@ fn exact_stretch(y: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-fn exact_top_displacement() -> f64 {
+/// The top displacement of that column, the integral of (lambda - 1) over
+/// its height.
+pub fn top_displacement_under_weight(modulus: f64, rho_g: f64, length: f64) -> f64 {
     // Composite Simpson on 2000 intervals: the integrand is smooth.
     let n = 2000;
-    let h = L / n as f64;
-    let f = |y: f64| exact_stretch(y) - 1.0;
+    let h = length / n as f64;
+    let f = |y: f64| stretch_under_weight(modulus, rho_g, length, y) - 1.0;
     let inner: f64 = (1..n)
         .map(|i| f(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 })
         .sum();
-    (f(0.0) + f(L) + inner) * h / 3.0
+    (f(0.0) + f(length) + inner) * h / 3.0
+}
+
+fn exact_top_displacement() -> f64 {
+    top_displacement_under_weight(E, RHO_G, L)
 }
 
 /// The column with `cells` cells over the height and 2x2 points per cell.

@@ -4,6 +4,7 @@
 
 mod common;
 
+mod bodies;
 mod cantilever;
 mod column;
 mod ghost;
