@@ -42,7 +42,7 @@ fn the_ghost_penalty_removes_the_drift_with_the_number_of_steps() {
 /// Over three decades of the penalty (1e-5 to 1e-2) the 5-step deflection
 /// moves by 0.09% (measured: -2.6224, -2.6215, -2.6209, -2.6201; 1e-1
 /// gives -2.6179); the target is 0.1%. At 100 steps the drift is
-/// 0.07% at 1e-2, 0.11% at 1e-3, 0.64% at 1e-4 and 3.7% at 1e-5: below
+/// 0.07% at 1e-2, 0.09% at 1e-3, 0.64% at 1e-4 and 3.7% at 1e-5: below
 /// 1e-3 the sliver nodes are held too weakly again.
 #[test]
 fn the_answer_does_not_hang_on_the_penalty() {
