@@ -105,14 +105,7 @@ pub(crate) fn overlapped_cells(start: &Configuration, basis: Basis) -> Vec<(i64,
     let mut keys: Vec<(i64, i64)> = (0..points.len())
         .into_par_iter()
         .flat_map_iter(|p| {
-            let x = points.position[p];
-            let lp = match basis {
-                Basis::Linear => [0.0, 0.0],
-                // As in `Basis::eval`, which caps the domain at a cell.
-                Basis::Gimp => points.half_width(p).map(|l| l.min(grid.h)),
-            };
-            let lo = grid.cell_of([x[0] - lp[0], x[1] - lp[1]]);
-            let hi = grid.cell_of([x[0] + lp[0], x[1] + lp[1]]);
+            let (lo, hi) = basis.cell_range(grid, points.position[p], points.support(p));
             let range = |d: usize| lo[d]..=hi[d];
             let ys = range(1);
             range(0).flat_map(move |i| ys.clone().map(move |j| (i, j)))

@@ -6,7 +6,7 @@
 //! finite-element ones whatever the basis of the points.
 
 use super::bspline::{Point, bezier};
-use crate::grid::{Basis, Grid, NodeKey, NodeWeight};
+use crate::grid::{Basis, Grid, NodeKey, NodeWeight, Support};
 
 /// Gauss-Legendre nodes on [0, 1] and weights (summing to 1), 4 points.
 const GAUSS4: [(f64, f64); 4] = [
@@ -32,7 +32,7 @@ pub fn active_hats(
     shares: &mut Vec<(usize, f64)>,
 ) -> f64 {
     weights.clear();
-    Basis::Linear.eval(grid, x, [0.0, 0.0], weights);
+    Basis::Linear.eval(grid, x, Support::Rectangle([0.0, 0.0]), weights);
     let before = shares.len();
     shares.extend(
         weights

@@ -217,8 +217,9 @@ pub enum BasisKind {
     /// Bilinear finite-element hat functions (the paper's choice).
     #[default]
     Linear,
-    /// Generalised interpolation MPM with the point domain following the
-    /// stretch of the point (cpGIMP-style, axis-aligned domain).
+    /// Generalised interpolation MPM: the hats averaged over each point's
+    /// own cell, an upright one following the point's stretch (cpGIMP), a
+    /// turned, mapped or polar one carried by its deformation gradient.
     Gimp,
 }
 

@@ -3,9 +3,11 @@
 //! - `Gimp`: the hat convolved with the point's characteristic function of
 //!   half-width `lp` (generalised interpolation MPM). The convolution is
 //!   written with the hat's antiderivative `H`, `S(d) = (H(d+lp) - H(d-lp)) /
-//!   2lp`, which is valid for any `lp` (not only `lp <= h/2`).
+//!   2lp`, which is valid for any `lp` (not only `lp <= h/2`). A point
+//!   whose cell is not an axis-aligned rectangle has its hats averaged over
+//!   that cell instead ([`super::quadrilateral_domain`]).
 
-use super::{Grid, NodeKey, node_key};
+use super::{Grid, NodeKey, node_key, quadrilateral_domain};
 
 /// One node's contribution at a point: `N` and its gradient.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -18,6 +20,16 @@ pub struct NodeWeight {
 /// Up to four 1D weights per direction (GIMP with `lp <= h`).
 type Weights1d = smallvec1d::Small;
 
+/// A point's domain for GIMP, about the point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Support {
+    /// An axis-aligned rectangle of these half-widths.
+    Rectangle([f64; 2]),
+    /// A convex quadrilateral: its corners relative to the point, in order
+    /// round it.
+    Quadrilateral([[f64; 2]; 4]),
+}
+
 /// The shape functions of a case.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Basis {
@@ -27,9 +39,17 @@ pub enum Basis {
 
 impl Basis {
     /// Appends to `out` every node whose shape function or gradient is
-    /// non-zero at `x`; `half_width` is the point's domain (ignored by the
+    /// non-zero at `x`, for a point of domain `support` (ignored by the
     /// linear basis).
-    pub fn eval(&self, grid: &Grid, x: [f64; 2], half_width: [f64; 2], out: &mut Vec<NodeWeight>) {
+    pub fn eval(&self, grid: &Grid, x: [f64; 2], support: Support, out: &mut Vec<NodeWeight>) {
+        let half_width = match (self, support) {
+            (Basis::Linear, _) => [0.0, 0.0],
+            (Basis::Gimp, Support::Rectangle(half_width)) => half_width,
+            (Basis::Gimp, Support::Quadrilateral(corners)) => {
+                let corners = corners.map(|c| [x[0] + c[0], x[1] + c[1]]);
+                return quadrilateral_domain::eval(grid, &corners, out);
+            }
+        };
         let wx = self.eval_1d(grid.h, x[0] - grid.origin[0], half_width[0]);
         let wy = self.eval_1d(grid.h, x[1] - grid.origin[1], half_width[1]);
         for &(j, sy, dsy) in wy.as_slice() {
@@ -44,6 +64,24 @@ impl Basis {
                 }
             }
         }
+    }
+
+    /// The lowest and highest cell `(i, j)` that a point at `x` with domain
+    /// `support` reaches (its own cell for the linear basis).
+    pub fn cell_range(&self, grid: &Grid, x: [f64; 2], support: Support) -> ([i64; 2], [i64; 2]) {
+        let lp = match (self, support) {
+            (Basis::Linear, _) => [0.0, 0.0],
+            // As `eval_1d`, which caps the domain at a cell.
+            (Basis::Gimp, Support::Rectangle(half_width)) => half_width.map(|l| l.min(grid.h)),
+            (Basis::Gimp, Support::Quadrilateral(corners)) => {
+                let corners = corners.map(|c| [x[0] + c[0], x[1] + c[1]]);
+                return quadrilateral_domain::cell_range(grid, &corners);
+            }
+        };
+        (
+            grid.cell_of([x[0] - lp[0], x[1] - lp[1]]),
+            grid.cell_of([x[0] + lp[0], x[1] + lp[1]]),
+        )
     }
 
     /// 1D weights `(node index, S, dS/dx)` at coordinate `x` measured from
@@ -116,7 +154,7 @@ mod tests {
 
     fn sums(basis: Basis, x: [f64; 2], lp: [f64; 2]) -> (f64, [f64; 2]) {
         let mut w = Vec::new();
-        basis.eval(&GRID, x, lp, &mut w);
+        basis.eval(&GRID, x, Support::Rectangle(lp), &mut w);
         let n: f64 = w.iter().map(|w| w.n).sum();
         let g = w
             .iter()
@@ -151,11 +189,11 @@ mod tests {
             let eps = 1e-6;
             let value = |p: [f64; 2], key: NodeKey| {
                 let mut w = Vec::new();
-                Basis::Gimp.eval(&GRID, p, [lx, lx], &mut w);
+                Basis::Gimp.eval(&GRID, p, Support::Rectangle([lx, lx]), &mut w);
                 w.iter().find(|w| w.node == key).map_or(0.0, |w| w.n)
             };
             let mut w = Vec::new();
-            Basis::Gimp.eval(&GRID, [x, y], [lx, lx], &mut w);
+            Basis::Gimp.eval(&GRID, [x, y], Support::Rectangle([lx, lx]), &mut w);
             for nw in w {
                 let fd = (value([x + eps, y], nw.node) - value([x - eps, y], nw.node)) / (2.0 * eps);
                 prop_assert!((fd - nw.grad[0]).abs() < 1e-5, "{} vs {}", fd, nw.grad[0]);
@@ -171,7 +209,7 @@ mod tests {
         Basis::Gimp.eval(
             &GRID,
             [GRID.origin[0] + 0.35, GRID.origin[1] + 0.35],
-            [0.1, 0.1],
+            Support::Rectangle([0.1, 0.1]),
             &mut w,
         );
         assert_eq!(w.len(), 4);

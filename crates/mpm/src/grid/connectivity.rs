@@ -49,7 +49,7 @@ impl Connectivity {
                 let mut weights = Vec::with_capacity(idx.len() * 9);
                 for p in idx {
                     let before = weights.len();
-                    basis.eval(grid, points.position[p], points.half_width(p), &mut weights);
+                    basis.eval(grid, points.position[p], points.support(p), &mut weights);
                     let mut k = before;
                     for i in before..weights.len() {
                         if in_grid(weights[i].node) {

@@ -5,8 +5,9 @@
 
 pub mod basis;
 pub mod connectivity;
+pub mod quadrilateral_domain;
 
-pub use basis::{Basis, NodeWeight};
+pub use basis::{Basis, NodeWeight, Support};
 pub use connectivity::{Connectivity, Link};
 
 /// A lattice node packed into one integer; ordering is by `i`, then `j`.

@@ -5,6 +5,7 @@ use nalgebra::Matrix2;
 
 pub mod seeding;
 
+use crate::grid::Support;
 use crate::material::{CauchyStress, Material};
 use seeding::{Domain, SeedPoint};
 
@@ -17,8 +18,6 @@ pub struct MaterialPoints {
     /// Reference volume `V0` (area times unit thickness).
     pub volume0: Vec<f64>,
     pub mass: Vec<f64>,
-    /// Half-widths of the point's domain in the reference configuration.
-    pub half_width0: Vec<[f64; 2]>,
     /// Index into [`MaterialPoints::materials`] (one material per body, so
     /// this is also the body index).
     pub material: Vec<u32>,
@@ -46,7 +45,6 @@ impl MaterialPoints {
             self.reference.push(seed.position);
             self.volume0.push(seed.volume);
             self.mass.push(density * seed.volume);
-            self.half_width0.push(seed.half_width);
             self.material.push(body);
             self.lattice.push(seed.lattice);
             self.domain.push(seed.domain);
@@ -80,13 +78,31 @@ impl MaterialPoints {
         [x[0] - x0[0], x[1] - x0[1]]
     }
 
-    /// Current half-widths of the point's domain for GIMP: the reference
-    /// half-widths scaled by the diagonal of the right stretch tensor
-    /// `U = sqrt(F^T F)`, so the domain follows stretch but not rotation.
-    pub fn half_width(&self, p: usize) -> [f64; 2] {
-        let u = right_stretch(&self.deformation[p]);
-        let h = self.half_width0[p];
-        [h[0] * u[(0, 0)], h[1] * u[(1, 1)]]
+    /// The point's domain for GIMP now. An upright rectangular cell stays
+    /// an axis-aligned rectangle, its half-widths scaled by the diagonal of
+    /// the right stretch tensor `U = sqrt(F^T F)`, so it follows stretch
+    /// but not rotation. Any other cell (turned, mapped, polar) is carried
+    /// by `F` as a whole, `x + F (s a + t b + s t c)`, so that neighbouring
+    /// cells keep tiling the body under a uniform deformation.
+    pub fn support(&self, p: usize) -> Support {
+        let Domain {
+            axes: [a, b],
+            twist,
+        } = self.domain[p];
+        let f = &self.deformation[p];
+        if a[1] == 0.0 && b[0] == 0.0 && twist == [0.0, 0.0] {
+            let u = right_stretch(f);
+            return Support::Rectangle([a[0].abs() * u[(0, 0)], b[1].abs() * u[(1, 1)]]);
+        }
+        Support::Quadrilateral([(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(
+            |(s, t)| {
+                let r = [0, 1].map(|d| s * a[d] + t * b[d] + s * t * twist[d]);
+                [
+                    f[(0, 0)] * r[0] + f[(0, 1)] * r[1],
+                    f[(1, 0)] * r[0] + f[(1, 1)] * r[1],
+                ]
+            },
+        ))
     }
 }
 

@@ -11,17 +11,16 @@
 
 use crate::geometry::Geometry;
 
-/// One material point as generated: position, volume, the half-widths of
-/// its (rectangular) domain, and its place `(i, j)` in the body's lattice
-/// (neighbours differ by one in `i` or `j`; the boundary is found from it).
+/// One material point as generated: position, volume, its cell, and its
+/// place `(i, j)` in the body's lattice (neighbours differ by one in `i` or
+/// `j`; the boundary is found from it).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SeedPoint {
     pub position: [f64; 2],
     pub volume: f64,
-    pub half_width: [f64; 2],
     pub lattice: [i64; 2],
-    /// The point's cell of the body's own lattice, which the boundary's
-    /// offset to the material edge uses.
+    /// The point's cell of the body's own lattice: GIMP's domain, and the
+    /// boundary's offset to the material edge.
     pub domain: Domain,
 }
 
@@ -130,7 +129,6 @@ pub fn fill(geometry: &Geometry, density: Density, origin: [f64; 2]) -> Vec<Seed
                             min[1] + (j as f64 + 0.5) * step[1],
                         ],
                         volume: step[0] * step[1],
-                        half_width: [step[0] / 2.0, step[1] / 2.0],
                         lattice: [i as i64, j as i64],
                         domain: Domain::turned([step[0] / 2.0, step[1] / 2.0], 0.0),
                     });
@@ -179,8 +177,7 @@ fn counter_clockwise(v: &[[f64; 2]; 4]) -> [[f64; 2]; 4] {
 /// constant `u` or `w` map to straight lines, so every cell is a straight
 /// sided quadrilateral and its area is exact. A point sits at the image of
 /// its cell's centre, its domain is the cell itself (half-axes half the
-/// mid-lines, and the twist), and its GIMP domain is the square of its
-/// cell's area.
+/// mid-lines, and the twist), which is also its GIMP domain.
 fn mapped_quadrilateral(v: &[[f64; 2]; 4], s: f64, count: Option<[u32; 2]>) -> Vec<SeedPoint> {
     let [n_i, n_j] = quadrilateral_counts(v, s, count).map(|n| n as usize);
     let map = |u: f64, w: f64| {
@@ -210,11 +207,9 @@ fn mapped_quadrilateral(v: &[[f64; 2]; 4], s: f64, count: Option<[u32; 2]>) -> V
             let half = |p: [f64; 2], q: [f64; 2]| [(q[0] - p[0]) / 2.0, (q[1] - p[1]) / 2.0];
             let along_i = half(map(u0, w0 + dw / 2.0), map(u0 + du, w0 + dw / 2.0));
             let along_j = half(map(u0 + du / 2.0, w0), map(u0 + du / 2.0, w0 + dw));
-            let square = volume.sqrt() / 2.0;
             out.push(SeedPoint {
                 position: centre,
                 volume,
-                half_width: [square, square],
                 lattice: [i as i64, j as i64],
                 domain: Domain {
                     axes: [along_i, along_j],
@@ -244,7 +239,8 @@ fn quadrilateral_counts(v: &[[f64; 2]; 4], s: f64, count: Option<[u32; 2]>) -> [
 
 /// A polar lattice on an annulus sector: `n_r` rings of equal width and
 /// `n_t` equal angular divisions, both from the spacing (at the mean
-/// radius). Each point has the exact area of its annular cell; its lattice
+/// radius). Each point has the exact area of its annular cell, and a
+/// domain of that area turned with it (radial by tangential); its lattice
 /// place is (ring, division), which maps counter-clockwise loops to
 /// counter-clockwise loops.
 fn polar_sector(c: [f64; 2], a: f64, b: f64, t0: f64, t1: f64, s: f64) -> Vec<SeedPoint> {
@@ -256,12 +252,9 @@ fn polar_sector(c: [f64; 2], a: f64, b: f64, t0: f64, t1: f64, s: f64) -> Vec<Se
             let r = a + (i as f64 + 0.5) * dr;
             let t = t0 + (j as f64 + 0.5) * dt;
             let volume = r * dr * dt;
-            // GIMP domains are axis-aligned: the square of the same area.
-            let square = volume.sqrt() / 2.0;
             out.push(SeedPoint {
                 position: [c[0] + r * t.cos(), c[1] + r * t.sin()],
                 volume,
-                half_width: [square, square],
                 lattice: [i as i64, j as i64],
                 domain: Domain::turned([dr / 2.0, r * dt / 2.0], t),
             });
@@ -290,7 +283,6 @@ fn lattice_inside(
                 out.push(SeedPoint {
                     position: p,
                     volume: s * s,
-                    half_width: [s / 2.0, s / 2.0],
                     lattice: [i, j],
                     domain: Domain::turned([s / 2.0, s / 2.0], 0.0),
                 });

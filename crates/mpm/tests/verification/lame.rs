@@ -96,8 +96,12 @@ fn error_rows(basis: &str) -> Vec<(f64, f64, f64)> {
         .collect()
 }
 
-/// GIMP converges to Lame's solution. Measured (h = 0.25, 0.125, 0.0625;
-/// relative errors): u_r(a) 3.3e-2, 1.6e-2, 3.2e-4; u_r(b) 1.4e-2, 6.5e-3,
+/// GIMP converges to Lame's solution. Each point's domain is its own
+/// polar cell, turned with it (`grid::quadrilateral_domain`). Measured
+/// (h = 0.25, 0.125, 0.0625; relative errors): u_r(a) 3.4e-3, 2.5e-3,
+/// 1.6e-4; u_r(b) 5.7e-3, 8.8e-4, 3.0e-4; stress 7.7e-2, 3.9e-2, 1.9e-2
+/// (order 1.0, the boundary layer's). With axis-aligned square domains
+/// instead (before): u_r(a) 3.3e-2, 1.6e-2, 3.2e-4; u_r(b) 1.4e-2, 6.5e-3,
 /// 1.8e-3; stress 9.4e-2, 5.7e-2, 3.7e-2 (order about 0.7). Asserted: every
 /// error falls and the finest are within the bounds below.
 #[test]
@@ -111,7 +115,7 @@ fn pressurised_thick_cylinder_converges_to_lame() {
     }
     let finest = rows[2];
     assert!(
-        finest.0 < 1e-2 && finest.1 < 1e-2 && finest.2 < 6e-2,
+        finest.0 < 2e-3 && finest.1 < 2e-3 && finest.2 < 3e-2,
         "{rows:?}"
     );
 }
@@ -137,8 +141,8 @@ fn bilinear_basis_keeps_the_cylinder_within_five_percent() {
 
 /// Nearly incompressible (nu = 0.4999): the standard formulation locks
 /// and its pressure oscillates; F-bar does neither. GIMP, relative errors
-/// (u_r(a), u_r(b), stress norm) at h = 0.0625, measured: standard -21%,
-/// -27%, 21; F-bar 0.10%, 0.36%, 4.9% (the stress norm's floor is the
+/// (u_r(a), u_r(b), stress norm) at h = 0.0625, measured: standard -20%,
+/// -27%, 21; F-bar 0.04%, 0.08%, 0.8% (the stress norm's floor is the
 /// boundary layer's, as at nu = 0.3). Tolerance 1e-8: see locking.rs.
 #[test]
 fn fbar_keeps_the_nearly_incompressible_cylinder_on_lame() {
@@ -150,7 +154,7 @@ fn fbar_keeps_the_nearly_incompressible_cylinder_on_lame() {
     let fbar = errors(0.0625, "gimp", 0.4999, "fbar");
     eprintln!("nu 0.4999, h 0.0625: standard {standard:?}, F-bar {fbar:?}");
     assert!(
-        fbar.0.abs() < 1e-2 && fbar.1.abs() < 1e-2 && fbar.2 < 8e-2,
+        fbar.0.abs() < 5e-3 && fbar.1.abs() < 5e-3 && fbar.2 < 3e-2,
         "{fbar:?}"
     );
 }

@@ -202,12 +202,15 @@ const COOK_REFERENCE_COMPRESSIBLE: f64 = 22.6104;
 /// run takes 1e-4 of the load (the corner moves 8e-4: small strain, as the
 /// linear reference) and the answer is scaled by 1e4.
 ///
-/// Measured, h = 2, 1, 0.5: standard 6.169, 6.955, 7.399 (-21%, -10%,
-/// -4.8%); F-bar 8.230, 8.030, 7.916 (+5.9%, +3.3%, +1.9%); at 0.25, 7.596
-/// (-2.3%) and 7.852 (+1.0%). F-bar converges from above at an order of
-/// about 0.8 (the reference's own meshes see 1.07: the corner (0, 44) is
+/// Each point's GIMP domain is its own mapped cell
+/// (`grid::quadrilateral_domain`). Measured, h = 2, 1, 0.5: standard
+/// 5.983, 6.802, 7.292 (-23%, -12%, -6.2%); F-bar 7.700, 7.738, 7.755
+/// (-0.92%, -0.43%, -0.20%). F-bar converges from below at an order of
+/// 1.1 (the reference's own meshes see 1.07: the corner (0, 44) is
 /// singular), the standard formulation from below, locked: at each h its
-/// error is more than twice F-bar's.
+/// error is more than twice F-bar's. With axis-aligned square domains
+/// (before), F-bar was +5.9%, +3.3%, +1.9%, order about 0.8: the squares
+/// overlap and leave gaps along the slanted rows.
 #[test]
 fn cooks_membrane_converges_with_fbar_and_locks_without() {
     let corner = |volumetric: &str, h: f64, nu: f64, youngs: f64, load: f64| {
@@ -244,9 +247,10 @@ fn cooks_membrane_converges_with_fbar_and_locks_without() {
         );
         last = fbar.abs();
     }
-    assert!(last < 3e-2, "{last}");
-    // Compressible, the standard formulation converges: measured +1.7%,
-    // +0.98%, +0.56% at h = 2, 1, 0.5 (F-bar +4.8%, +2.7%, +1.5%).
+    assert!(last < 5e-3, "{last}");
+    // Compressible, the standard formulation converges: measured -0.87%,
+    // -0.42%, -0.20% at h = 2, 1, 0.5 (+1.7%, +0.98%, +0.56% with square
+    // domains).
     let compressible: Vec<f64> = [2.0, 1.0, 0.5]
         .iter()
         .map(|&h| {
@@ -256,7 +260,7 @@ fn cooks_membrane_converges_with_fbar_and_locks_without() {
         .collect();
     eprintln!("Cook's membrane, nu = 1/3, standard: errors {compressible:.4?}");
     assert!(
-        compressible.windows(2).all(|w| w[1].abs() < w[0].abs()) && compressible[2].abs() < 1e-2,
+        compressible.windows(2).all(|w| w[1].abs() < w[0].abs()) && compressible[2].abs() < 5e-3,
         "{compressible:?}"
     );
 }
