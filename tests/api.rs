@@ -287,7 +287,8 @@ fn peak_memory() -> u64 {
 
 /// Bodies whose bounding boxes are tiny but whose lattices are not: a thin
 /// rectangle (1e-9 m x 5000 m at 1 mm: a column of 5e6 points) and a sliver
-/// polygon (a column of 1e9 lattice sites to scan for a handful of points).
+/// polygon (on the grid's lattice a column of 1e9 sites to scan for a
+/// handful of points; on its own, patches of 5e8 points in all).
 /// Counting from the bounding box's area let the first through to be
 /// seeded (24.8 s and 3.0 GB before its 422) and the second scanned (15 s
 /// of CPU). Per-direction counts refuse both before anything is seeded:
@@ -297,17 +298,22 @@ fn peak_memory() -> u64 {
 #[test]
 fn bodies_over_the_limits_are_refused_from_their_lattice_counts() {
     let app = spawn_app();
-    let with = |geometry: Value| filled_at_1mm(geometry).to_string();
+    let with = |geometry: Value, lattice: &str| {
+        let mut case = filled_at_1mm(geometry);
+        case["bodies"][0]["points"]["lattice"] = lattice.into();
+        case.to_string()
+    };
+    let sliver = json!({"polygon": {"vertices": [[0, 0], [1e-12, 0], [0, 1e6]]}});
     let peak_before = peak_memory();
     for (body, path) in [
         (
-            with(json!({"rectangle": {"min": [0, 0], "max": [1e-9, 5000]}})),
+            with(json!({"rectangle": {"min": [0, 0], "max": [1e-9, 5000]}}), "body"),
             "bodies",
         ),
-        (
-            with(json!({"polygon": {"vertices": [[0, 0], [1e-12, 0], [0, 1e6]]}})),
-            "bodies[0].points",
-        ),
+        // On the grid's lattice, a column of 1e9 sites to scan; on its own,
+        // 5e8 points, counted from its patches without making them.
+        (with(sliver.clone(), "grid"), "bodies[0].points"),
+        (with(sliver, "body"), "bodies"),
     ] {
         let start = std::time::Instant::now();
         let (status, code, got) = rejection(&app, &body);
@@ -575,8 +581,8 @@ fn a_job_that_would_store_too_much_is_refused_naming_the_field() {
 }
 
 /// Checking a submission has a time limit: past it the client gets 503
-/// with Retry-After, and nothing is queued. The case is a sliver whose
-/// seeding scans 2e8 lattice sites (two columns; about 3 s) for a handful of points:
+/// with Retry-After, and nothing is queued. The case is a sliver on the
+/// grid's lattice whose seeding scans 2e8 lattice sites (two columns; about 3 s) for a handful of points:
 /// slow, but small in memory.
 #[test]
 fn a_submission_whose_check_runs_out_of_time_is_503() {
@@ -584,7 +590,8 @@ fn a_submission_whose_check_runs_out_of_time_is_503() {
         c.limits.admission_time_limit = Duration::from_millis(50);
         c.limits.max_points = 100_000_000;
     });
-    let sliver = filled_at_1mm(json!({"polygon": {"vertices": [[0, 0], [1e-12, 0], [0, 1e5]]}}));
+    let mut sliver = filled_at_1mm(json!({"polygon": {"vertices": [[0, 0], [1e-12, 0], [0, 1e5]]}}));
+    sliver["bodies"][0]["points"]["lattice"] = "grid".into();
     let (status, headers, body) = submit_with(&app, &[], &sliver.to_string());
     assert_eq!(status, 503, "{body}");
     assert_eq!(body["error"]["code"], "unavailable");

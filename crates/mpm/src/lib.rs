@@ -33,9 +33,11 @@ pub mod newton;
 pub mod observer;
 pub mod particles;
 pub mod probes;
+pub mod reference_edge;
 pub mod report;
 pub mod stepper;
 pub mod supports;
+pub mod triangulation;
 pub mod vtk;
 
 pub use case::{Case, CaseError, CaseErrorKind};

@@ -4,11 +4,15 @@
 //! segments once ([`Seeded`]), then splits the supports by how they are
 //! imposed.
 
+use crate::boundary::edge_detection::loops_on_edge;
 use crate::boundary::ibm::{self, IbmSupport};
 use crate::boundary::loading::LoadedStretch;
 use crate::boundary::traction::Traction;
-use crate::boundary::{BoundaryLoop, find_loops, selected_segments, set_offsets};
+use crate::boundary::{
+    BoundaryLoop, Representation, find_loops, selected_segments, set_offsets, snap_to_edge,
+};
 use crate::case::{BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, SupportMethod};
+use crate::geometry::Geometry;
 use crate::grid::{Basis, Grid};
 use crate::material::{Elastic, Material};
 use crate::newton::NewtonSettings;
@@ -39,10 +43,10 @@ impl Seeded {
     /// Seeds a validated case.
     pub fn new(case: &Case) -> Result<Self, CaseError> {
         let points = material_points(case);
-        let mut loops = find_loops(&points.lattice, &points.material, &points.reference);
-        set_offsets(&mut loops, &points, case.boundary.representation);
+        let loops = boundary_loops(case, &points);
         let select = |path: String, on| {
-            let segments = selected_segments(on, &loops, &points, case.grid.cell_size);
+            let on_edge = case.boundary.representation == Representation::Edge;
+            let segments = selected_segments(on, &loops, &points, case.grid.cell_size, on_edge);
             if segments.is_empty() {
                 return Err(CaseError::new(
                     path,
@@ -196,11 +200,49 @@ fn material_points(case: &Case) -> MaterialPoints {
             &body.geometry,
             density(body, case.grid.cell_size),
             case.grid.origin,
+            body.points.lattice,
         );
         let (_, _, rho) = body.material.constants();
         mp.add_body(material(&body.material), rho, &seeds);
     }
     mp
+}
+
+/// The boundary loops of every body with their data-point offsets: from
+/// lattice neighbours for a body on one lattice, its data points then put
+/// on the exact edge (`edge` representation); from the exact edge itself
+/// for a body of patches or polar rings ([`seeding::follows_edge`]).
+fn boundary_loops(case: &Case, points: &MaterialPoints) -> Vec<BoundaryLoop> {
+    let representation = case.boundary.representation;
+    let on_edge: Vec<bool> = (case.bodies.iter())
+        .map(|b| seeding::follows_edge(&b.geometry, b.points.lattice))
+        .collect();
+    let mut loops: Vec<BoundaryLoop> =
+        find_loops(&points.lattice, &points.material, &points.reference, |b| {
+            !on_edge[b]
+        });
+    set_offsets(&mut loops, points, representation);
+    if representation == Representation::Edge {
+        let geometries: Vec<&Geometry> = case.bodies.iter().map(|b| &b.geometry).collect();
+        snap_to_edge(&mut loops, points, &geometries);
+    }
+    for (b, body) in case.bodies.iter().enumerate().filter(|(b, _)| on_edge[*b]) {
+        let ids: Vec<usize> = (0..points.len())
+            .filter(|&p| points.material[p] as usize == b)
+            .collect();
+        for mut l in loops_on_edge(b, &body.geometry.rings(), points, &ids) {
+            if representation == Representation::Points {
+                // Through the points: each once, in the edge's order.
+                l.points.dedup();
+                if l.points.len() > 1 && l.points.first() == l.points.last() {
+                    l.points.pop();
+                }
+                l.offset = vec![[0.0, 0.0]; l.points.len()];
+            }
+            loops.push(l);
+        }
+    }
+    loops
 }
 
 /// The constitutive model of a material spec.
@@ -242,7 +284,12 @@ fn density(body: &Body, cell_size: f64) -> Density {
 /// How many lattice sites seeding a body visits, counted without seeding
 /// it (see [`seeding::size`]).
 pub fn fill_size(body: &Body, grid: &GridSpec) -> FillSize {
-    seeding::size(&body.geometry, density(body, grid.cell_size), grid.origin)
+    seeding::size(
+        &body.geometry,
+        density(body, grid.cell_size),
+        grid.origin,
+        body.points.lattice,
+    )
 }
 
 fn basis(kind: BasisKind) -> Basis {

@@ -99,12 +99,18 @@ pub fn loops_of_lattice(lattice: &[[i64; 2]], ids: &[usize]) -> Vec<Vec<usize>> 
     loops
 }
 
-/// Boundary loops of every body: `lattice[p]` and `body[p]` per point,
-/// `reference[p]` the reference position (for orientation).
-pub fn find_loops(lattice: &[[i64; 2]], body: &[u32], reference: &[[f64; 2]]) -> Vec<BoundaryLoop> {
+/// Boundary loops of the bodies `b` for which `wanted(b)` holds:
+/// `lattice[p]` and `body[p]` per point, `reference[p]` the reference
+/// position (for orientation).
+pub fn find_loops(
+    lattice: &[[i64; 2]],
+    body: &[u32],
+    reference: &[[f64; 2]],
+    wanted: impl Fn(usize) -> bool,
+) -> Vec<BoundaryLoop> {
     let n_bodies = body.iter().map(|&b| b as usize + 1).max().unwrap_or(0);
     let mut out = Vec::new();
-    for b in 0..n_bodies {
+    for b in (0..n_bodies).filter(|&b| wanted(b)) {
         let ids: Vec<usize> = (0..body.len()).filter(|&p| body[p] as usize == b).collect();
         let cells: Vec<[i64; 2]> = ids.iter().map(|&p| lattice[p]).collect();
         for points in loops_of_lattice(&cells, &ids) {
@@ -160,7 +166,7 @@ mod tests {
         let (lattice, _) = pixels(&["#####", "#...#", "#...#", "#####"]);
         let reference: Vec<[f64; 2]> = lattice.iter().map(|l| l.map(|c| c as f64)).collect();
         let body = vec![0; lattice.len()];
-        let loops = find_loops(&lattice, &body, &reference);
+        let loops = find_loops(&lattice, &body, &reference, |_| true);
         assert_eq!(loops.len(), 2);
         assert_eq!(loops.iter().filter(|l| l.hole).count(), 1);
         // A one-pixel-thick frame of 14 pixels: the outer loop visits all of

@@ -4,6 +4,7 @@
 
 pub mod bspline;
 pub mod detection;
+pub mod edge_detection;
 pub mod ibm;
 pub mod loading;
 pub mod quadrature;
@@ -14,8 +15,9 @@ use serde::{Deserialize, Serialize};
 pub use bspline::{BSplineData, ClosedCurve};
 pub use detection::{BoundaryLoop, find_loops};
 
-use crate::geometry::Selector;
+use crate::geometry::{Geometry, Selector};
 use crate::particles::MaterialPoints;
+use crate::reference_edge::{distance, nearest_on};
 
 /// Where the boundary curve's data points are.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
@@ -63,20 +65,141 @@ pub fn set_offsets(
     }
 }
 
+/// Puts each loop's reference data points on the exact edge of its body's
+/// geometry (the `edge` representation), so that straight sides are
+/// straight, corners are corners and arcs lie on the arc whatever lattice
+/// the points sit on.
+/// - Each data point goes to the nearest point of the edge.
+/// - Each corner of the geometry becomes a data point of the loop whose
+///   data points come nearest it: the nearest one moves onto it if it is
+///   within half a domain reach, otherwise the corner is added next to it,
+///   on the side it lies ahead of, carried by the same material point. (On
+///   the grid's lattice the nearest point of an acute corner can be more
+///   than a spacing away.)
+/// - A data point that lands within half a domain reach of the one kept
+///   before it is dropped, its material point no longer on the curve: on a
+///   lattice that steps along a gentle slope, neighbours land close
+///   together, and the points in the shadow of a re-entrant corner all
+///   land on it. A corner is kept over a plain point.
+///
+/// On the bodies' own lattices (rectangles, quadrilaterals, sectors) the
+/// data points are on the edge already and this moves them by round-off.
+pub fn snap_to_edge(loops: &mut [BoundaryLoop], points: &MaterialPoints, geometries: &[&Geometry]) {
+    /// A data point: its material point, where it goes, whether a corner.
+    struct Entry {
+        point: usize,
+        at: [f64; 2],
+        corner: bool,
+    }
+    let reach = |p: usize| points.domain[p].reach();
+    let mut entries: Vec<Vec<Entry>> = loops
+        .iter()
+        .map(|l| {
+            let edge = geometries[l.body].edge();
+            let ring = reference_ring(l, points);
+            (l.points.iter().zip(ring))
+                .map(|(&point, x)| Entry {
+                    point,
+                    at: nearest_on(&edge, x),
+                    corner: false,
+                })
+                .collect()
+        })
+        .collect();
+    for (body, geometry) in geometries.iter().enumerate() {
+        for c in geometry.corners() {
+            let nearest = (0..loops.len())
+                .filter(|&l| loops[l].body == body && entries[l].len() >= 3)
+                .flat_map(|l| (0..entries[l].len()).map(move |k| (l, k)))
+                .min_by(|&(l, k), &(m, j)| {
+                    distance(entries[l][k].at, c).total_cmp(&distance(entries[m][j].at, c))
+                });
+            let Some((l, k)) = nearest else { continue };
+            let e = &mut entries[l];
+            let n = e.len();
+            let here = e[k].at;
+            if distance(here, c) < 0.5 * reach(e[k].point) {
+                (e[k].at, e[k].corner) = (c, true);
+                continue;
+            }
+            let ahead = |j: usize| {
+                let d = [e[j].at[0] - here[0], e[j].at[1] - here[1]];
+                d[0] * (c[0] - here[0]) + d[1] * (c[1] - here[1])
+            };
+            let place = if ahead((k + 1) % n) >= ahead((k + n - 1) % n) {
+                k + 1
+            } else {
+                k
+            };
+            let point = e[k].point;
+            e.insert(
+                place,
+                Entry {
+                    point,
+                    at: c,
+                    corner: true,
+                },
+            );
+        }
+    }
+    for (l, e) in loops.iter_mut().zip(entries) {
+        if e.len() < 3 {
+            continue;
+        }
+        // Keep, in loop order, the data points not too close to the last
+        // kept one, then close the loop the same way.
+        let close = |a: &Entry, b: &Entry| distance(a.at, b.at) < 0.5 * reach(b.point);
+        let mut kept: Vec<Entry> = Vec::with_capacity(e.len());
+        for entry in e {
+            match kept.last_mut() {
+                Some(last) if close(last, &entry) => {
+                    if entry.corner && !last.corner {
+                        *last = entry;
+                    }
+                }
+                _ => kept.push(entry),
+            }
+        }
+        while kept.len() > 3 && close(&kept[kept.len() - 1], &kept[0]) {
+            if kept[kept.len() - 1].corner && !kept[0].corner {
+                kept.remove(0);
+            } else {
+                kept.pop();
+            }
+        }
+        l.offset = (kept.iter())
+            .map(|e| {
+                let x = points.reference[e.point];
+                [e.at[0] - x[0], e.at[1] - x[1]]
+            })
+            .collect();
+        l.points = kept.iter().map(|e| e.point).collect();
+    }
+}
+
 /// The segments of each loop that `selector` picks in the reference
-/// configuration, as `(loop index, segments)` for loops with any: a segment
-/// is picked when both its end data points (reference positions, offsets
-/// set) are within 1.5 domain half-widths of the selection: the material
-/// edge's data points lie on a straight selected side, and within about a
-/// half-width of a curved edge filled on a Cartesian lattice; through the
-/// points they sit a half-width inside a straight side. Round a rectangle's
-/// corner the next data point is two half-widths (edge) or three (points)
-/// from the selected side, so the selection stops at the corner.
+/// configuration, as `(loop index, segments)` for loops with any.
+///
+/// A point selector picks the segment(s) nearest it ([`nearest_segments`]).
+/// Otherwise a segment is picked when both its end data points (reference
+/// positions, offsets set) are within a tolerance of the selection:
+/// - `on_edge` (the `edge` representation: every data point on the exact
+///   edge): a tenth of the segment's length, at most 1.5 domain
+///   half-widths. A segment along the selected side is on it to round-off;
+///   one that leaves it at a corner is picked only if the corner turns by
+///   less than 6 degrees. The tolerance once was 1.5 half-widths alone,
+///   which on the long cells of a sliver triangle reached round a corner
+///   onto the next side.
+/// - through the points: 1.5 domain half-widths, since the data points sit
+///   a half-width inside a straight side; round a rectangle's corner the
+///   next data point is three half-widths from the selected side, so the
+///   selection stops at the corner.
 pub fn selected_segments(
     selector: &Selector,
     loops: &[BoundaryLoop],
     points: &MaterialPoints,
     h: f64,
+    on_edge: bool,
 ) -> Vec<(usize, Vec<usize>)> {
     loops
         .iter()
@@ -84,15 +207,19 @@ pub fn selected_segments(
         .filter_map(|(l, lp)| {
             let n = lp.points.len();
             let ring = reference_ring(lp, points);
-            let on = |k: usize| {
-                let reach = points.domain[lp.points[k]].reach();
-                selector.contains(ring[k], 1.5 * reach + 1e-9 * h)
+            let reach = |k: usize| 1.5 * points.domain[lp.points[k]].reach();
+            let picked = |k: usize| {
+                let j = (k + 1) % n;
+                let tol = if on_edge {
+                    reach(k).min(reach(j)).min(0.1 * distance(ring[k], ring[j]))
+                } else {
+                    reach(k).min(reach(j))
+                } + 1e-9 * h;
+                selector.contains(ring[k], tol) && selector.contains(ring[j], tol)
             };
             let segments: Vec<usize> = match selector.point() {
-                Some(x) => nearest_segments(&ring, x, |k| {
-                    1.5 * points.domain[lp.points[k]].reach() + 1e-9 * h
-                }),
-                None => (0..n).filter(|&k| on(k) && on((k + 1) % n)).collect(),
+                Some(x) => nearest_segments(&ring, x, |k| reach(k) + 1e-9 * h),
+                None => (0..n).filter(|&k| picked(k)).collect(),
             };
             (!segments.is_empty()).then_some((l, segments))
         })

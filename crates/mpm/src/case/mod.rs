@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 pub use crate::boundary::Representation;
 pub use crate::geometry::{Geometry, Selector};
 use crate::newton::NewtonSettings;
+pub use crate::particles::seeding::Lattice;
 use crate::stepper::Substepping;
 pub use crate::supports::{Fix, Rotation};
 
@@ -235,7 +236,7 @@ pub struct Body {
 
 /// How densely a body is filled with material points: exactly one of
 /// `per_cell` (points per cell per direction), `spacing` (metres) or `count`
-/// (`[nx, ny]`, rectangles only).
+/// (`[nx, ny]`, rectangles and quadrilaterals only); and on which lattice.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
 #[serde(deny_unknown_fields)]
 pub struct PointFill {
@@ -245,6 +246,10 @@ pub struct PointFill {
     pub spacing: Option<f64>,
     #[serde(default)]
     pub count: Option<[u32; 2]>,
+    /// `body` (default): the body's own lattice, whose rows follow its
+    /// edges; `grid`: the grid's square lattice, for any shape.
+    #[serde(default)]
+    pub lattice: Lattice,
 }
 
 /// Constitutive model of a body.

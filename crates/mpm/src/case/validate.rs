@@ -5,8 +5,9 @@
 use serde_json::Value;
 
 use super::*;
-use crate::geometry::{self_crossing, signed_area};
+use crate::geometry::{inside_ring, self_crossing, signed_area};
 use crate::grid::REACH_CELLS;
+use crate::triangulation;
 
 impl CaseError {
     pub(crate) fn new(path: impl Into<String>, message: impl Into<String>) -> Self {
@@ -305,6 +306,9 @@ impl Body {
                 for (k, h) in holes.iter().enumerate() {
                     check_ring(&format!("{g}.polygon.holes[{k}]"), h)?;
                 }
+                if self.points.lattice == Lattice::Body {
+                    check_triangulation(&format!("{g}.polygon"), vertices, holes)?;
+                }
             }
             Geometry::Quadrilateral { vertices } => {
                 check_convex_quadrilateral(&format!("{g}.quadrilateral.vertices"), vertices)?
@@ -361,13 +365,15 @@ impl Body {
             positive(&format!("{path}.points.spacing"), s)?;
         }
         if let Some(c) = p.count {
-            if !matches!(
-                self.geometry,
-                Geometry::Rectangle { .. } | Geometry::Quadrilateral { .. }
-            ) {
+            if p.lattice == Lattice::Grid
+                || !matches!(
+                    self.geometry,
+                    Geometry::Rectangle { .. } | Geometry::Quadrilateral { .. }
+                )
+            {
                 return Err(CaseError::new(
                     format!("{path}.points.count"),
-                    "only for rectangles and quadrilaterals; use per_cell or spacing",
+                    "only for rectangles and quadrilaterals on their own lattice; use per_cell or spacing",
                 ));
             }
             if c[0] == 0 || c[1] == 0 {
@@ -514,6 +520,45 @@ fn check_ring(path: &str, ring: &[[f64; 2]]) -> Result<(), CaseError> {
         ));
     }
     Ok(())
+}
+
+/// A polygon filled on its own lattice is cut into triangles first: at most
+/// [`triangulation::MAX_VERTICES`] vertices (holes' included), and its
+/// holes must lie inside it and apart, which the triangles' areas adding
+/// up to the polygon's (less the holes') shows.
+fn check_triangulation(
+    path: &str,
+    outer: &[[f64; 2]],
+    holes: &[Vec<[f64; 2]>],
+) -> Result<(), CaseError> {
+    let n = outer.len() + holes.iter().map(Vec::len).sum::<usize>();
+    if n > triangulation::MAX_VERTICES {
+        return Err(CaseError::new(
+            format!("{path}.vertices"),
+            format!(
+                "has {n} vertices with its holes, more than the {} a polygon on its own lattice \
+                 may have; give a mesh, or points.lattice: grid",
+                triangulation::MAX_VERTICES
+            ),
+        ));
+    }
+    let holes_area: f64 = holes.iter().map(|h| signed_area(h).abs()).sum();
+    let exact = signed_area(outer).abs() - holes_area;
+    let covered = triangulation::triangulate(outer, holes).map(|t| {
+        t.iter()
+            .map(|[a, b, c]| ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])) / 2.0)
+            .sum::<f64>()
+    });
+    let inside = holes
+        .iter()
+        .all(|h| h.iter().all(|&v| inside_ring(outer, v)));
+    match covered {
+        Some(area) if inside && (area - exact).abs() <= 1e-9 * signed_area(outer).abs() => Ok(()),
+        _ => Err(CaseError::new(
+            format!("{path}.holes"),
+            "every hole must lie inside the polygon, apart from the other holes and its edge",
+        )),
+    }
 }
 
 /// A quadrilateral's vertices must be finite and make a strictly convex

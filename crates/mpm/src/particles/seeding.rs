@@ -96,6 +96,34 @@ impl Domain {
     }
 }
 
+/// Which lattice a body's points sit on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Lattice {
+    /// The body's own: rectangles and quadrilaterals mapped, sectors,
+    /// circles and annuli polar, polygons cut into triangles and each
+    /// triangle into three mapped quadrilaterals. The points' cells tile
+    /// the body and its edges are rows of points.
+    #[default]
+    Body,
+    /// The grid's, for any shape: the sites of a square lattice aligned
+    /// with the grid that fall inside, each the volume of its square; a
+    /// slanted or curved edge is a staircase.
+    Grid,
+}
+
+/// Whether the points of `geometry` on `lattice` are more than one lattice
+/// (patches, or polar rings of their own counts), so that their boundary
+/// loops come from the exact edge ([`crate::boundary::edge_detection`]),
+/// not from lattice neighbours.
+pub fn follows_edge(geometry: &Geometry, lattice: Lattice) -> bool {
+    lattice == Lattice::Body
+        && matches!(
+            geometry,
+            Geometry::Polygon { .. } | Geometry::Circle { .. } | Geometry::Annulus { .. }
+        )
+}
+
 /// How densely a region is filled.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Density {
@@ -105,13 +133,22 @@ pub enum Density {
     Count([u32; 2]),
 }
 
-/// The material points of `geometry` at `density`, on a lattice through
-/// the grid's `origin`.
-pub fn fill(geometry: &Geometry, density: Density, origin: [f64; 2]) -> Vec<SeedPoint> {
+/// The material points of `geometry` at `density` on `lattice` (the
+/// grid's goes through the grid's `origin`).
+pub fn fill(
+    geometry: &Geometry,
+    density: Density,
+    origin: [f64; 2],
+    lattice: Lattice,
+) -> Vec<SeedPoint> {
     let (spacing, count) = match density {
         Density::Spacing(s) => (s, None),
         Density::Count(c) => (f64::NAN, Some(c)), // rectangles and quadrilaterals
     };
+    if lattice == Lattice::Grid {
+        let (lo, hi) = geometry.bounding_box();
+        return lattice_inside(lo, hi, spacing, origin, |p| geometry.contains(p));
+    }
     if let Some(corners) = geometry.turned_corners() {
         return mapped_quadrilateral(&corners, spacing, count);
     }
@@ -153,12 +190,115 @@ pub fn fill(geometry: &Geometry, density: Density, origin: [f64; 2]) -> Vec<Seed
         Geometry::Quadrilateral { vertices } => {
             mapped_quadrilateral(&counter_clockwise(vertices), spacing, count)
         }
-        geometry => {
-            let (lo, hi) = geometry.bounding_box();
-            let inside = |p: [f64; 2]| geometry.contains(p);
-            lattice_inside(lo, hi, spacing, origin, inside)
+        Geometry::Polygon { vertices, holes } => {
+            let mut out = Vec::new();
+            for (k, quad) in polygon_patches(vertices, holes).iter().enumerate() {
+                out.extend(
+                    mapped_quadrilateral(quad, spacing, None)
+                        .into_iter()
+                        .map(|mut p| {
+                            p.lattice = [k as i64, p.lattice[0] + (p.lattice[1] << 32)];
+                            p
+                        }),
+                );
+            }
+            out
+        }
+        Geometry::Circle { center, radius } => polar_rings(*center, 0.0, *radius, spacing),
+        Geometry::Annulus {
+            center,
+            inner_radius,
+            outer_radius,
+        } => polar_rings(*center, *inner_radius, *outer_radius, spacing),
+    }
+}
+
+/// A polygon's patches, counter-clockwise quadrilaterals of which every
+/// side of the polygon is a side of some. A convex quadrilateral is its
+/// own patch; any other convex polygon is cut by the lines from its
+/// centroid to the middles of its sides, one patch per vertex. Otherwise
+/// its triangles ([`crate::triangulation`]) are cut so, three patches each.
+fn polygon_patches(vertices: &[[f64; 2]], holes: &[Vec<[f64; 2]>]) -> Vec<[[f64; 2]; 4]> {
+    let mid = |a: [f64; 2], b: [f64; 2]| [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+    if holes.is_empty() && strictly_convex(vertices) {
+        let v = if crate::geometry::signed_area(vertices) > 0.0 {
+            vertices.to_vec()
+        } else {
+            vertices.iter().rev().copied().collect()
+        };
+        let n = v.len();
+        if n == 4 {
+            return vec![[v[0], v[1], v[2], v[3]]];
+        }
+        // The centroid of the vertices lies inside a convex polygon.
+        let g = [0, 1].map(|d| v.iter().map(|p| p[d]).sum::<f64>() / n as f64);
+        return (0..n)
+            .map(|k| {
+                let (prev, here, next) = (v[(k + n - 1) % n], v[k], v[(k + 1) % n]);
+                [here, mid(here, next), g, mid(prev, here)]
+            })
+            .collect();
+    }
+    crate::triangulation::triangulate(vertices, holes)
+        .expect("validated: every hole inside the polygon")
+        .into_iter()
+        .flat_map(|[a, b, c]| {
+            let g = [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0];
+            let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+            [[a, ab, g, ca], [b, bc, g, ab], [c, ca, g, bc]]
+        })
+        .collect()
+}
+
+/// Whether every turn of the ring `v` is the same way and none is straight.
+fn strictly_convex(v: &[[f64; 2]]) -> bool {
+    let n = v.len();
+    let turns: Vec<f64> = (0..n)
+        .map(|k| {
+            let (a, b, c) = (v[k], v[(k + 1) % n], v[(k + 2) % n]);
+            (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0])
+        })
+        .collect();
+    turns.iter().all(|&t| t > 0.0) || turns.iter().all(|&t| t < 0.0)
+}
+
+/// A full disc (`a = 0`) or annulus on polar rings: `n_r` rings of equal
+/// width from the spacing, each ring divided into as many equal angles as
+/// the spacing gives at its middle radius (at least three), so that the
+/// cells stay near square from the centre out. Each point has the exact
+/// area of its cell and a domain of that area turned with it; the points'
+/// lattice places are (ring, division), which do not make one lattice: the
+/// loops come from the edge.
+fn polar_rings(c: [f64; 2], a: f64, b: f64, s: f64) -> Vec<SeedPoint> {
+    let counts = ring_counts(a, b, s);
+    let dr = (b - a) / counts.len() as f64;
+    let mut out = Vec::with_capacity(counts.iter().sum::<usize>());
+    for (i, &n_t) in counts.iter().enumerate() {
+        let r = a + (i as f64 + 0.5) * dr;
+        let dt = std::f64::consts::TAU / n_t as f64;
+        for j in 0..n_t {
+            let t = (j as f64 + 0.5) * dt;
+            out.push(SeedPoint {
+                position: [c[0] + r * t.cos(), c[1] + r * t.sin()],
+                volume: r * dr * dt,
+                lattice: [i as i64, j as i64],
+                domain: Domain::turned([dr / 2.0, r * dt / 2.0], t),
+            });
         }
     }
+    out
+}
+
+/// Divisions of each polar ring between radii `a` and `b` at spacing `s`.
+fn ring_counts(a: f64, b: f64, s: f64) -> Vec<usize> {
+    let n_r = ((b - a) / s).round().max(1.0) as usize;
+    let dr = (b - a) / n_r as f64;
+    (0..n_r)
+        .map(|i| {
+            let r = a + (i as f64 + 0.5) * dr;
+            (std::f64::consts::TAU * r / s).round().max(3.0) as usize
+        })
+        .collect()
 }
 
 /// The vertices in counter-clockwise order (the first kept), so that the
@@ -319,6 +459,17 @@ fn lattice_range(lo: [f64; 2], hi: [f64; 2], s: f64, origin: [f64; 2], d: usize)
     )
 }
 
+/// The points of [`polar_rings`], counted in floating point without
+/// building them: a ring at radius `r` has about `2 pi r / s` of them.
+fn ring_sites(a: f64, b: f64, s: f64) -> f64 {
+    let n_r = ((b - a) / s).round().max(1.0);
+    if n_r > 1e6 {
+        // Too many rings to list: the area over the spacing squared.
+        return std::f64::consts::PI * (b * b - a * a) / (s * s);
+    }
+    ring_counts(a, b, s).iter().map(|&n| n as f64).sum()
+}
+
 /// How many lattice sites [`fill`] visits, found without visiting them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FillSize {
@@ -335,12 +486,43 @@ pub struct FillSize {
 /// The size of [`fill`]'s work for `geometry` at `density`, in
 /// microseconds whatever the size: per-direction counts multiplied in
 /// floating point, so a huge body gives a huge number, not an overflow.
-pub fn size(geometry: &Geometry, density: Density, origin: [f64; 2]) -> FillSize {
+pub fn size(geometry: &Geometry, density: Density, origin: [f64; 2], lattice: Lattice) -> FillSize {
     let (spacing, count) = match density {
         Density::Spacing(s) => (s, None),
         Density::Count(c) => (f64::NAN, Some(c)),
     };
+    let scan = || {
+        let (lo, hi) = geometry.bounding_box();
+        let n = |d: usize| {
+            let (first, last) = lattice_range(lo, hi, spacing, origin, d);
+            last - first + 1.0
+        };
+        ([n(0), n(1)], false)
+    };
     let (counts, exact) = match geometry {
+        _ if lattice == Lattice::Grid => scan(),
+        Geometry::Polygon { vertices, holes } => (
+            [
+                polygon_patches(vertices, holes)
+                    .iter()
+                    .map(|q| {
+                        let [n_i, n_j] = quadrilateral_counts(q, spacing, None);
+                        n_i * n_j
+                    })
+                    .sum(),
+                1.0,
+            ],
+            true,
+        ),
+        Geometry::Circle { radius, .. } => ([ring_sites(0.0, *radius, spacing), 1.0], true),
+        Geometry::Annulus {
+            inner_radius,
+            outer_radius,
+            ..
+        } => (
+            [ring_sites(*inner_radius, *outer_radius, spacing), 1.0],
+            true,
+        ),
         Geometry::Rectangle { min, max, .. } => (
             rectangle_counts([max[0] - min[0], max[1] - min[1]], spacing, count),
             true,
@@ -364,14 +546,6 @@ pub fn size(geometry: &Geometry, density: Density, origin: [f64; 2]) -> FillSize
             ),
             true,
         ),
-        geometry => {
-            let (lo, hi) = geometry.bounding_box();
-            let n = |d: usize| {
-                let (first, last) = lattice_range(lo, hi, spacing, origin, d);
-                last - first + 1.0
-            };
-            ([n(0), n(1)], false)
-        }
     };
     FillSize {
         sites: counts[0] * counts[1],
@@ -392,7 +566,7 @@ mod tests {
             angle: 0.0,
             about: None,
         };
-        let pts = fill(&b, Density::Count([56, 16]), [0.0, 0.0]);
+        let pts = fill(&b, Density::Count([56, 16]), [0.0, 0.0], Lattice::Body);
         assert_eq!(pts.len(), 896);
         let area: f64 = pts.iter().map(|p| p.volume).sum();
         assert!((area - 20.0).abs() < 1e-12);
@@ -409,9 +583,9 @@ mod tests {
         let v = [[0.0, 0.0], [48.0, 44.0], [48.0, 60.0], [0.0, 44.0]];
         for vertices in [v, [v[0], v[3], v[2], v[1]]] {
             let q = Geometry::Quadrilateral { vertices };
-            let pts = fill(&q, Density::Spacing(2.0), [0.0, 0.0]);
+            let pts = fill(&q, Density::Spacing(2.0), [0.0, 0.0], Lattice::Body);
             assert_eq!(pts.len(), 29 * 15);
-            let counted = size(&q, Density::Spacing(2.0), [0.0, 0.0]);
+            let counted = size(&q, Density::Spacing(2.0), [0.0, 0.0], Lattice::Body);
             assert_eq!((counted.sites, counted.exact), (435.0, true));
             let area: f64 = pts.iter().map(|p| p.volume).sum();
             assert!((area - 1440.0).abs() < 1e-9, "{area}");
@@ -470,7 +644,7 @@ mod tests {
             inner_radius: 0.5,
             outer_radius: 1.0,
         };
-        let area: f64 = fill(&b, Density::Spacing(0.01), [0.0, 0.0])
+        let area: f64 = fill(&b, Density::Spacing(0.01), [0.0, 0.0], Lattice::Body)
             .iter()
             .map(|p| p.volume)
             .sum();
@@ -486,10 +660,16 @@ mod tests {
             vertices: square,
             holes: vec![hole],
         };
-        // Four points per 0.25 m cell.
-        let pts = fill(&b, Density::Spacing(0.25 / 4.0), [0.0, 0.0]);
-        // 16 x 16 lattice minus the 8 x 8 hole.
+        // Four points per 0.25 m cell, on the grid's lattice: 16 x 16 sites
+        // minus the 8 x 8 of the hole.
+        let pts = fill(&b, Density::Spacing(0.25 / 4.0), [0.0, 0.0], Lattice::Grid);
         assert_eq!(pts.len(), 256 - 64);
+        // On its own lattice the cells add up to the area exactly, and none
+        // is in the hole.
+        let pts = fill(&b, Density::Spacing(0.25 / 4.0), [0.0, 0.0], Lattice::Body);
+        let area: f64 = pts.iter().map(|p| p.volume).sum();
+        assert!((area - 0.75).abs() < 1e-12, "{area}");
+        assert!(pts.iter().all(|p| b.contains(p.position)));
     }
 
     #[test]
@@ -517,14 +697,17 @@ mod tests {
                 holes: vec![],
             },
         ];
-        for g in &shapes {
-            let made = fill(g, Density::Spacing(0.05), [0.1, 0.0]).len() as f64;
-            let size = size(g, Density::Spacing(0.05), [0.1, 0.0]);
+        for (g, lattice) in shapes
+            .iter()
+            .flat_map(|g| [(g, Lattice::Body), (g, Lattice::Grid)])
+        {
+            let made = fill(g, Density::Spacing(0.05), [0.1, 0.0], lattice).len() as f64;
+            let size = size(g, Density::Spacing(0.05), [0.1, 0.0], lattice);
             if size.exact {
                 assert_eq!(size.sites, made, "{g:?}");
             } else {
                 assert!(
-                    size.sites >= made && size.sites < 3.0 * made,
+                    size.sites >= made && size.sites < 8.0 * made,
                     "{g:?}: {size:?}"
                 );
             }
@@ -537,7 +720,10 @@ mod tests {
             angle: 0.0,
             about: None,
         };
-        assert_eq!(size(&thin, Density::Spacing(1e-3), [0.0, 0.0]).sites, 5e6);
+        assert_eq!(
+            size(&thin, Density::Spacing(1e-3), [0.0, 0.0], Lattice::Body).sites,
+            5e6
+        );
         // A sliver polygon scans a column of 1e9 sites for a handful of
         // points; a body 1e300 long gives a finite or infinite count, never
         // a wrapped one.
@@ -545,14 +731,16 @@ mod tests {
             vertices: vec![[0.0, 0.0], [1e-12, 0.0], [0.0, 1e6]],
             holes: vec![],
         };
-        let s = size(&sliver, Density::Spacing(1e-3), [0.0, 0.0]);
+        let s = size(&sliver, Density::Spacing(1e-3), [0.0, 0.0], Lattice::Grid);
         assert!(!s.exact && s.sites > 1e9, "{s:?}");
+        let s = size(&sliver, Density::Spacing(1e-3), [0.0, 0.0], Lattice::Body);
+        assert!(s.exact && s.sites > 1e8, "{s:?}");
         let huge = Geometry::Rectangle {
             min: [0.0, 0.0],
             max: [1e300, 1e300],
             angle: 0.0,
             about: None,
         };
-        assert!(size(&huge, Density::Spacing(1e-3), [0.0, 0.0]).sites > 1e300);
+        assert!(size(&huge, Density::Spacing(1e-3), [0.0, 0.0], Lattice::Body).sites > 1e300);
     }
 }

@@ -256,8 +256,8 @@ fn cylinder_case(turn: f64, h: f64, outer_roller: bool) -> (f64, f64) {
 /// Inclined rollers: the quarter cylinder turned by 30 degrees sits on
 /// rollers at 30 and 120 degrees to the grid and must match Lame as well
 /// as the axis-aligned quarter on grid-node rollers does (`lame.rs`, same
-/// h = 0.125: u_r errors 2.5e-3 at a, 8.8e-4 at b). Measured turned:
-/// 1.3e-3 and 2.0e-3 at h = 0.125, 7.4e-4 and 9.8e-4 at h = 0.0625.
+/// h = 0.125: u_r errors 2.1e-3 at a, 4.5e-4 at b). Measured turned:
+/// -7.3e-4 and -1.4e-3 at h = 0.125, 9.1e-5 and -2.7e-6 at h = 0.0625.
 #[test]
 fn inclined_rollers_behave_like_the_aligned_case_turned() {
     for (h, bound) in [(0.125, 5e-3), (0.0625, 2e-3)] {
@@ -274,7 +274,7 @@ fn inclined_rollers_behave_like_the_aligned_case_turned() {
 /// well (`fix: normal` on the circle r = b), so u_r(b) = 0; Lame's solution
 /// with that condition is `u_r = A (r - b^2 / r)`. The roller's normal turns
 /// along the arc, across the cells. Measured at h = 0.0625: u_r(a) errors
-/// 5.2e-4 (aligned) and 4.7e-4 (turned 30 degrees); u_r(b), the gap the
+/// 3.5e-4 (aligned) and 3.1e-4 (turned 30 degrees); u_r(b), the gap the
 /// penalty leaves, 3.2e-4 and 2.9e-4 of u_r(a).
 #[test]
 fn curved_rollers_hold_the_normal_component() {

@@ -1,0 +1,310 @@
+//! The exact edge of a body's reference geometry, as the case gives it:
+//! straight sides and circular arcs, and the corners where the edge turns.
+//! The boundary curve's data points are put on it in the reference
+//! configuration ([`crate::boundary::snap_to_edge`]), whatever lattice the
+//! points were seeded on.
+
+use std::f64::consts::TAU;
+
+use crate::geometry::{Geometry, signed_area};
+
+/// One smooth piece of a geometry's edge, in the direction its ring runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EdgePiece {
+    Segment([f64; 2], [f64; 2]),
+    /// From angle `start` through `sweep` radians: counter-clockwise when
+    /// `sweep > 0`, clockwise when `sweep < 0` (`0 < |sweep| <= 2 pi`).
+    Arc {
+        center: [f64; 2],
+        radius: f64,
+        start: f64,
+        sweep: f64,
+    },
+}
+
+impl EdgePiece {
+    pub fn length(&self) -> f64 {
+        match *self {
+            EdgePiece::Segment(a, b) => distance(a, b),
+            EdgePiece::Arc { radius, sweep, .. } => radius * sweep.abs(),
+        }
+    }
+
+    /// The point at arc length `s` from the piece's start.
+    pub fn at(&self, s: f64) -> [f64; 2] {
+        match *self {
+            EdgePiece::Segment(a, b) => {
+                let t = s / distance(a, b);
+                [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+            }
+            EdgePiece::Arc {
+                center: c,
+                radius: r,
+                start,
+                sweep,
+            } => {
+                let t = start + sweep.signum() * s / r;
+                [c[0] + r * t.cos(), c[1] + r * t.sin()]
+            }
+        }
+    }
+
+    /// The unit tangent, in the running direction, at arc length `s`.
+    fn tangent(&self, s: f64) -> [f64; 2] {
+        match *self {
+            EdgePiece::Segment(a, b) => {
+                let l = distance(a, b);
+                [(b[0] - a[0]) / l, (b[1] - a[1]) / l]
+            }
+            EdgePiece::Arc {
+                radius: r,
+                start,
+                sweep,
+                ..
+            } => {
+                let t = start + sweep.signum() * s / r;
+                [-sweep.signum() * t.sin(), sweep.signum() * t.cos()]
+            }
+        }
+    }
+
+    /// The arc length from the piece's start of its point nearest `x`.
+    pub fn nearest_length(&self, x: [f64; 2]) -> f64 {
+        match *self {
+            EdgePiece::Segment(a, b) => {
+                let d = [b[0] - a[0], b[1] - a[1]];
+                let length = distance(a, b);
+                if length == 0.0 {
+                    return 0.0;
+                }
+                (((x[0] - a[0]) * d[0] + (x[1] - a[1]) * d[1]) / length).clamp(0.0, length)
+            }
+            EdgePiece::Arc {
+                center: c,
+                radius: r,
+                start,
+                sweep,
+            } => {
+                let t = (x[1] - c[1]).atan2(x[0] - c[0]);
+                let along = (sweep.signum() * (t - start)).rem_euclid(TAU);
+                if along <= sweep.abs() {
+                    return r * along;
+                }
+                // Past the arc's end: the nearer end point.
+                let end = self.length();
+                if distance(x, self.at(0.0)) <= distance(x, self.at(end)) {
+                    0.0
+                } else {
+                    end
+                }
+            }
+        }
+    }
+
+    /// The point of the piece nearest `x`.
+    pub fn nearest(&self, x: [f64; 2]) -> [f64; 2] {
+        self.at(self.nearest_length(x))
+    }
+}
+
+pub fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// One closed ring of a geometry's edge, the material on its left: an
+/// outer boundary runs counter-clockwise, a hole's clockwise.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ring {
+    pub pieces: Vec<EdgePiece>,
+    pub hole: bool,
+}
+
+impl Ring {
+    fn polygon(vertices: &[[f64; 2]], hole: bool) -> Self {
+        let counter_clockwise = signed_area(vertices) > 0.0;
+        let mut v = vertices.to_vec();
+        if counter_clockwise == hole {
+            v.reverse();
+        }
+        Self {
+            pieces: (0..v.len())
+                .map(|k| EdgePiece::Segment(v[k], v[(k + 1) % v.len()]))
+                .collect(),
+            hole,
+        }
+    }
+
+    fn circle(center: [f64; 2], radius: f64, hole: bool) -> Self {
+        Self {
+            pieces: vec![EdgePiece::Arc {
+                center,
+                radius,
+                start: 0.0,
+                sweep: if hole { -TAU } else { TAU },
+            }],
+            hole,
+        }
+    }
+
+    pub fn length(&self) -> f64 {
+        self.pieces.iter().map(EdgePiece::length).sum()
+    }
+
+    /// The arc length along the ring of its point nearest `x`, and the
+    /// distance to it.
+    pub fn locate(&self, x: [f64; 2]) -> (f64, f64) {
+        let mut before = 0.0;
+        let mut best = (0.0, f64::INFINITY);
+        for piece in &self.pieces {
+            let s = piece.nearest_length(x);
+            let d = distance(x, piece.at(s));
+            if d < best.1 {
+                best = (before + s, d);
+            }
+            before += piece.length();
+        }
+        best
+    }
+
+    /// The vertices where the ring turns (the tangents either side differ
+    /// by more than a milliradian), with their arc lengths.
+    pub fn corners(&self) -> Vec<(f64, [f64; 2])> {
+        let n = self.pieces.len();
+        let mut before = 0.0;
+        let mut out = Vec::new();
+        for k in 0..n {
+            let (prev, here) = (&self.pieces[(k + n - 1) % n], &self.pieces[k]);
+            let (t0, t1) = (prev.tangent(prev.length()), here.tangent(0.0));
+            let turn = (t0[0] * t1[1] - t0[1] * t1[0]).atan2(t0[0] * t1[0] + t0[1] * t1[1]);
+            if turn.abs() > 1e-3 {
+                out.push((before, here.at(0.0)));
+            }
+            before += here.length();
+        }
+        out
+    }
+}
+
+impl Geometry {
+    /// The closed rings of the edge: the outer boundary counter-clockwise,
+    /// holes clockwise.
+    pub fn rings(&self) -> Vec<Ring> {
+        match self {
+            Geometry::Polygon { vertices, holes } => {
+                std::iter::once(Ring::polygon(vertices, false))
+                    .chain(holes.iter().map(|h| Ring::polygon(h, true)))
+                    .collect()
+            }
+            Geometry::Circle { center, radius } => vec![Ring::circle(*center, *radius, false)],
+            Geometry::Annulus {
+                center,
+                inner_radius,
+                outer_radius,
+            } => vec![
+                Ring::circle(*center, *outer_radius, false),
+                Ring::circle(*center, *inner_radius, true),
+            ],
+            Geometry::AnnulusSector {
+                center,
+                inner_radius: a,
+                outer_radius: b,
+                start_angle,
+                end_angle,
+            } => {
+                let (start, end) = (start_angle.to_radians(), end_angle.to_radians());
+                let at = |r: f64, t: f64| [center[0] + r * t.cos(), center[1] + r * t.sin()];
+                let arc = |radius, start, sweep| EdgePiece::Arc {
+                    center: *center,
+                    radius,
+                    start,
+                    sweep,
+                };
+                vec![Ring {
+                    pieces: vec![
+                        EdgePiece::Segment(at(*a, start), at(*b, start)),
+                        arc(*b, start, end - start),
+                        EdgePiece::Segment(at(*b, end), at(*a, end)),
+                        arc(*a, end, start - end),
+                    ],
+                    hole: false,
+                }]
+            }
+            Geometry::Rectangle { min, max, .. } => {
+                let corners = self.turned_corners().unwrap_or([
+                    *min,
+                    [max[0], min[1]],
+                    *max,
+                    [min[0], max[1]],
+                ]);
+                vec![Ring::polygon(&corners, false)]
+            }
+            Geometry::Quadrilateral { vertices } => vec![Ring::polygon(vertices, false)],
+        }
+    }
+
+    /// The pieces of the edge, holes' included.
+    pub fn edge(&self) -> Vec<EdgePiece> {
+        self.rings().into_iter().flat_map(|r| r.pieces).collect()
+    }
+
+    /// Where the edge is not smooth: the vertices of polygons (holes'
+    /// included), rectangles and quadrilaterals, and a sector's four
+    /// corners; circles and annuli have none.
+    pub fn corners(&self) -> Vec<[f64; 2]> {
+        self.rings()
+            .iter()
+            .flat_map(|r| r.corners().into_iter().map(|(_, x)| x))
+            .collect()
+    }
+
+    /// The point of the edge nearest `x`.
+    pub fn nearest_on_edge(&self, x: [f64; 2]) -> [f64; 2] {
+        nearest_on(&self.edge(), x)
+    }
+}
+
+/// The point of `pieces` nearest `x` (`x` itself if there are none).
+pub fn nearest_on(pieces: &[EdgePiece], x: [f64; 2]) -> [f64; 2] {
+    pieces
+        .iter()
+        .map(|p| p.nearest(x))
+        .min_by(|a, b| distance(x, *a).total_cmp(&distance(x, *b)))
+        .unwrap_or(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_points_lie_on_sides_arcs_and_their_ends() {
+        let sector = Geometry::AnnulusSector {
+            center: [1.0, 2.0],
+            inner_radius: 1.0,
+            outer_radius: 2.0,
+            start_angle: 0.0,
+            end_angle: 90.0,
+        };
+        let close = |a: [f64; 2], b: [f64; 2]| distance(a, b) < 1e-12;
+        // Outside the outer arc, inside the inner one, beyond the ends.
+        assert!(close(sector.nearest_on_edge([4.0, 5.0]), {
+            let s = 2.0 / 2f64.sqrt();
+            [1.0 + s, 2.0 + s]
+        }));
+        assert!(close(sector.nearest_on_edge([1.5, 2.2]), {
+            let d = 0.5f64.hypot(0.2);
+            [1.0 + 0.5 / d, 2.0 + 0.2 / d]
+        }));
+        assert!(close(sector.nearest_on_edge([2.5, 1.0]), [2.5, 2.0]));
+        assert!(close(sector.nearest_on_edge([-1.0, 1.0]), [1.0, 3.0]));
+        assert_eq!(sector.corners().len(), 4);
+        let turned = Geometry::Rectangle {
+            min: [0.0, 0.0],
+            max: [2.0, 1.0],
+            angle: 90.0,
+            about: Some([0.0, 0.0]),
+        };
+        assert!(close(turned.nearest_on_edge([0.2, 1.0]), [0.0, 1.0]));
+        assert!(close(turned.nearest_on_edge([-0.5, 3.0]), [-0.5, 2.0]));
+    }
+}
