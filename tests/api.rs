@@ -307,7 +307,10 @@ fn bodies_over_the_limits_are_refused_from_their_lattice_counts() {
     let peak_before = peak_memory();
     for (body, path) in [
         (
-            with(json!({"rectangle": {"min": [0, 0], "max": [1e-9, 5000]}}), "body"),
+            with(
+                json!({"rectangle": {"min": [0, 0], "max": [1e-9, 5000]}}),
+                "body",
+            ),
             "bodies",
         ),
         // On the grid's lattice, a column of 1e9 sites to scan; on its own,
@@ -590,7 +593,8 @@ fn a_submission_whose_check_runs_out_of_time_is_503() {
         c.limits.admission_time_limit = Duration::from_millis(50);
         c.limits.max_points = 100_000_000;
     });
-    let mut sliver = filled_at_1mm(json!({"polygon": {"vertices": [[0, 0], [1e-12, 0], [0, 1e5]]}}));
+    let mut sliver =
+        filled_at_1mm(json!({"polygon": {"vertices": [[0, 0], [1e-12, 0], [0, 1e5]]}}));
     sliver["bodies"][0]["points"]["lattice"] = "grid".into();
     let (status, headers, body) = submit_with(&app, &[], &sliver.to_string());
     assert_eq!(status, 503, "{body}");

@@ -67,7 +67,9 @@ fn a_turned_polygon_settles_as_the_turned_rectangle() {
         let (along, across) = turned_column_as(30.0, h, Some("body"));
         let (grid, _) = turned_column_as(30.0, h, Some("grid"));
         let error = (along - exact) / exact;
-        eprintln!("polygon at 30 degrees, h {h}: axial error {error:+.3e} (own lattice), top {grid:.4} m on the grid's");
+        eprintln!(
+            "polygon at 30 degrees, h {h}: axial error {error:+.3e} (own lattice), top {grid:.4} m on the grid's"
+        );
         assert!(error.abs() < 3e-3, "h {h}: {error}");
         assert!(across.abs() < 3e-4 * exact.abs(), "h {h}: {across}");
         let grid_error = (grid - exact) / exact;
