@@ -44,6 +44,10 @@ pub enum Geometry {
     Quadrilateral {
         vertices: [[f64; 2]; 4],
     },
+    /// A 2D mesh of triangles and quadrilaterals (node indices, either way
+    /// round), as meshio reads it from a gmsh file. Its boundary is the
+    /// edges that one element alone has.
+    Mesh(Mesh),
     /// The part of an annulus between two angles (degrees, counter-clockwise
     /// from +x, less than a full turn apart), filled on a polar lattice so
     /// that its arcs are rows of points.
@@ -54,6 +58,90 @@ pub enum Geometry {
         start_angle: f64,
         end_angle: f64,
     },
+}
+
+/// The nodes and elements of a mesh body.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Mesh {
+    pub nodes: Vec<[f64; 2]>,
+    /// Three or four node indices each.
+    pub elements: Vec<Vec<usize>>,
+}
+
+impl Mesh {
+    /// Each element's corners, counter-clockwise.
+    pub fn element_corners(&self) -> impl Iterator<Item = Vec<[f64; 2]>> + '_ {
+        self.elements.iter().map(|e| {
+            let mut v: Vec<[f64; 2]> = e.iter().map(|&i| self.nodes[i]).collect();
+            if signed_area(&v) < 0.0 {
+                v.reverse();
+            }
+            v
+        })
+    }
+
+    /// The boundary as closed rings of nodes, each with the material on its
+    /// left (outer boundaries counter-clockwise, holes clockwise): the
+    /// edges that one element alone has, directed as that element runs
+    /// counter-clockwise, chained end to start. `Err` names an element or
+    /// node where the boundary is not a set of simple closed rings.
+    pub fn boundary_rings(&self) -> Result<Vec<Vec<[f64; 2]>>, String> {
+        use std::collections::HashMap;
+        let mut count: HashMap<(usize, usize), u32> = HashMap::new();
+        let mut directed = Vec::new();
+        for e in &self.elements {
+            let v: Vec<[f64; 2]> = e.iter().map(|&i| self.nodes[i]).collect();
+            let mut e = e.clone();
+            if signed_area(&v) < 0.0 {
+                e.reverse();
+            }
+            for k in 0..e.len() {
+                let (a, b) = (e[k], e[(k + 1) % e.len()]);
+                *count.entry((a.min(b), a.max(b))).or_default() += 1;
+                directed.push((a, b));
+            }
+        }
+        if let Some(((a, b), n)) = count.iter().find(|(_, n)| **n > 2) {
+            return Err(format!(
+                "the edge from node {a} to node {b} is shared by {n} elements"
+            ));
+        }
+        let mut next: HashMap<usize, usize> = HashMap::new();
+        for &(a, b) in &directed {
+            if count[&(a.min(b), a.max(b))] == 1 && next.insert(a, b).is_some() {
+                return Err(format!(
+                    "node {a} starts two stretches of boundary (elements meet only at it)"
+                ));
+            }
+        }
+        let mut starts: Vec<usize> = next.keys().copied().collect();
+        starts.sort_unstable();
+        let mut seen = std::collections::HashSet::new();
+        let mut rings = Vec::new();
+        for start in starts {
+            if seen.contains(&start) {
+                continue;
+            }
+            let mut ring = Vec::new();
+            let mut at = start;
+            loop {
+                if !seen.insert(at) {
+                    return Err(format!("the boundary through node {at} does not close"));
+                }
+                ring.push(self.nodes[at]);
+                at = match next.get(&at) {
+                    Some(&b) => b,
+                    None => return Err(format!("the boundary stops at node {at}")),
+                };
+                if at == start {
+                    break;
+                }
+            }
+            rings.push(ring);
+        }
+        Ok(rings)
+    }
 }
 
 impl Geometry {
@@ -79,6 +167,7 @@ impl Geometry {
                 None => (*min, *max),
             },
             Geometry::Polygon { vertices, .. } => vertex_box(vertices),
+            Geometry::Mesh(mesh) => vertex_box(&mesh.nodes),
             Geometry::Quadrilateral { vertices } => vertex_box(vertices),
             Geometry::Circle { center, radius: r }
             | Geometry::Annulus {
@@ -109,6 +198,7 @@ impl Geometry {
                 inside_ring(vertices, p) && !holes.iter().any(|h| inside_ring(h, p))
             }
             Geometry::Quadrilateral { vertices } => inside_ring(vertices, p),
+            Geometry::Mesh(mesh) => mesh.element_corners().any(|v| inside_ring(&v, p)),
             Geometry::Circle { center, radius } => dist(center) < *radius,
             Geometry::Annulus {
                 center,

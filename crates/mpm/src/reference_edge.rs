@@ -239,6 +239,9 @@ impl Geometry {
                 vec![Ring::polygon(&corners, false)]
             }
             Geometry::Quadrilateral { vertices } => vec![Ring::polygon(vertices, false)],
+            Geometry::Mesh(mesh) => (mesh.boundary_rings().unwrap_or_default().iter())
+                .map(|r| Ring::polygon(r, signed_area(r) < 0.0))
+                .collect(),
         }
     }
 

@@ -1,7 +1,7 @@
 //! Built-in cases, shipped in `crates/mpm/cases/` and compiled in.
 
 /// Names accepted by [`get`].
-pub const NAMES: [&str; 3] = ["column", "cantilever-grid", "cantilever"];
+pub const NAMES: [&str; 4] = ["column", "cantilever-grid", "cantilever", "plate-with-hole"];
 
 /// The JSON text of a built-in case.
 pub fn get(name: &str) -> Option<&'static str> {
@@ -9,6 +9,8 @@ pub fn get(name: &str) -> Option<&'static str> {
         "column" => Some(include_str!("../../cases/column.json")),
         "cantilever-grid" => Some(include_str!("../../cases/cantilever-grid.json")),
         "cantilever" => Some(include_str!("../../cases/cantilever.json")),
+        // Made by scripts/plate_with_hole_mesh.py and scripts/gmsh_to_case.py.
+        "plate-with-hole" => Some(include_str!("../../cases/plate-with-hole.json")),
         _ => None,
     }
 }

@@ -524,6 +524,103 @@ mod tests {
         Case::from_json(&v.to_string()).unwrap();
     }
 
+    /// A mesh body is refused, naming the field, when an element is not
+    /// one (a wrong node count, a missing or repeated node, no area, a
+    /// quadrilateral that is not convex), when its boundary is not closed
+    /// simple rings, or when elements overlap; a good mesh, triangles and
+    /// quadrilaterals either way round, passes.
+    #[test]
+    fn a_mesh_that_is_not_one_is_refused() {
+        let nodes = serde_json::json!([[0, 0], [1, 0], [2, 0], [0, 1], [1, 1], [2, 1]]);
+        let mesh_case = |elements: serde_json::Value| {
+            let mut v = column_json();
+            v["bodies"][0]["geometry"] =
+                serde_json::json!({"mesh": {"nodes": nodes.clone(), "elements": elements}});
+            v
+        };
+        Case::from_json(
+            &mesh_case(serde_json::json!([[0, 1, 4, 3], [1, 5, 4], [1, 2, 5]])).to_string(),
+        )
+        .unwrap();
+        Case::from_json(
+            &mesh_case(serde_json::json!([[3, 4, 1, 0], [4, 5, 1], [1, 5, 2]])).to_string(),
+        )
+        .unwrap();
+        for (elements, path, words) in [
+            (
+                serde_json::json!([[0, 1]]),
+                "bodies[0].geometry.mesh.elements[0]",
+                "3 or 4",
+            ),
+            (
+                serde_json::json!([[0, 1, 9]]),
+                "bodies[0].geometry.mesh.elements[0]",
+                "does not exist",
+            ),
+            (
+                serde_json::json!([[0, 1, 1]]),
+                "bodies[0].geometry.mesh.elements[0]",
+                "repeats",
+            ),
+            (
+                serde_json::json!([[0, 1, 2]]),
+                "bodies[0].geometry.mesh.elements[0]",
+                "no area",
+            ),
+            (
+                serde_json::json!([[0, 1, 2, 4]]),
+                "bodies[0].geometry.mesh.elements[0]",
+                "convex",
+            ),
+            (
+                serde_json::json!([[0, 1, 4, 3], [3, 4, 1, 0]]),
+                "bodies[0].geometry.mesh.elements",
+                "overlap",
+            ),
+            (
+                serde_json::json!([[0, 1, 4, 3], [0, 1, 4]]),
+                "bodies[0].geometry.mesh.elements",
+                "node 4",
+            ),
+            (
+                serde_json::json!([[0, 1, 3], [1, 2, 5]]),
+                "bodies[0].geometry.mesh.elements",
+                "node 1",
+            ),
+            (
+                serde_json::json!([]),
+                "bodies[0].geometry.mesh.elements",
+                "at least one",
+            ),
+        ] {
+            let e = error_for(mesh_case(elements.clone()));
+            assert_eq!(e.path, path, "{elements}: {e}");
+            assert!(e.message.contains(words), "{elements}: {e}");
+        }
+        let mut v = mesh_case(serde_json::json!([[0, 1, 4, 3]]));
+        v["bodies"][0]["points"]["lattice"] = "grid".into();
+        assert_eq!(error_for(v).path, "bodies[0].points.lattice");
+    }
+
+    /// A polygon on its own lattice is cut into triangles: a hole outside
+    /// it or overlapping another is refused, naming the holes.
+    #[test]
+    fn a_polygon_hole_outside_is_refused() {
+        let square = serde_json::json!([[0, 0], [4, 0], [4, 4], [0, 4]]);
+        for holes in [
+            serde_json::json!([[[5, 1], [6, 1], [6, 2]]]),
+            serde_json::json!([
+                [[1, 1], [2, 1], [2, 2], [1, 2]],
+                [[1.5, 1.5], [3, 1.5], [3, 3]]
+            ]),
+        ] {
+            let mut v = column_json();
+            v["bodies"][0]["geometry"] = serde_json::json!({"polygon": {"vertices": square.clone(), "holes": holes.clone()}});
+            let e = error_for(v);
+            assert_eq!(e.path, "bodies[0].geometry.polygon.holes", "{holes}: {e}");
+        }
+    }
+
     #[test]
     fn poisson_ratio_of_one_half_names_the_field() {
         let mut v = column_json();

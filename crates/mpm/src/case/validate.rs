@@ -313,6 +313,15 @@ impl Body {
             Geometry::Quadrilateral { vertices } => {
                 check_convex_quadrilateral(&format!("{g}.quadrilateral.vertices"), vertices)?
             }
+            Geometry::Mesh(mesh) => {
+                check_mesh(&format!("{g}.mesh"), mesh)?;
+                if self.points.lattice == Lattice::Grid {
+                    return Err(CaseError::new(
+                        format!("{path}.points.lattice"),
+                        "a mesh is filled on its own elements (body)",
+                    ));
+                }
+            }
             Geometry::Circle { center, radius } => {
                 finite_pair(&format!("{g}.circle.center"), *center)?;
                 positive(&format!("{g}.circle.radius"), *radius)?;
@@ -522,6 +531,77 @@ fn check_ring(path: &str, ring: &[[f64; 2]]) -> Result<(), CaseError> {
     Ok(())
 }
 
+/// A mesh: at most [`MAX_MESH_NODES`] finite nodes; at least one element,
+/// each of three or four distinct nodes that exist, enclosing area, a
+/// quadrilateral strictly convex; a boundary of closed simple rings; and
+/// elements that neither overlap nor leave gaps, which their areas adding
+/// up to the area the rings enclose shows.
+fn check_mesh(path: &str, mesh: &crate::geometry::Mesh) -> Result<(), CaseError> {
+    let nodes = &mesh.nodes;
+    if nodes.len() > MAX_MESH_NODES || mesh.elements.len() > MAX_MESH_NODES {
+        return Err(CaseError::new(
+            path,
+            format!("more than {MAX_MESH_NODES} nodes or elements"),
+        ));
+    }
+    for (i, v) in nodes.iter().enumerate() {
+        finite_pair(&format!("{path}.nodes[{i}]"), *v)?;
+    }
+    if mesh.elements.is_empty() {
+        return Err(CaseError::new(
+            format!("{path}.elements"),
+            "needs at least one element",
+        ));
+    }
+    let (lo, hi) = Geometry::Mesh(crate::geometry::Mesh {
+        nodes: nodes.clone(),
+        elements: Vec::new(),
+    })
+    .bounding_box();
+    let scale = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    let mut total = 0.0;
+    for (k, e) in mesh.elements.iter().enumerate() {
+        let at = format!("{path}.elements[{k}]");
+        if !(3..=4).contains(&e.len()) {
+            return Err(CaseError::new(
+                at,
+                format!("needs 3 or 4 nodes, got {}", e.len()),
+            ));
+        }
+        if let Some(&i) = e.iter().find(|&&i| i >= nodes.len()) {
+            return Err(CaseError::new(
+                at,
+                format!("node {i} does not exist ({} nodes)", nodes.len()),
+            ));
+        }
+        if (0..e.len()).any(|a| (a + 1..e.len()).any(|b| e[a] == e[b])) {
+            return Err(CaseError::new(at, "repeats a node"));
+        }
+        let v: Vec<[f64; 2]> = e.iter().map(|&i| nodes[i]).collect();
+        let area = signed_area(&v).abs();
+        if area <= 1e-12 * scale * scale {
+            return Err(CaseError::new(at, "encloses no area"));
+        }
+        if e.len() == 4 {
+            check_convex_quadrilateral(&at, &[v[0], v[1], v[2], v[3]])?;
+        }
+        total += area;
+    }
+    let rings = mesh
+        .boundary_rings()
+        .map_err(|m| CaseError::new(format!("{path}.elements"), m))?;
+    let enclosed: f64 = rings.iter().map(|r| signed_area(r)).sum();
+    if (total - enclosed).abs() > 1e-9 * total {
+        return Err(CaseError::new(
+            format!("{path}.elements"),
+            format!(
+                "elements overlap: their areas add up to {total}, their boundary encloses {enclosed}"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// A polygon filled on its own lattice is cut into triangles first: at most
 /// [`triangulation::MAX_VERTICES`] vertices (holes' included), and its
 /// holes must lie inside it and apart, which the triangles' areas adding
@@ -596,3 +676,6 @@ const MAX_CUTBACKS: u32 = 1000;
 /// Vertices a polygon's ring may have: the simplicity check is quadratic in
 /// them (5e7 edge pairs at this size, a fraction of a second).
 const MAX_RING_VERTICES: usize = 10_000;
+
+/// The most nodes (and elements) a mesh body may have.
+const MAX_MESH_NODES: usize = 1_000_000;

@@ -120,7 +120,10 @@ pub fn follows_edge(geometry: &Geometry, lattice: Lattice) -> bool {
     lattice == Lattice::Body
         && matches!(
             geometry,
-            Geometry::Polygon { .. } | Geometry::Circle { .. } | Geometry::Annulus { .. }
+            Geometry::Polygon { .. }
+                | Geometry::Circle { .. }
+                | Geometry::Annulus { .. }
+                | Geometry::Mesh(_)
         )
 }
 
@@ -204,6 +207,20 @@ pub fn fill(
             }
             out
         }
+        Geometry::Mesh(mesh) => {
+            let mut out = Vec::new();
+            for (k, quad) in mesh_patches(mesh).iter().enumerate() {
+                out.extend(
+                    mapped_quadrilateral(quad, spacing, None)
+                        .into_iter()
+                        .map(|mut p| {
+                            p.lattice = [k as i64, p.lattice[0] + (p.lattice[1] << 32)];
+                            p
+                        }),
+                );
+            }
+            out
+        }
         Geometry::Circle { center, radius } => polar_rings(*center, 0.0, *radius, spacing),
         Geometry::Annulus {
             center,
@@ -242,10 +259,30 @@ fn polygon_patches(vertices: &[[f64; 2]], holes: &[Vec<[f64; 2]>]) -> Vec<[[f64;
     crate::triangulation::triangulate(vertices, holes)
         .expect("validated: every hole inside the polygon")
         .into_iter()
-        .flat_map(|[a, b, c]| {
-            let g = [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0];
-            let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
-            [[a, ab, g, ca], [b, bc, g, ab], [c, ca, g, bc]]
+        .flat_map(triangle_patches)
+        .collect()
+}
+
+/// A counter-clockwise triangle cut into three counter-clockwise
+/// quadrilaterals by the lines from its centroid to the middles of its
+/// sides, a vertex of the triangle first in each.
+fn triangle_patches([a, b, c]: [[f64; 2]; 3]) -> [[[f64; 2]; 4]; 3] {
+    let mid = |a: [f64; 2], b: [f64; 2]| [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
+    let g = [(a[0] + b[0] + c[0]) / 3.0, (a[1] + b[1] + c[1]) / 3.0];
+    let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
+    [[a, ab, g, ca], [b, bc, g, ab], [c, ca, g, bc]]
+}
+
+/// A mesh's patches: each quadrilateral element itself (validated convex),
+/// each triangle cut in three ([`triangle_patches`]), all counter-clockwise.
+/// Its points are those of a composite midpoint rule on each element's
+/// map, each with its exact sub-cell's area (the rule's weight times the
+/// Jacobian, integrated), and each sub-cell its point's GIMP domain.
+fn mesh_patches(mesh: &crate::geometry::Mesh) -> Vec<[[f64; 2]; 4]> {
+    mesh.element_corners()
+        .flat_map(|v| match v.len() {
+            3 => triangle_patches([v[0], v[1], v[2]]).to_vec(),
+            _ => vec![[v[0], v[1], v[2], v[3]]],
         })
         .collect()
 }
@@ -504,6 +541,19 @@ pub fn size(geometry: &Geometry, density: Density, origin: [f64; 2], lattice: La
         Geometry::Polygon { vertices, holes } => (
             [
                 polygon_patches(vertices, holes)
+                    .iter()
+                    .map(|q| {
+                        let [n_i, n_j] = quadrilateral_counts(q, spacing, None);
+                        n_i * n_j
+                    })
+                    .sum(),
+                1.0,
+            ],
+            true,
+        ),
+        Geometry::Mesh(mesh) => (
+            [
+                mesh_patches(mesh)
                     .iter()
                     .map(|q| {
                         let [n_i, n_j] = quadrilateral_counts(q, spacing, None);

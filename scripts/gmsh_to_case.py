@@ -1,0 +1,71 @@
+"""Turn a 2D gmsh mesh into a case body: `geometry: {"mesh": {...}}`.
+
+meshio reads the .msh file; its triangles and quadrilaterals become the
+body's elements (node indices, either way round), its nodes the x and y
+of gmsh's points. Nodes no element uses are dropped. The case around the
+body comes from a template (a case JSON whose first body's geometry is
+replaced), or a minimal one.
+
+    pip install meshio
+    python3 scripts/gmsh_to_case.py mesh.msh --template case.json > case.json
+
+The built-in `plate-with-hole` was made so (see plate_with_hole_mesh.py):
+
+    python3 scripts/plate_with_hole_mesh.py /tmp/plate.msh
+    python3 scripts/gmsh_to_case.py /tmp/plate.msh \\
+        --template scripts/plate_with_hole_template.json \\
+        > crates/mpm/cases/plate-with-hole.json
+"""
+
+import argparse
+import json
+import sys
+
+import meshio
+
+CELL_TYPES = ("triangle", "quad")
+
+
+def mesh_geometry(path, digits=9):
+    mesh = meshio.read(path)
+    elements = []
+    for block in mesh.cells:
+        if block.type in CELL_TYPES:
+            elements.extend(block.data.tolist())
+    if not elements:
+        sys.exit(f"{path}: no triangles or quadrilaterals")
+    used = sorted({i for e in elements for i in e})
+    renumber = {old: new for new, old in enumerate(used)}
+    nodes = [[round(float(mesh.points[i][0]), digits), round(float(mesh.points[i][1]), digits)] for i in used]
+    return {"nodes": nodes, "elements": [[renumber[i] for i in e] for e in elements]}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("mesh", help="a .msh file (or anything meshio reads)")
+    parser.add_argument("--template", help="case JSON whose first body takes the mesh")
+    args = parser.parse_args()
+    geometry = {"mesh": mesh_geometry(args.mesh)}
+    if args.template:
+        with open(args.template) as f:
+            case = json.load(f)
+    else:
+        case = {
+            "version": 1,
+            "analysis": {"load_steps": 1},
+            "grid": {"cell_size": 0.5},
+            "basis": "gimp",
+            "bodies": [
+                {
+                    "points": {"per_cell": 2},
+                    "material": {"model": "linear_elastic", "youngs_modulus": 1e6, "poisson_ratio": 0.3, "density": 0},
+                }
+            ],
+        }
+    case["bodies"][0]["geometry"] = geometry
+    json.dump(case, sys.stdout, separators=(",", ":"))
+    sys.stdout.write("\n")
+
+
+if __name__ == "__main__":
+    main()
