@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Draws docs/turned-column.svg: the 2 m x 10 m self-weight column turned 30
 degrees on 0.5 m cells (the case of `bodies.rs` in the verification tests),
-filled as a turned rectangle (its own lattice) and as a polygon (the grid's
-lattice, a staircase), with the points in the reference configuration, the
-true edge and the boundary curve at the last load step.
+filled as a turned rectangle (its own lattice) and as a polygon on the
+grid's lattice (`points.lattice: grid`, a staircase; its boundary curve is
+put on the true edge all the same), with the points in the reference
+configuration, the true edge and the boundary curve at the last load step.
+A polygon on its own lattice (the default) is filled as the rectangle is.
 
     cargo build --release && python3 scripts/turned_column_picture.py
 """
@@ -25,7 +27,7 @@ def turn(p):
     return [c * p[0] - s * p[1], s * p[0] + c * p[1]]
 
 
-def case(geometry):
+def case(geometry, lattice="body"):
     axis = turn([0.0, 1.0])
     return {
         "version": 1,
@@ -34,7 +36,7 @@ def case(geometry):
         "basis": "gimp",
         "bodies": [{
             "geometry": geometry,
-            "points": {"per_cell": 2},
+            "points": {"per_cell": 2, "lattice": lattice},
             "material": {"model": "hencky", "youngs_modulus": 1e6, "poisson_ratio": 0.25,
                          "density": 1000.0},
         }],
@@ -47,11 +49,11 @@ def case(geometry):
     }
 
 
-def solve(geometry, work):
+def solve(geometry, work, lattice="body"):
     path = os.path.join(work, "case.json")
     out = os.path.join(work, "out")
     with open(path, "w") as f:
-        json.dump(case(geometry), f)
+        json.dump(case(geometry, lattice), f)
     subprocess.run([MPM, "run", path, "--out", out], check=True, capture_output=True)
     with open(sorted(glob.glob(os.path.join(out, "steps", "*.json")))[-1]) as f:
         last = json.load(f)
@@ -88,11 +90,11 @@ def main():
     with tempfile.TemporaryDirectory() as work:
         own = solve({"rectangle": {"min": [0, 0], "max": [W, L], "angle": ANGLE,
                                    "about": [0, 0]}}, work)
-        staircase = solve({"polygon": {"vertices": corners}}, work)
+        staircase = solve({"polygon": {"vertices": corners}}, work, "grid")
     svg = ['<svg xmlns="http://www.w3.org/2000/svg" width="940" height="720" viewBox="0 0 940 720">',
            '<rect width="940" height="720" fill="white"/>']
     svg += panel(0, "turned rectangle (its own lattice)", *own, corners)
-    svg += panel(470, "polygon (the grid's lattice: a staircase)", *staircase, corners)
+    svg += panel(470, "polygon on the grid's lattice (a staircase)", *staircase, corners)
     svg.append('<text x="10" y="705" font-family="sans-serif" font-size="12">The 2 m x 10 m column '
                'turned 30 degrees on 0.5 m cells (grey), 2 points per cell: points in the reference '
                'configuration (blue), the true edge (dashed), the boundary curve after 5 steps (red).</text>')
