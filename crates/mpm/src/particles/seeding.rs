@@ -194,33 +194,9 @@ pub fn fill(
             mapped_quadrilateral(&counter_clockwise(vertices), spacing, count)
         }
         Geometry::Polygon { vertices, holes } => {
-            let mut out = Vec::new();
-            for (k, quad) in polygon_patches(vertices, holes).iter().enumerate() {
-                out.extend(
-                    mapped_quadrilateral(quad, spacing, None)
-                        .into_iter()
-                        .map(|mut p| {
-                            p.lattice = [k as i64, p.lattice[0] + (p.lattice[1] << 32)];
-                            p
-                        }),
-                );
-            }
-            out
+            fill_patches(&polygon_patches(vertices, holes), spacing)
         }
-        Geometry::Mesh(mesh) => {
-            let mut out = Vec::new();
-            for (k, quad) in mesh_patches(mesh).iter().enumerate() {
-                out.extend(
-                    mapped_quadrilateral(quad, spacing, None)
-                        .into_iter()
-                        .map(|mut p| {
-                            p.lattice = [k as i64, p.lattice[0] + (p.lattice[1] << 32)];
-                            p
-                        }),
-                );
-            }
-            out
-        }
+        Geometry::Mesh(mesh) => fill_patches(&mesh_patches(mesh), spacing),
         Geometry::Circle { center, radius } => polar_rings(*center, 0.0, *radius, spacing),
         Geometry::Annulus {
             center,
@@ -228,6 +204,35 @@ pub fn fill(
             outer_radius,
         } => polar_rings(*center, *inner_radius, *outer_radius, spacing),
     }
+}
+
+/// Every patch's mapped lattice at spacing `s`; a point's lattice place is
+/// (patch, its place in the patch), which is no lattice as a whole: the
+/// loops of such bodies come from the edge.
+fn fill_patches(patches: &[[[f64; 2]; 4]], s: f64) -> Vec<SeedPoint> {
+    let mut out = Vec::new();
+    for (k, quad) in patches.iter().enumerate() {
+        out.extend(
+            mapped_quadrilateral(quad, s, None)
+                .into_iter()
+                .map(|mut p| {
+                    p.lattice = [k as i64, p.lattice[0] + (p.lattice[1] << 32)];
+                    p
+                }),
+        );
+    }
+    out
+}
+
+/// The points [`fill_patches`] makes, counted without making them.
+fn patch_sites(patches: &[[[f64; 2]; 4]], s: f64) -> f64 {
+    patches
+        .iter()
+        .map(|q| {
+            let [n_i, n_j] = quadrilateral_counts(q, s, None);
+            n_i * n_j
+        })
+        .sum()
 }
 
 /// A polygon's patches, counter-clockwise quadrilaterals of which every
@@ -539,31 +544,10 @@ pub fn size(geometry: &Geometry, density: Density, origin: [f64; 2], lattice: La
     let (counts, exact) = match geometry {
         _ if lattice == Lattice::Grid => scan(),
         Geometry::Polygon { vertices, holes } => (
-            [
-                polygon_patches(vertices, holes)
-                    .iter()
-                    .map(|q| {
-                        let [n_i, n_j] = quadrilateral_counts(q, spacing, None);
-                        n_i * n_j
-                    })
-                    .sum(),
-                1.0,
-            ],
+            [patch_sites(&polygon_patches(vertices, holes), spacing), 1.0],
             true,
         ),
-        Geometry::Mesh(mesh) => (
-            [
-                mesh_patches(mesh)
-                    .iter()
-                    .map(|q| {
-                        let [n_i, n_j] = quadrilateral_counts(q, spacing, None);
-                        n_i * n_j
-                    })
-                    .sum(),
-                1.0,
-            ],
-            true,
-        ),
+        Geometry::Mesh(mesh) => ([patch_sites(&mesh_patches(mesh), spacing), 1.0], true),
         Geometry::Circle { radius, .. } => ([ring_sites(0.0, *radius, spacing), 1.0], true),
         Geometry::Annulus {
             inner_radius,

@@ -411,67 +411,104 @@ fn kirsch_hoop(s: f64, a: f64, r: f64, t: f64) -> f64 {
 
 /// The built-in `plate-with-hole` (a gmsh mesh body: the quarter 10 m x
 /// 10 m with a hole of a = 1 m, tension 1 kPa along x on x = 10, symmetry
-/// rollers on grid nodes) on cells of `h`: the hoop stress of the points
-/// next to the hole within 15 degrees of its top, each over Kirsch's at
-/// the point, averaged by volume; and the same over the whole ring of
-/// points next to the hole, as the largest deviation.
-fn plate_with_hole(h: f64, polar: bool) -> (f64, f64) {
+/// rollers on grid nodes) on cells of `h`, or (`polar`) the same plate as
+/// an annulus sector to r = 3 m on its polar lattice and the rest as a
+/// polygon whose inner side is that arc in 64 chords (the two bodies share
+/// the grid, so they act as one). Returns the hoop stress of the points
+/// within half a cell of the hole and 15 degrees of its top, each over
+/// Kirsch's at the point, averaged by volume; and the probes' displacements
+/// `[u_y(0, 1), u_x(1, 0), u_x(10, 10), u_y(10, 10)]`.
+fn plate_with_hole(h: f64, polar: bool) -> (f64, [f64; 4]) {
     let mut case = mpm::case::builtin::json("plate-with-hole").expect("built in");
     case["grid"]["cell_size"] = h.into();
     if polar {
-        // An annulus sector to r = 3 m on its polar lattice, and the rest
-        // of the quarter as a polygon whose inner side is the sector's arc
-        // in 64 chords; the two bodies share the grid, so they act as one.
         let n = 64;
         let mut ring = vec![[3.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
         ring.extend((0..n).map(|k| {
             let t = std::f64::consts::FRAC_PI_2 * (n - k) as f64 / n as f64;
             [3.0 * t.cos(), 3.0 * t.sin()]
         }));
-        ring.pop();
         let mut sector = case["bodies"][0].clone();
-        sector["geometry"] = serde_json::json!({ "annulus_sector": { "center": [0.0, 0.0], "inner_radius": 1.0,
-            "outer_radius": 3.0, "start_angle": 0.0, "end_angle": 90.0 } });
+        sector["geometry"] = serde_json::json!({ "annulus_sector": { "center": [0.0, 0.0],
+            "inner_radius": 1.0, "outer_radius": 3.0, "start_angle": 0.0, "end_angle": 90.0 } });
         let mut rest = case["bodies"][0].clone();
         rest["geometry"] = serde_json::json!({ "polygon": { "vertices": ring } });
         case["bodies"] = serde_json::json!([sector, rest]);
     }
-    let (sim, _) = run(&case);
+    let (sim, report) = run(&case);
     let mp = &sim.points;
-    let (mut top, mut volume, mut worst) = (0.0, 0.0, 0.0f64);
+    let (mut top, mut volume) = (0.0, 0.0);
     for p in 0..mp.len() {
         let x = mp.reference[p];
         let (r, t) = (x[0].hypot(x[1]), x[1].atan2(x[0]));
-        if r > 1.0 + 0.5 * h {
+        if r > 1.0 + 0.5 * h || (t - std::f64::consts::FRAC_PI_2).abs() > 15f64.to_radians() {
             continue;
         }
         let [sxx, syy, sxy] = mp.stress[p].plane;
         let (c, s) = (t.cos(), t.sin());
         let hoop = s * s * sxx + c * c * syy - 2.0 * c * s * sxy;
-        let ratio = hoop / kirsch_hoop(1e3, 1.0, r, t);
-        if (t - std::f64::consts::FRAC_PI_2).abs() < 15f64.to_radians() {
-            top += ratio * mp.volume0[p];
-            volume += mp.volume0[p];
-        }
-        if t.to_degrees() > 45.0 {
-            worst = worst.max((ratio - 1.0).abs());
-        }
+        top += hoop / kirsch_hoop(1e3, 1.0, r, t) * mp.volume0[p];
+        volume += mp.volume0[p];
     }
-    (top / volume, worst)
+    let probe = |k: usize| report.steps[0].probes[k].displacement;
+    (
+        top / volume,
+        [probe(0)[1], probe(1)[0], probe(2)[0], probe(2)[1]],
+    )
 }
 
+/// The plate with a hole against a converged finite-element solution of
+/// the same finite plate (`scripts/plate_with_hole_reference.py`: Q9
+/// elements on an exact hole, 12288 elements, Richardson-extrapolated;
+/// checked there against Lame and against Kirsch with Kirsch's tractions
+/// on the far edges). Its hoop stress at the top of the hole is 3086.06 Pa,
+/// K = 3.0861, 2.9% over Kirsch's 3 for an infinite plate: the finite width
+/// (d/D = 0.1: Peterson's fit of Howland's strip gives K = 3.0245, and the
+/// script's long strip 3.0361) and the finite length (the 20 m x 20 m
+/// plate, +1.65% over the strip). Near the top the reference is 1.027 to
+/// 1.029 times Kirsch's field (75 degrees on the hole, y = 1.05 and 1.1 on
+/// x = 0), so the points' ratio is compared with 1.028.
+///
+/// Measured (h = 0.25, 0.125, 0.0625), the ratio: the mesh 1.0289, 1.0299,
+/// 1.0236 (+0.1%, +0.2%, -0.4%: its hole is 64 facets, a little smaller
+/// than the circle); the polar fill 1.0381, 1.0336, 1.0275 (+1.0%, +0.6%,
+/// -0.05%). Displacement errors, relative: u_y(0, 1) -1.1e-2, -3.8e-3,
+/// -6.7e-4 (mesh) and -1.4e-2, -2.2e-3, -6.4e-5 (polar), order 2 or more;
+/// u_x(1, 0) 1.2e-3, -4.5e-4, -9.0e-4 and 1.7e-3, 8.9e-5, -2.6e-4; the far
+/// corner's -3.7e-4 and +3.2e-4 whatever h: that is the load's difference,
+/// this code's traction being per current length and the far side 3.7e-4
+/// shorter (Poisson), the reference's per reference length. Bounds: the
+/// ratio within 1.5% (GIMP's point stresses at a free edge are first
+/// order), and the displacements' largest error falling at each
+/// refinement and under 1% at the finest.
 #[test]
-fn the_plate_with_a_hole_concentrates_stress_as_kirsch() {
+fn the_plate_with_a_hole_matches_the_converged_reference() {
+    // scripts/plate_with_hole_reference.py, errors about 1e-9 m.
+    let reference = [-9.725843e-4, 2.809188e-3, 9.002192e-3, -3.689529e-3];
     for polar in [false, true] {
         let mut coarser = f64::INFINITY;
         for h in [0.25, 0.125, 0.0625] {
-            let (top, worst) = plate_with_hole(h, polar);
+            let (top, u) = plate_with_hole(h, polar);
+            let errors: Vec<f64> = (0..4)
+                .map(|k| (u[k] - reference[k]) / reference[k].abs())
+                .collect();
+            let worst = errors.iter().map(|e| e.abs()).fold(0.0, f64::max);
             eprintln!(
-                "plate with a hole, polar {polar}, h {h}: hoop stress over Kirsch's at the top {top:.4}, worst deviation past 45 degrees {worst:.3}"
+                "plate with a hole, {}, h {h}: hoop stress over Kirsch's near the top {top:.4} \
+                 (reference 1.028), displacement errors {:?}",
+                if polar { "polar fill" } else { "mesh" },
+                errors
+                    .iter()
+                    .map(|e| format!("{e:+.2e}"))
+                    .collect::<Vec<_>>()
             );
-            assert!((top - 1.008).abs() < 4e-2, "polar {polar}, h {h}: {top}");
-            assert!(worst < coarser, "polar {polar}, h {h}: {worst} after {coarser}");
+            assert!(
+                (top / 1.028 - 1.0).abs() < 1.5e-2,
+                "polar {polar}, h {h}: {top}"
+            );
+            assert!(worst < coarser, "polar {polar}, h {h}: {errors:?}");
             coarser = worst;
         }
+        assert!(coarser < 1e-2, "polar {polar}: {coarser}");
     }
 }
