@@ -4,6 +4,7 @@
 //! configuration ([`crate::boundary::snap_to_edge`]), whatever lattice the
 //! points were seeded on.
 
+use std::collections::HashMap;
 use std::f64::consts::TAU;
 
 use crate::geometry::{Geometry, signed_area};
@@ -34,7 +35,11 @@ impl EdgePiece {
     pub fn at(&self, s: f64) -> [f64; 2] {
         match *self {
             EdgePiece::Segment(a, b) => {
-                let t = s / distance(a, b);
+                let length = distance(a, b);
+                if length == 0.0 {
+                    return a;
+                }
+                let t = s / length;
                 [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
             }
             EdgePiece::Arc {
@@ -123,6 +128,11 @@ impl Ring {
     fn polygon(vertices: &[[f64; 2]], hole: bool) -> Self {
         let counter_clockwise = signed_area(vertices) > 0.0;
         let mut v = vertices.to_vec();
+        // A vertex given twice in a row is one corner.
+        v.dedup();
+        while v.len() > 1 && v.first() == v.last() {
+            v.pop();
+        }
         if counter_clockwise == hole {
             v.reverse();
         }
@@ -148,6 +158,19 @@ impl Ring {
 
     pub fn length(&self) -> f64 {
         self.pieces.iter().map(EdgePiece::length).sum()
+    }
+
+    /// The arc length along the ring at which each piece starts.
+    pub fn starts(&self) -> Vec<f64> {
+        let mut at = 0.0;
+        self.pieces
+            .iter()
+            .map(|p| {
+                let start = at;
+                at += p.length();
+                start
+            })
+            .collect()
     }
 
     /// The arc length along the ring of its point nearest `x`, and the
@@ -266,6 +289,170 @@ impl Geometry {
     }
 }
 
+/// Edge pieces bucketed by their bounding boxes, so that the piece nearest
+/// a point costs a few pieces, not the whole edge of a mesh or a polygon.
+pub struct EdgeIndex<'a> {
+    pieces: &'a [EdgePiece],
+    size: f64,
+    buckets: HashMap<(i64, i64), Vec<usize>>,
+}
+
+impl<'a> EdgeIndex<'a> {
+    /// Buckets at least `size` wide (and as wide as the largest piece).
+    pub fn new(pieces: &'a [EdgePiece], size: f64) -> Self {
+        let boxes: Vec<([f64; 2], [f64; 2])> = pieces.iter().map(bounding_box).collect();
+        let size = boxes
+            .iter()
+            .map(|(lo, hi)| (hi[0] - lo[0]).max(hi[1] - lo[1]))
+            .fold(size, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let mut buckets: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+        for (k, (lo, hi)) in boxes.iter().enumerate() {
+            let (i0, j0) = bucket(*lo, size);
+            let (i1, j1) = bucket(*hi, size);
+            for i in i0..=i1 {
+                for j in j0..=j1 {
+                    buckets.entry((i, j)).or_default().push(k);
+                }
+            }
+        }
+        Self {
+            pieces,
+            size,
+            buckets,
+        }
+    }
+
+    /// The piece nearest `x` among those within `radius` of it: its index,
+    /// the arc length along it and the distance; `None` if none is within.
+    pub fn nearest(&self, x: [f64; 2], radius: f64) -> Option<(usize, f64, f64)> {
+        let reach = (radius / self.size).ceil().min(1e6) as i64;
+        let (i, j) = bucket(x, self.size);
+        let mut best: Option<(usize, f64, f64)> = None;
+        for a in i - reach..=i + reach {
+            for b in j - reach..=j + reach {
+                for &k in self.buckets.get(&(a, b)).into_iter().flatten() {
+                    let s = self.pieces[k].nearest_length(x);
+                    let d = distance(x, self.pieces[k].at(s));
+                    if d <= radius && best.is_none_or(|(_, _, e)| d < e) {
+                        best = Some((k, s, d));
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// The point of the edge nearest `x`, looked for within `radius`
+    /// first and over the whole edge if nothing is that near.
+    pub fn nearest_point(&self, x: [f64; 2], radius: f64) -> [f64; 2] {
+        match self.nearest(x, radius) {
+            Some((k, s, _)) => self.pieces[k].at(s),
+            None => nearest_on(self.pieces, x),
+        }
+    }
+}
+
+/// Points bucketed on a square lattice, for the nearest of them to a
+/// place without looking at all of them.
+pub struct PointIndex {
+    points: Vec<[f64; 2]>,
+    size: f64,
+    buckets: HashMap<(i64, i64), Vec<usize>>,
+}
+
+impl PointIndex {
+    /// `points` in buckets at least `size` wide, and wide enough that there
+    /// are no more buckets over their bounding box than points (so that a
+    /// few points lie near any place among them).
+    pub fn new(points: Vec<[f64; 2]>, size: f64) -> Self {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in &points {
+            for d in 0..2 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+        }
+        let spread = if points.is_empty() {
+            0.0
+        } else {
+            ((hi[0] - lo[0]) * (hi[1] - lo[1]) / points.len() as f64)
+                .sqrt()
+                .max((hi[0] - lo[0]).max(hi[1] - lo[1]) / points.len() as f64)
+        };
+        let size = size.max(spread).max(f64::MIN_POSITIVE);
+        let mut buckets: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+        for (k, &p) in points.iter().enumerate() {
+            buckets.entry(bucket(p, size)).or_default().push(k);
+        }
+        Self {
+            points,
+            size,
+            buckets,
+        }
+    }
+
+    /// The index of the point nearest `x` (ties to the lower index), if
+    /// any: the buckets in growing squares about `x` until one holds a
+    /// point, then one square more (a nearer point may sit just beyond the
+    /// first square's corner), or all the points past a hundred buckets.
+    pub fn nearest(&self, x: [f64; 2]) -> Option<usize> {
+        self.nearest_within(x, f64::INFINITY)
+    }
+
+    /// [`Self::nearest`] among the points within `radius` of `x`.
+    pub fn nearest_within(&self, x: [f64; 2], radius: f64) -> Option<usize> {
+        let (i, j) = bucket(x, self.size);
+        let closer = |best: Option<usize>, k: usize| match best {
+            Some(b) if (distance(self.points[b], x), b) <= (distance(self.points[k], x), k) => best,
+            _ => Some(k),
+        };
+        let mut best = None;
+        let mut found_at = None;
+        // Squares out to the radius, at most a hundred buckets wide.
+        let rings = (radius / self.size).ceil().min(100.0) as i64 + 1;
+        for r in 0..rings {
+            if found_at.is_some_and(|f: i64| r > 2 * f + 1) {
+                break;
+            }
+            for a in i - r..=i + r {
+                for b in j - r..=j + r {
+                    if (a - i).abs() != r && (b - j).abs() != r {
+                        continue; // inside the square searched already
+                    }
+                    for &k in self.buckets.get(&(a, b)).into_iter().flatten() {
+                        best = closer(best, k);
+                        found_at.get_or_insert(r);
+                    }
+                }
+            }
+        }
+        let best = if best.is_none() && rings > 100 {
+            (0..self.points.len()).fold(best, closer)
+        } else {
+            best
+        };
+        best.filter(|&k| distance(self.points[k], x) <= radius)
+    }
+}
+
+fn bucket(x: [f64; 2], size: f64) -> (i64, i64) {
+    ((x[0] / size).floor() as i64, (x[1] / size).floor() as i64)
+}
+
+fn bounding_box(piece: &EdgePiece) -> ([f64; 2], [f64; 2]) {
+    match *piece {
+        EdgePiece::Segment(a, b) => (
+            [a[0].min(b[0]), a[1].min(b[1])],
+            [a[0].max(b[0]), a[1].max(b[1])],
+        ),
+        EdgePiece::Arc { center, radius, .. } => (
+            [center[0] - radius, center[1] - radius],
+            [center[0] + radius, center[1] + radius],
+        ),
+    }
+}
+
 /// The point of `pieces` nearest `x` (`x` itself if there are none).
 pub fn nearest_on(pieces: &[EdgePiece], x: [f64; 2]) -> [f64; 2] {
     pieces
@@ -278,6 +465,34 @@ pub fn nearest_on(pieces: &[EdgePiece], x: [f64; 2]) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The bucketed searches find what looking at everything finds.
+        #[test]
+        fn the_indexes_find_the_nearest(
+            pts in proptest::collection::vec((-10.0..10.0f64, -10.0..10.0f64), 1..60),
+            x in -15.0..15.0f64, y in -15.0..15.0f64, size in 0.01..5.0f64,
+        ) {
+            let pts: Vec<[f64; 2]> = pts.into_iter().map(|(a, b)| [a, b]).collect();
+            let q = [x, y];
+            let brute = (0..pts.len())
+                .min_by(|&a, &b| distance(pts[a], q).total_cmp(&distance(pts[b], q)).then(a.cmp(&b)))
+                .unwrap();
+            let index = PointIndex::new(pts.clone(), size);
+            let found = index.nearest(q).unwrap();
+            prop_assert!((distance(pts[found], q) - distance(pts[brute], q)).abs() < 1e-12);
+            let within = index.nearest_within(q, 1.0);
+            prop_assert_eq!(within.is_some(), distance(pts[brute], q) <= 1.0);
+            // The pieces of the closed polyline through the points.
+            let pieces: Vec<EdgePiece> = (0..pts.len())
+                .map(|k| EdgePiece::Segment(pts[k], pts[(k + 1) % pts.len()]))
+                .collect();
+            let exact = distance(nearest_on(&pieces, q), q);
+            let edges = EdgeIndex::new(&pieces, size);
+            prop_assert!((distance(edges.nearest_point(q, size), q) - exact).abs() < 1e-12);
+        }
+    }
 
     #[test]
     fn nearest_points_lie_on_sides_arcs_and_their_ends() {

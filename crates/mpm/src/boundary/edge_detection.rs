@@ -12,11 +12,9 @@
 //! corner on an edge corner gives that corner only, as a lattice's corner
 //! point does, so a rectangle's loop is the same either way.
 
-use std::collections::HashMap;
-
 use super::BoundaryLoop;
 use crate::particles::MaterialPoints;
-use crate::reference_edge::{EdgePiece, Ring, distance};
+use crate::reference_edge::{EdgeIndex, PointIndex, Ring, distance};
 
 /// The loops of body `body`, whose points are `ids`, on the rings of its
 /// geometry's edge. A ring that no cell reaches (thinner than its points)
@@ -43,16 +41,24 @@ pub fn loops_on_edge(
 
 /// The data points on one ring as `(arc length, point, offset)`, in order.
 fn ring_loop(ring: &Ring, points: &MaterialPoints, ids: &[usize]) -> Vec<(f64, usize, [f64; 2])> {
-    let index = PieceIndex::new(&ring.pieces);
+    let reach = ids
+        .iter()
+        .map(|&p| points.domain[p].reach())
+        .fold(0.0, f64::max);
+    let index = EdgeIndex::new(&ring.pieces, 3.0 * reach);
+    let starts = ring.starts();
     let corners = ring.corners();
+    let corner_index = PointIndex::new(corners.iter().map(|c| c.1).collect(), reach);
     let mut entries = Vec::new();
     let mut owned = vec![false; corners.len()];
     for &p in ids {
         let x = points.reference[p];
         let d = points.domain[p];
         let [a, b] = d.axes;
-        let tol = 1e-6 * d.reach();
-        if !index.near(x, 3.0 * d.reach()) {
+        // A millionth of the cell, and the rounding of coordinates far from
+        // the origin.
+        let tol = 1e-6 * d.reach() + 1e-12 * x[0].abs().max(x[1].abs());
+        if index.nearest(x, 3.0 * d.reach()).is_none() {
             continue;
         }
         // A corner of the cell on a corner of the edge.
@@ -60,7 +66,8 @@ fn ring_loop(ring: &Ring, points: &MaterialPoints, ids: &[usize]) -> Vec<(f64, u
         for (s, t) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
             let o = [0, 1].map(|k| s * a[k] + t * b[k] + s * t * d.twist[k]);
             let c = [x[0] + o[0], x[1] + o[1]];
-            for (k, &(arc, corner)) in corners.iter().enumerate() {
+            if let Some(k) = corner_index.nearest_within(c, tol) {
+                let (arc, corner) = corners[k];
                 if !owned[k] && distance(c, corner) <= tol {
                     owned[k] = true;
                     at_corner = true;
@@ -72,30 +79,31 @@ fn ring_loop(ring: &Ring, points: &MaterialPoints, ids: &[usize]) -> Vec<(f64, u
             continue;
         }
         for o in [a, [-a[0], -a[1]], b, [-b[0], -b[1]]] {
-            let (arc, off) = ring.locate([x[0] + o[0], x[1] + o[1]]);
-            if off <= tol {
-                entries.push((arc, p, o));
+            if let Some((k, s, off)) = index.nearest([x[0] + o[0], x[1] + o[1]], 2.0 * tol)
+                && off <= tol
+            {
+                entries.push((starts[k] + s, p, o));
             }
         }
     }
     // Corners no cell has: carried by the point of the nearest data point.
-    let sides = entries.clone();
+    let at = |e: &(f64, usize, [f64; 2])| {
+        let x = points.reference[e.1];
+        [x[0] + e.2[0], x[1] + e.2[1]]
+    };
+    let sides = PointIndex::new(entries.iter().map(at).collect(), reach);
+    let mut extra = Vec::new();
     for (k, &(arc, corner)) in corners.iter().enumerate() {
         if owned[k] {
             continue;
         }
-        let nearest = sides.iter().min_by(|e, f| {
-            let at = |e: &(f64, usize, [f64; 2])| {
-                let x = points.reference[e.1];
-                distance([x[0] + e.2[0], x[1] + e.2[1]], corner)
-            };
-            at(e).total_cmp(&at(f))
-        });
-        if let Some(&(_, p, _)) = nearest {
+        if let Some(nearest) = sides.nearest(corner) {
+            let p = entries[nearest].1;
             let x = points.reference[p];
-            entries.push((arc, p, [corner[0] - x[0], corner[1] - x[1]]));
+            extra.push((arc, p, [corner[0] - x[0], corner[1] - x[1]]));
         }
     }
+    entries.extend(extra);
     entries.sort_by(|e, f| e.0.total_cmp(&f.0));
     // Two cells' sides cannot share a middle; a corner can meet a side's
     // middle only on a cell one side long: keep the corner.
@@ -108,70 +116,4 @@ fn ring_loop(ring: &Ring, points: &MaterialPoints, ids: &[usize]) -> Vec<(f64, u
         }
     }
     out
-}
-
-/// The pieces of a ring bucketed by their bounding boxes, so that asking
-/// whether a point is near the edge costs a few pieces, not all of a
-/// mesh's boundary.
-struct PieceIndex<'a> {
-    pieces: &'a [EdgePiece],
-    size: f64,
-    buckets: HashMap<(i64, i64), Vec<usize>>,
-}
-
-impl<'a> PieceIndex<'a> {
-    fn new(pieces: &'a [EdgePiece]) -> Self {
-        let boxes: Vec<([f64; 2], [f64; 2])> = pieces.iter().map(bounding_box).collect();
-        let size = boxes
-            .iter()
-            .map(|(lo, hi)| (hi[0] - lo[0]).max(hi[1] - lo[1]))
-            .fold(0.0, f64::max)
-            .max(f64::MIN_POSITIVE);
-        let mut buckets: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
-        for (k, (lo, hi)) in boxes.iter().enumerate() {
-            let (i0, j0) = key(*lo, size);
-            let (i1, j1) = key(*hi, size);
-            for i in i0..=i1 {
-                for j in j0..=j1 {
-                    buckets.entry((i, j)).or_default().push(k);
-                }
-            }
-        }
-        Self {
-            pieces,
-            size,
-            buckets,
-        }
-    }
-
-    /// Whether some piece passes within `radius` of `x`.
-    fn near(&self, x: [f64; 2], radius: f64) -> bool {
-        let reach = (radius / self.size).ceil() as i64 + 1;
-        let (i, j) = key(x, self.size);
-        (i - reach..=i + reach).any(|a| {
-            (j - reach..=j + reach).any(|b| {
-                self.buckets.get(&(a, b)).is_some_and(|ks| {
-                    ks.iter()
-                        .any(|&k| distance(x, self.pieces[k].nearest(x)) <= radius)
-                })
-            })
-        })
-    }
-}
-
-fn key(x: [f64; 2], size: f64) -> (i64, i64) {
-    ((x[0] / size).floor() as i64, (x[1] / size).floor() as i64)
-}
-
-fn bounding_box(piece: &EdgePiece) -> ([f64; 2], [f64; 2]) {
-    match *piece {
-        EdgePiece::Segment(a, b) => (
-            [a[0].min(b[0]), a[1].min(b[1])],
-            [a[0].max(b[0]), a[1].max(b[1])],
-        ),
-        EdgePiece::Arc { center, radius, .. } => (
-            [center[0] - radius, center[1] - radius],
-            [center[0] + radius, center[1] + radius],
-        ),
-    }
 }

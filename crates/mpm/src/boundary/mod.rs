@@ -17,7 +17,7 @@ pub use detection::{BoundaryLoop, find_loops};
 
 use crate::geometry::{Geometry, Selector};
 use crate::particles::MaterialPoints;
-use crate::reference_edge::{distance, nearest_on};
+use crate::reference_edge::{EdgeIndex, PointIndex, distance};
 
 /// Where the boundary curve's data points are.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
@@ -97,28 +97,41 @@ pub fn snap_to_edge(loops: &mut [BoundaryLoop], points: &MaterialPoints, geometr
         .map(|l| {
             let edge = geometries[l.body].edge();
             let ring = reference_ring(l, points);
+            let radius = l.points.iter().map(|&p| 2.0 * reach(p)).fold(0.0, f64::max);
+            let index = EdgeIndex::new(&edge, radius);
             (l.points.iter().zip(ring))
                 .map(|(&point, x)| Entry {
                     point,
-                    at: nearest_on(&edge, x),
+                    at: index.nearest_point(x, radius),
                     corner: false,
                 })
                 .collect()
         })
         .collect();
     for (body, geometry) in geometries.iter().enumerate() {
-        for c in geometry.corners() {
-            let nearest = (0..loops.len())
-                .filter(|&l| loops[l].body == body && entries[l].len() >= 3)
-                .flat_map(|l| (0..entries[l].len()).map(move |k| (l, k)))
-                .min_by(|&(l, k), &(m, j)| {
-                    distance(entries[l][k].at, c).total_cmp(&distance(entries[m][j].at, c))
-                });
-            let Some((l, k)) = nearest else { continue };
+        // The body's data points as (loop, place) before any corner is
+        // added: a corner goes next to the nearest of them.
+        let slots: Vec<(usize, usize)> = (0..loops.len())
+            .filter(|&l| loops[l].body == body && entries[l].len() >= 3)
+            .flat_map(|l| (0..entries[l].len()).map(move |k| (l, k)))
+            .collect();
+        let size = slots
+            .iter()
+            .map(|&(l, k)| reach(entries[l][k].point))
+            .fold(0.0, f64::max);
+        let index = PointIndex::new(slots.iter().map(|&(l, k)| entries[l][k].at).collect(), size);
+        let mut corners: Vec<([f64; 2], (usize, usize))> = geometry
+            .corners()
+            .into_iter()
+            .filter_map(|c| index.nearest(c).map(|i| (c, slots[i])))
+            .collect();
+        // Inserting shifts the later places of a loop: from the back.
+        corners.sort_by_key(|c| std::cmp::Reverse(c.1));
+        for (c, (l, k)) in corners {
             let e = &mut entries[l];
             let n = e.len();
             let here = e[k].at;
-            if distance(here, c) < 0.5 * reach(e[k].point) {
+            if distance(here, c) < 0.5 * reach(e[k].point) && !e[k].corner {
                 (e[k].at, e[k].corner) = (c, true);
                 continue;
             }
@@ -152,7 +165,8 @@ pub fn snap_to_edge(loops: &mut [BoundaryLoop], points: &MaterialPoints, geometr
         let mut kept: Vec<Entry> = Vec::with_capacity(e.len());
         for entry in e {
             match kept.last_mut() {
-                Some(last) if close(last, &entry) => {
+                // Two corners close together (a short side) both stay.
+                Some(last) if close(last, &entry) && !(last.corner && entry.corner) => {
                     if entry.corner && !last.corner {
                         *last = entry;
                     }
@@ -160,7 +174,10 @@ pub fn snap_to_edge(loops: &mut [BoundaryLoop], points: &MaterialPoints, geometr
                 _ => kept.push(entry),
             }
         }
-        while kept.len() > 3 && close(&kept[kept.len() - 1], &kept[0]) {
+        while kept.len() > 3
+            && close(&kept[kept.len() - 1], &kept[0])
+            && !(kept[kept.len() - 1].corner && kept[0].corner)
+        {
             if kept[kept.len() - 1].corner && !kept[0].corner {
                 kept.remove(0);
             } else {

@@ -531,7 +531,23 @@ mod tests {
     /// quadrilaterals either way round, passes.
     #[test]
     fn a_mesh_that_is_not_one_is_refused() {
-        let nodes = serde_json::json!([[0, 0], [1, 0], [2, 0], [0, 1], [1, 1], [2, 1]]);
+        // 0-5: a 2 x 1 block of nodes; 6-9: a square inside the first cell;
+        // 10: below the middle; 11, 12: the middle column again.
+        let nodes = serde_json::json!([
+            [0, 0],
+            [1, 0],
+            [2, 0],
+            [0, 1],
+            [1, 1],
+            [2, 1],
+            [0.2, 0.2],
+            [0.8, 0.2],
+            [0.8, 0.8],
+            [0.2, 0.8],
+            [1, -0.5],
+            [1, 0],
+            [1, 1]
+        ]);
         let mesh_case = |elements: serde_json::Value| {
             let mut v = column_json();
             v["bodies"][0]["geometry"] =
@@ -553,7 +569,7 @@ mod tests {
                 "3 or 4",
             ),
             (
-                serde_json::json!([[0, 1, 9]]),
+                serde_json::json!([[0, 1, 99]]),
                 "bodies[0].geometry.mesh.elements[0]",
                 "does not exist",
             ),
@@ -576,6 +592,21 @@ mod tests {
                 serde_json::json!([[0, 1, 4, 3], [3, 4, 1, 0]]),
                 "bodies[0].geometry.mesh.elements",
                 "overlap",
+            ),
+            (
+                serde_json::json!([[0, 1, 4, 3], [6, 7, 8, 9]]),
+                "bodies[0].geometry.mesh.elements",
+                "overlap",
+            ),
+            (
+                serde_json::json!([[0, 2, 5, 3], [0, 10, 1], [1, 10, 2]]),
+                "bodies[0].geometry.mesh.elements",
+                "",
+            ),
+            (
+                serde_json::json!([[0, 1, 4, 3], [11, 2, 5, 12]]),
+                "bodies[0].geometry.mesh.elements",
+                "without sharing",
             ),
             (
                 serde_json::json!([[0, 1, 4, 3], [0, 1, 4]]),

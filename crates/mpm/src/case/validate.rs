@@ -590,6 +590,44 @@ fn check_mesh(path: &str, mesh: &crate::geometry::Mesh) -> Result<(), CaseError>
     let rings = mesh
         .boundary_rings()
         .map_err(|m| CaseError::new(format!("{path}.elements"), m))?;
+    let not_conforming = |m: String| CaseError::new(format!("{path}.elements"), m);
+    if rings.len() > MAX_MESH_RINGS {
+        return Err(not_conforming(format!(
+            "the boundary has {} rings, more than {MAX_MESH_RINGS}",
+            rings.len()
+        )));
+    }
+    // Every boundary node at a place of its own: two there mean elements
+    // that meet without sharing nodes (an unfused seam, a hanging node).
+    let mut places = std::collections::HashSet::new();
+    for v in rings.iter().flatten() {
+        if !places.insert([v[0].to_bits(), v[1].to_bits()]) {
+            return Err(not_conforming(format!(
+                "two boundary nodes at ({}, {}): elements meet there without sharing a node",
+                v[0], v[1]
+            )));
+        }
+    }
+    // Rings that nest as a body's boundary does: an outer ring
+    // (counter-clockwise) inside an even number of others, a hole inside
+    // an odd number; overlapping elements break it.
+    for (k, r) in rings.iter().enumerate() {
+        if signed_area(r).abs() <= 1e-12 * scale * scale {
+            return Err(not_conforming(format!(
+                "a boundary ring through ({}, {}) encloses no area",
+                r[0][0], r[0][1]
+            )));
+        }
+        let depth = (rings.iter().enumerate())
+            .filter(|&(j, o)| j != k && inside_ring(o, r[0]))
+            .count();
+        if (depth % 2 == 0) != (signed_area(r) > 0.0) {
+            return Err(not_conforming(format!(
+                "elements overlap: the boundary through ({}, {}) lies inside another",
+                r[0][0], r[0][1]
+            )));
+        }
+    }
     let enclosed: f64 = rings.iter().map(|r| signed_area(r)).sum();
     if (total - enclosed).abs() > 1e-9 * total {
         return Err(CaseError::new(
@@ -679,3 +717,6 @@ const MAX_RING_VERTICES: usize = 10_000;
 
 /// The most nodes (and elements) a mesh body may have.
 const MAX_MESH_NODES: usize = 1_000_000;
+
+/// The most boundary rings (outer boundaries and holes) a mesh may have.
+const MAX_MESH_RINGS: usize = 1000;

@@ -30,6 +30,19 @@ pub enum Support {
     Quadrilateral([[f64; 2]; 4]),
 }
 
+/// A quadrilateral domain's corners about `x`, shrunk about it to reach at
+/// most a cell in x and in y, as a rectangle's half-widths are capped: a
+/// wider domain reaches nodes the point does not need, and a huge one (a
+/// body of one point on a fine grid) would list cells without bound.
+fn placed(grid: &Grid, x: [f64; 2], corners: [[f64; 2]; 4]) -> [[f64; 2]; 4] {
+    let reach = corners
+        .iter()
+        .map(|c| c[0].abs().max(c[1].abs()))
+        .fold(0.0, f64::max);
+    let k = if reach > grid.h { grid.h / reach } else { 1.0 };
+    corners.map(|c| [x[0] + k * c[0], x[1] + k * c[1]])
+}
+
 /// The shape functions of a case.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Basis {
@@ -46,7 +59,11 @@ impl Basis {
             (Basis::Linear, _) => [0.0, 0.0],
             (Basis::Gimp, Support::Rectangle(half_width)) => half_width,
             (Basis::Gimp, Support::Quadrilateral(corners)) => {
-                let corners = corners.map(|c| [x[0] + c[0], x[1] + c[1]]);
+                let corners = placed(grid, x, corners);
+                if quadrilateral_domain::area(&corners).abs() <= 1e-12 * grid.h * grid.h {
+                    // A cell crushed flat has no average: the hats at x.
+                    return Basis::Linear.eval(grid, x, support, out);
+                }
                 return quadrilateral_domain::eval(grid, &corners, out);
             }
         };
@@ -74,8 +91,7 @@ impl Basis {
             // As `eval_1d`, which caps the domain at a cell.
             (Basis::Gimp, Support::Rectangle(half_width)) => half_width.map(|l| l.min(grid.h)),
             (Basis::Gimp, Support::Quadrilateral(corners)) => {
-                let corners = corners.map(|c| [x[0] + c[0], x[1] + c[1]]);
-                return quadrilateral_domain::cell_range(grid, &corners);
+                return quadrilateral_domain::cell_range(grid, &placed(grid, x, corners));
             }
         };
         (
@@ -199,6 +215,26 @@ mod tests {
                 prop_assert!((fd - nw.grad[0]).abs() < 1e-5, "{} vs {}", fd, nw.grad[0]);
             }
         }
+    }
+
+    /// A point's cell much wider than the grid's (one point filling a big
+    /// turned body on a fine grid) is shrunk about the point to a cell
+    /// either way, as a rectangle's half-widths are, so it reaches a few
+    /// nodes, not millions; a cell crushed flat falls back to the hats.
+    #[test]
+    fn a_huge_or_flat_quadrilateral_domain_reaches_a_few_nodes() {
+        let huge = Support::Quadrilateral([[-5e4, -3e4], [4e4, -5e4], [5e4, 3e4], [-4e4, 5e4]]);
+        let mut w = Vec::new();
+        Basis::Gimp.eval(&GRID, [0.3, 1.7], huge, &mut w);
+        assert!(w.len() <= 16, "{}", w.len());
+        assert!((w.iter().map(|w| w.n).sum::<f64>() - 1.0).abs() < 1e-12);
+        let (lo, hi) = Basis::Gimp.cell_range(&GRID, [0.3, 1.7], huge);
+        assert!(hi[0] - lo[0] <= 2 && hi[1] - lo[1] <= 2, "{lo:?} {hi:?}");
+        let flat = Support::Quadrilateral([[-0.1, 0.0], [0.0, 0.0], [0.1, 0.0], [0.0, 0.0]]);
+        w.clear();
+        Basis::Gimp.eval(&GRID, [0.3, 1.7], flat, &mut w);
+        assert_eq!(w.len(), 4);
+        assert!(w.iter().all(|w| w.n.is_finite()));
     }
 
     #[test]

@@ -557,10 +557,14 @@ pub fn size(geometry: &Geometry, density: Density, origin: [f64; 2], lattice: La
             [ring_sites(*inner_radius, *outer_radius, spacing), 1.0],
             true,
         ),
-        Geometry::Rectangle { min, max, .. } => (
-            rectangle_counts([max[0] - min[0], max[1] - min[1]], spacing, count),
-            true,
-        ),
+        Geometry::Rectangle { min, max, .. } => match geometry.turned_corners() {
+            // As `fill` counts it, from the turned corners.
+            Some(corners) => (quadrilateral_counts(&corners, spacing, count), true),
+            None => (
+                rectangle_counts([max[0] - min[0], max[1] - min[1]], spacing, count),
+                true,
+            ),
+        },
         Geometry::Quadrilateral { vertices } => {
             (quadrilateral_counts(vertices, spacing, count), true)
         }
@@ -746,6 +750,18 @@ mod tests {
                 );
             }
         }
+        // A turned square whose side over the spacing is 3.5: its turned
+        // corners' lengths round to 3.4999999999999996, and the count must
+        // be the fill's (it once said 9 where the fill made 16).
+        let turned = Geometry::Rectangle {
+            min: [0.0, 0.0],
+            max: [0.7, 0.7],
+            angle: 30.0,
+            about: None,
+        };
+        let made = fill(&turned, Density::Spacing(0.2), [0.0, 0.0], Lattice::Body).len() as f64;
+        let counted = size(&turned, Density::Spacing(0.2), [0.0, 0.0], Lattice::Body);
+        assert_eq!((counted.sites, counted.exact), (made, true));
         // The thin rectangle that once made 5e6 points to count them: its
         // bounding box's area is 5e-6, but it is a column of 5e6 points.
         let thin = Geometry::Rectangle {
