@@ -326,17 +326,29 @@ impl<'a> EdgeIndex<'a> {
     /// The piece nearest `x` among those within `radius` of it: its index,
     /// the arc length along it and the distance; `None` if none is within.
     pub fn nearest(&self, x: [f64; 2], radius: f64) -> Option<(usize, f64, f64)> {
-        let reach = (radius / self.size).ceil().min(1e6) as i64;
-        let (i, j) = bucket(x, self.size);
+        if self.pieces.is_empty() {
+            return None;
+        }
         let mut best: Option<(usize, f64, f64)> = None;
+        let mut consider = |k: usize| {
+            let s = self.pieces[k].nearest_length(x);
+            let d = distance(x, self.pieces[k].at(s));
+            if d <= radius && best.is_none_or(|(_, _, e)| d < e) {
+                best = Some((k, s, d));
+            }
+        };
+        let reach = (radius / self.size).ceil();
+        if reach > 100.0 {
+            // Wider than a hundred buckets: every piece.
+            (0..self.pieces.len()).for_each(consider);
+            return best;
+        }
+        let reach = reach as i64;
+        let (i, j) = bucket(x, self.size);
         for a in i - reach..=i + reach {
             for b in j - reach..=j + reach {
                 for &k in self.buckets.get(&(a, b)).into_iter().flatten() {
-                    let s = self.pieces[k].nearest_length(x);
-                    let d = distance(x, self.pieces[k].at(s));
-                    if d <= radius && best.is_none_or(|(_, _, e)| d < e) {
-                        best = Some((k, s, d));
-                    }
+                    consider(k);
                 }
             }
         }
@@ -402,6 +414,9 @@ impl PointIndex {
 
     /// [`Self::nearest`] among the points within `radius` of `x`.
     pub fn nearest_within(&self, x: [f64; 2], radius: f64) -> Option<usize> {
+        if self.points.is_empty() {
+            return None;
+        }
         let (i, j) = bucket(x, self.size);
         let closer = |best: Option<usize>, k: usize| match best {
             Some(b) if (distance(self.points[b], x), b) <= (distance(self.points[k], x), k) => best,
@@ -436,8 +451,11 @@ impl PointIndex {
     }
 }
 
+/// The bucket of `x`, its indices kept far inside `i64` so that the
+/// squares searched about it cannot overflow.
 fn bucket(x: [f64; 2], size: f64) -> (i64, i64) {
-    ((x[0] / size).floor() as i64, (x[1] / size).floor() as i64)
+    let index = |c: f64| (c / size).floor().clamp(-1e15, 1e15) as i64;
+    (index(x[0]), index(x[1]))
 }
 
 fn bounding_box(piece: &EdgePiece) -> ([f64; 2], [f64; 2]) {
