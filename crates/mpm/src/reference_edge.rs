@@ -173,22 +173,6 @@ impl Ring {
             .collect()
     }
 
-    /// The arc length along the ring of its point nearest `x`, and the
-    /// distance to it.
-    pub fn locate(&self, x: [f64; 2]) -> (f64, f64) {
-        let mut before = 0.0;
-        let mut best = (0.0, f64::INFINITY);
-        for piece in &self.pieces {
-            let s = piece.nearest_length(x);
-            let d = distance(x, piece.at(s));
-            if d < best.1 {
-                best = (before + s, d);
-            }
-            before += piece.length();
-        }
-        best
-    }
-
     /// The vertices where the ring turns (the tangents either side differ
     /// by more than a milliradian), with their arc lengths.
     pub fn corners(&self) -> Vec<(f64, [f64; 2])> {
