@@ -3,12 +3,14 @@
 //! and the material points. The stages that build a step's terms (boundary
 //! loads, the IBM band, the soft background) take it as one bundle.
 
-use crate::grid::{Connectivity, Grid};
+use crate::grid::{Basis, Connectivity, Grid};
 use crate::particles::MaterialPoints;
 
 #[derive(Clone, Copy)]
 pub struct Configuration<'a> {
     pub grid: &'a Grid,
+    /// The shape functions, which the boundary's quadrature uses too.
+    pub basis: Basis,
     /// The grid reset of the step: shape functions on the active nodes.
     pub conn: &'a Connectivity,
     pub points: &'a MaterialPoints,

@@ -135,7 +135,7 @@ impl Simulation {
             basis: basis(case.basis),
             extent: case.grid.extent.map(|b| (b.min, b.max)),
             probes: Probes::new(case.probes.iter().map(|p| (p.name.clone(), p.at))),
-            anchors: ibm::anchors(&ibm_supports, &loops, &points, &grid),
+            anchors: ibm::anchors(&ibm_supports, &loops, &points, &grid, basis(case.basis)),
             band_width: case
                 .boundary
                 .band_width
@@ -296,6 +296,8 @@ fn basis(kind: BasisKind) -> Basis {
     match kind {
         BasisKind::Linear => Basis::Linear,
         BasisKind::Gimp => Basis::Gimp,
+        BasisKind::Bspline2 => Basis::BSpline2,
+        BasisKind::Bspline3 => Basis::BSpline3,
     }
 }
 

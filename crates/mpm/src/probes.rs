@@ -2,7 +2,7 @@
 //! reported every step.
 
 use crate::boundary::quadrature::active_hats;
-use crate::grid::{Connectivity, Grid};
+use crate::grid::{Basis, Connectivity, Grid};
 use crate::report::ProbeReport;
 
 /// Named reference points that move with the grid displacement.
@@ -25,14 +25,15 @@ impl Probes {
         probes
     }
 
-    /// Moves each probe with the bilinear interpolation of the grid
-    /// displacement over the active nodes of its cell (renormalised if some
-    /// are inactive; a probe away from all material stays where it is).
-    pub fn advect(&mut self, grid: &Grid, conn: &Connectivity, u: &[f64]) {
+    /// Moves each probe with the grid displacement interpolated by the
+    /// boundary's shape functions (the cell's bilinear hats, or the
+    /// B-splines; renormalised if some nodes are inactive; a probe away
+    /// from all material stays where it is).
+    pub fn advect(&mut self, grid: &Grid, basis: Basis, conn: &Connectivity, u: &[f64]) {
         let (mut weights, mut shares) = (Vec::new(), Vec::new());
         for x in &mut self.position {
             shares.clear();
-            let sum = active_hats(grid, *x, &conn.nodes, &mut weights, &mut shares);
+            let sum = active_hats(basis, grid, *x, &conn.nodes, &mut weights, &mut shares);
             let mut d = [0.0; 2];
             for &(a, n) in &shares {
                 d[0] += n * u[2 * a];

@@ -232,7 +232,7 @@ impl Simulation {
         let active_dofs = eq.n_free_dofs();
         let (responses, band, solve_timings) = eq.into_converged();
         self.update_points(&conn, &u, &responses);
-        self.probes.advect(&self.grid, &conn, &u);
+        self.probes.advect(&self.grid, self.basis, &conn, &u);
         self.advance_anchors(&band, &conn, &u);
         let timings = StepTimings {
             grid: grid_seconds,
@@ -274,6 +274,7 @@ impl Simulation {
     ) -> StepEquilibrium<'a> {
         let start = Configuration {
             grid: &self.grid,
+            basis: self.basis,
             conn,
             points: &self.points,
         };

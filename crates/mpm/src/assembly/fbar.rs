@@ -75,7 +75,9 @@ pub struct FbarTrial {
 
 impl FbarCells {
     pub fn new(start: &Configuration) -> Self {
-        let Configuration { grid, conn, points } = *start;
+        let Configuration {
+            grid, conn, points, ..
+        } = *start;
         let n = points.len();
         // Keyed by cell and material: points of different materials in one
         // cell average apart (a small-strain and a finite-strain model

@@ -56,7 +56,12 @@ impl<'a> BoundaryLoading<'a> {
         stretches: &'a [LoadedStretch],
         load_factor: f64,
     ) -> Self {
-        let Configuration { grid, conn, points } = *start;
+        let Configuration {
+            grid,
+            basis: start_basis,
+            conn,
+            points,
+        } = *start;
         let mut loading = Self {
             grid,
             conn,
@@ -77,6 +82,7 @@ impl<'a> BoundaryLoading<'a> {
                     q[k] = Some(SegmentQuadrature::new(
                         &local_segment(&start, k),
                         grid,
+                        start_basis,
                         &conn.nodes,
                     ));
                 }

@@ -1,9 +1,16 @@
 //! Quadrature along the boundary curve, shared by tractions and the
 //! implicit boundary method's band: each Bezier segment is split where it
-//! crosses a grid line, so every piece sees one cell and smooth (bilinear)
-//! shape functions, and each piece gets 4-point Gauss-Legendre quadrature in
-//! the segment parameter. The shape functions are the bilinear
-//! finite-element ones whatever the basis of the points.
+//! crosses a knot line of the shape functions (the grid lines; for
+//! quadratic B-splines the cell middles too), so every piece sees smooth
+//! shape functions, and each piece gets 4-point Gauss-Legendre quadrature
+//! in the segment parameter.
+//!
+//! The shape functions there are the bilinear finite-element hats for the
+//! linear basis and for GIMP (whose cell averages would reach across the
+//! boundary), and the B-splines themselves for the B-spline bases: their
+//! nodal values are coefficients, not the field's values, so a load or a
+//! constraint given to the hats would act on another field (and leave the
+//! outer ring of nodes, which the hats never reach, unbalanced).
 
 use super::bspline::{Point, bezier};
 use crate::grid::{Basis, Grid, NodeKey, NodeWeight, Support};
@@ -20,11 +27,19 @@ const GAUSS4: [(f64, f64); 4] = [
 /// spanning about one point spacing crosses at most a few lines.
 const CROSSING_SAMPLES: usize = 16;
 
-/// Appends to `shares` the active nodes' bilinear shape functions at `x`
+/// The shape functions the boundary uses with `basis` (see the module).
+fn boundary_basis(basis: Basis) -> Basis {
+    match basis {
+        Basis::Linear | Basis::Gimp => Basis::Linear,
+        b => b,
+    }
+}
+
+/// Appends to `shares` the active nodes' boundary shape functions at `x`
 /// as `(active node index, N)` and returns their sum, which is below one
-/// where some of the cell's corners are inactive. `weights` is scratch
-/// space.
+/// where some of their nodes are inactive. `weights` is scratch space.
 pub fn active_hats(
+    basis: Basis,
     grid: &Grid,
     x: Point,
     nodes: &[NodeKey],
@@ -32,7 +47,7 @@ pub fn active_hats(
     shares: &mut Vec<(usize, f64)>,
 ) -> f64 {
     weights.clear();
-    Basis::Linear.eval(grid, x, Support::Rectangle([0.0, 0.0]), weights);
+    boundary_basis(basis).eval(grid, x, Support::Rectangle([0.0, 0.0]), weights);
     let before = shares.len();
     shares.extend(
         weights
@@ -46,6 +61,7 @@ pub fn active_hats(
 /// active cells may touch an inactive node with a zero or round-off share).
 /// Returns false, appending nothing, when no active node has a share.
 pub fn hat_shares(
+    basis: Basis,
     grid: &Grid,
     x: Point,
     nodes: &[NodeKey],
@@ -53,7 +69,7 @@ pub fn hat_shares(
     shares: &mut Vec<(usize, f64)>,
 ) -> bool {
     let before = shares.len();
-    let total = active_hats(grid, x, nodes, weights, shares);
+    let total = active_hats(basis, grid, x, nodes, weights, shares);
     if total <= 0.0 {
         shares.truncate(before);
         return false;
@@ -65,10 +81,23 @@ pub fn hat_shares(
 }
 
 /// `(t, weight in t)` of four Gauss points on each piece of the segment
-/// between grid lines: the integrands (products of the cells' bilinear
-/// shape functions and the curve's smooth terms) are smooth on each piece.
-pub fn gauss_points(ctrl: &[Point; 4], grid: &Grid) -> impl Iterator<Item = (f64, f64)> {
-    let crossings = cell_crossings(ctrl, grid);
+/// between knot lines: the integrands (products of the shape functions and
+/// the curve's smooth terms) are smooth on each piece.
+pub fn gauss_points(
+    ctrl: &[Point; 4],
+    grid: &Grid,
+    basis: Basis,
+) -> impl Iterator<Item = (f64, f64)> {
+    // Quadratic B-splines centred on the nodes have knots at the cells'
+    // middles as well as on the grid lines.
+    let knots = match basis {
+        Basis::BSpline2 => Grid {
+            h: grid.h / 2.0,
+            origin: grid.origin,
+        },
+        _ => *grid,
+    };
+    let crossings = cell_crossings(ctrl, &knots);
     (1..crossings.len()).flat_map(move |i| {
         let (t0, t1) = (crossings[i - 1], crossings[i]);
         GAUSS4

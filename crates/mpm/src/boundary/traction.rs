@@ -13,9 +13,9 @@
 //! inactive corner (rare: the curve bulging past the material's cells) gives
 //! that corner's share to the active ones, in proportion.
 
-use super::bspline::{ClosedCurve, Point, bezier, bezier_derivative};
+use super::bspline::{Point, bezier, bezier_derivative};
 use super::quadrature::{gauss_points, hat_shares};
-use crate::grid::{Grid, NodeKey};
+use crate::grid::{Basis, Grid, NodeKey};
 
 /// What acts on a stretch of boundary.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -41,32 +41,6 @@ impl Traction {
     }
 }
 
-/// Adds the nodal forces of `traction`, scaled by `factor`, on `segments`
-/// of `curve`; `nodes` are the step's active node keys (sorted), `f` is
-/// indexed `2a + c`.
-pub fn add_nodal_forces(
-    curve: &ClosedCurve,
-    segments: &[usize],
-    traction: Traction,
-    factor: f64,
-    grid: &Grid,
-    nodes: &[NodeKey],
-    f: &mut [f64],
-) {
-    for &k in segments {
-        let (ctrl, _, _) = curve.segment(k);
-        SegmentQuadrature::new(&ctrl, grid, nodes).forces(
-            &ctrl,
-            traction,
-            factor,
-            &mut |a, force| {
-                f[2 * a] += force[0];
-                f[2 * a + 1] += force[1];
-            },
-        );
-    }
-}
-
 /// The quadrature of one boundary segment in the configuration at the
 /// step's start: Gauss points (split at grid lines) with their weights and
 /// their shares of the active nodes.
@@ -88,14 +62,21 @@ pub struct SegmentQuadrature {
 }
 
 impl SegmentQuadrature {
-    pub fn new(start: &[Point; 4], grid: &Grid, nodes: &[NodeKey]) -> Self {
+    pub fn new(start: &[Point; 4], grid: &Grid, basis: Basis, nodes: &[NodeKey]) -> Self {
         let mut q = SegmentQuadrature {
             first: vec![0],
             ..Default::default()
         };
         let mut weights = Vec::with_capacity(4);
-        for (t, w) in gauss_points(start, grid) {
-            if !hat_shares(grid, bezier(start, t), nodes, &mut weights, &mut q.shares) {
+        for (t, w) in gauss_points(start, grid, basis) {
+            if !hat_shares(
+                basis,
+                grid,
+                bezier(start, t),
+                nodes,
+                &mut weights,
+                &mut q.shares,
+            ) {
                 continue;
             }
             q.points.push((t, w));
@@ -127,7 +108,34 @@ impl SegmentQuadrature {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::boundary::bspline::ClosedCurve;
     use crate::grid::node_key;
+
+    /// Adds the nodal forces of `traction`, scaled by `factor`, on `segments`
+    /// of `curve` with the bilinear hats; `nodes` are the step's active node keys (sorted), `f` is
+    /// indexed `2a + c`.
+    fn add_nodal_forces(
+        curve: &ClosedCurve,
+        segments: &[usize],
+        traction: Traction,
+        factor: f64,
+        grid: &Grid,
+        nodes: &[NodeKey],
+        f: &mut [f64],
+    ) {
+        for &k in segments {
+            let (ctrl, _, _) = curve.segment(k);
+            SegmentQuadrature::new(&ctrl, grid, Basis::Linear, nodes).forces(
+                &ctrl,
+                traction,
+                factor,
+                &mut |a, force| {
+                    f[2 * a] += force[0];
+                    f[2 * a + 1] += force[1];
+                },
+            );
+        }
+    }
 
     /// All nodes of the lattice within `[-r, r]^2` cells, sorted.
     fn all_nodes(r: i64) -> Vec<NodeKey> {

@@ -222,6 +222,12 @@ pub enum BasisKind {
     /// own cell, an upright one following the point's stretch (cpGIMP), a
     /// turned, mapped or polar one carried by its deformation gradient.
     Gimp,
+    /// Uniform quadratic B-splines on the grid (C1), averaged over each
+    /// point's own cell as GIMP averages the hats (4 x 4 nodes a point).
+    Bspline2,
+    /// Uniform cubic B-splines on the grid (C2), averaged likewise (5 x 5
+    /// nodes a point).
+    Bspline3,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -754,5 +760,11 @@ mod tests {
         let e = set(&|v| v["boundary"] = serde_json::json!({"band_width": 10.0}));
         assert_eq!(e.path, "boundary.band_width");
         assert!(e.message.contains("cell size"), "{e}");
+        // Grid-node supports hold a B-spline's coefficients, not the field.
+        for basis in ["bspline2", "bspline3"] {
+            let e = set(&|v| v["basis"] = basis.into());
+            assert_eq!(e.path, "supports[0].method", "{basis}");
+            assert!(e.message.contains("ibm"), "{e}");
+        }
     }
 }

@@ -165,6 +165,17 @@ impl Case {
         }
         for (i, s) in self.supports.iter().enumerate() {
             s.on.validate(&format!("supports[{i}].on"))?;
+            let smooth = matches!(self.basis, BasisKind::Bspline2 | BasisKind::Bspline3);
+            if s.method == SupportMethod::Grid && smooth {
+                // A B-spline's nodal unknowns are coefficients, not the
+                // field's values: fixing the nodes on a line does not fix
+                // the field on it (docs/bsplines.md: AMPLE's column at 64
+                // cells tops at -1.85 m instead of -25.94 m).
+                return Err(CaseError::new(
+                    format!("supports[{i}].method"),
+                    "the B-spline bases need \"method\": \"ibm\" (grid nodes hold their coefficients, not the field)",
+                ));
+            }
             if s.method == SupportMethod::Grid && s.fix == Fix::Normal {
                 return Err(CaseError::new(
                     format!("supports[{i}].fix"),

@@ -1,5 +1,17 @@
 //! Shape functions of the background grid, tensor products of 1D functions:
 //! - `Linear`: the bilinear finite-element hat `max(0, 1 - |d|/h)`.
+//! - `BSpline2`, `BSpline3`: the uniform quadratic and cubic B-splines
+//!   centred on the nodes (C1 and C2; 3 and 4 nodes per direction at a
+//!   point; Steffen, Kirby & Berzins 2008), averaged over the point's
+//!   domain as GIMP averages the hat: up to 4 and 5 nodes per direction.
+//!   The nodal values are the field's B-spline coefficients: linear fields
+//!   are reproduced with the nodes' own values, `x^2` with `x_i^2 - h^2/4`
+//!   (quadratic) or `x_i^2 - h^2/3` (cubic). Evaluated at a point (a zero
+//!   domain), as the boundary's quadrature does, they are the B-splines
+//!   themselves. The average, not the value at the point, is what
+//!   converges: at the point, a body whose edge cuts the functions'
+//!   supports leaves an error of a few 1e-3 that no refinement removes
+//!   (the column, docs/bsplines.md).
 //! - `Gimp`: the hat convolved with the point's characteristic function of
 //!   half-width `lp` (generalised interpolation MPM). The convolution is
 //!   written with the hat's antiderivative `H`, `S(d) = (H(d+lp) - H(d-lp)) /
@@ -17,7 +29,7 @@ pub struct NodeWeight {
     pub grad: [f64; 2],
 }
 
-/// Up to four 1D weights per direction (GIMP with `lp <= h`).
+/// Up to five 1D weights per direction (the averaged cubic B-spline).
 type Weights1d = smallvec1d::Small;
 
 /// A point's domain for GIMP, about the point.
@@ -31,15 +43,15 @@ pub enum Support {
 }
 
 /// A quadrilateral domain's corners about `x`, shrunk about it to reach at
-/// most a cell in x and in y, as a rectangle's half-widths are capped: a
+/// most `most` in x and in y, as a rectangle's half-widths are capped: a
 /// wider domain reaches nodes the point does not need, and a huge one (a
 /// body of one point on a fine grid) would list cells without bound.
-fn placed(grid: &Grid, x: [f64; 2], corners: [[f64; 2]; 4]) -> [[f64; 2]; 4] {
+fn placed(x: [f64; 2], corners: [[f64; 2]; 4], most: f64) -> [[f64; 2]; 4] {
     let reach = corners
         .iter()
         .map(|c| c[0].abs().max(c[1].abs()))
         .fold(0.0, f64::max);
-    let k = if reach > grid.h { grid.h / reach } else { 1.0 };
+    let k = if reach > most { most / reach } else { 1.0 };
     corners.map(|c| [x[0] + k * c[0], x[1] + k * c[1]])
 }
 
@@ -48,6 +60,8 @@ fn placed(grid: &Grid, x: [f64; 2], corners: [[f64; 2]; 4]) -> [[f64; 2]; 4] {
 pub enum Basis {
     Linear,
     Gimp,
+    BSpline2,
+    BSpline3,
 }
 
 impl Basis {
@@ -57,14 +71,17 @@ impl Basis {
     pub fn eval(&self, grid: &Grid, x: [f64; 2], support: Support, out: &mut Vec<NodeWeight>) {
         let half_width = match (self, support) {
             (Basis::Linear, _) => [0.0, 0.0],
-            (Basis::Gimp, Support::Rectangle(half_width)) => half_width,
-            (Basis::Gimp, Support::Quadrilateral(corners)) => {
-                let corners = placed(grid, x, corners);
+            (_, Support::Rectangle(half_width)) => half_width.map(|l| l.min(self.widest(grid))),
+            (_, Support::Quadrilateral(corners)) => {
+                let corners = placed(x, corners, self.widest(grid));
                 if quadrilateral_domain::area(&corners).abs() <= 1e-12 * grid.h * grid.h {
-                    // A cell crushed flat has no average: the hats at x.
-                    return Basis::Linear.eval(grid, x, support, out);
+                    // A cell crushed flat has no average: the functions at x.
+                    return self.eval(grid, x, Support::Rectangle([0.0, 0.0]), out);
                 }
-                return quadrilateral_domain::eval(grid, &corners, out);
+                return match self.degree() {
+                    1 => quadrilateral_domain::eval(grid, &corners, out),
+                    p => quadrilateral_domain::eval_bsplines(grid, &corners, p, out),
+                };
             }
         };
         let wx = self.eval_1d(grid.h, x[0] - grid.origin[0], half_width[0]);
@@ -83,26 +100,73 @@ impl Basis {
         }
     }
 
+    /// The polynomial degree of the 1D functions.
+    pub fn degree(&self) -> usize {
+        match self {
+            Basis::Linear | Basis::Gimp => 1,
+            Basis::BSpline2 => 2,
+            Basis::BSpline3 => 3,
+        }
+    }
+
+    /// How far, in cells, the 1D function of a node reaches either side of
+    /// it: the hat a cell, the B-splines `(degree + 1) / 2`.
+    pub fn half_support(&self) -> f64 {
+        (self.degree() as f64 + 1.0) / 2.0
+    }
+
+    /// The widest a point's domain is taken, about the point, in x and in
+    /// y: a cell for GIMP (beyond it would need more than four nodes per
+    /// direction), half a cell for the wider B-splines (a domain of one
+    /// point per cell, the coarsest a case is seeded with, and one node
+    /// more per direction than at a point).
+    fn widest(&self, grid: &Grid) -> f64 {
+        match self {
+            Basis::Linear => 0.0,
+            Basis::Gimp => grid.h,
+            Basis::BSpline2 | Basis::BSpline3 => grid.h / 2.0,
+        }
+    }
+
+    /// How far, in cells, the functions of a point reach beyond points at
+    /// most half a cell inside a boundary: where nodes may take a share of
+    /// material they should not have (the ghost ties' search).
+    pub fn reach_beyond_boundary(&self) -> f64 {
+        match self {
+            Basis::Linear | Basis::Gimp => 1.0,
+            Basis::BSpline2 | Basis::BSpline3 => self.half_support() + 0.5,
+        }
+    }
+
     /// The lowest and highest cell `(i, j)` that a point at `x` with domain
     /// `support` reaches (its own cell for the linear basis).
     pub fn cell_range(&self, grid: &Grid, x: [f64; 2], support: Support) -> ([i64; 2], [i64; 2]) {
-        let lp = match (self, support) {
-            (Basis::Linear, _) => [0.0, 0.0],
-            // As `eval_1d`, which caps the domain at a cell.
-            (Basis::Gimp, Support::Rectangle(half_width)) => half_width.map(|l| l.min(grid.h)),
-            (Basis::Gimp, Support::Quadrilateral(corners)) => {
-                return quadrilateral_domain::cell_range(grid, &placed(grid, x, corners));
+        // The functions' reach past the domain: none for the hat and GIMP,
+        // whose functions are cell-wise; the B-splines' half-support.
+        let beyond = if self.degree() == 1 {
+            0.0
+        } else {
+            self.half_support() * grid.h
+        };
+        let (lo, hi) = match (self, support) {
+            (Basis::Linear, _) => (x, x),
+            (_, Support::Rectangle(half_width)) => {
+                let l = half_width.map(|l| l.min(self.widest(grid)));
+                ([x[0] - l[0], x[1] - l[1]], [x[0] + l[0], x[1] + l[1]])
+            }
+            (_, Support::Quadrilateral(corners)) => {
+                quadrilateral_domain::bounds(&placed(x, corners, self.widest(grid)))
             }
         };
         (
-            grid.cell_of([x[0] - lp[0], x[1] - lp[1]]),
-            grid.cell_of([x[0] + lp[0], x[1] + lp[1]]),
+            grid.cell_of([lo[0] - beyond, lo[1] - beyond]),
+            grid.cell_of([hi[0] + beyond, hi[1] + beyond]),
         )
     }
 
     /// 1D weights `(node index, S, dS/dx)` at coordinate `x` measured from
     /// the origin.
-    fn eval_1d(&self, h: f64, x: f64, lp: f64) -> Weights1d {
+    pub(super) fn eval_1d(&self, h: f64, x: f64, lp: f64) -> Weights1d {
         let mut w = Weights1d::default();
         match self {
             Basis::Linear => {
@@ -111,6 +175,34 @@ impl Basis {
                 let c = c as i64;
                 w.push((c, 1.0 - xi, -1.0 / h));
                 w.push((c + 1, xi, 1.0 / h));
+            }
+            Basis::BSpline2 | Basis::BSpline3 => {
+                let f = if *self == Basis::BSpline2 {
+                    quadratic_bspline
+                } else {
+                    cubic_bspline
+                };
+                let reach = self.half_support();
+                let xi = x / h;
+                let l = lp / h; // the domain's half-width in cells (0: at the point)
+                let first = (xi - l - reach).ceil() as i64;
+                let last = (xi + l + reach).floor() as i64;
+                for i in first..=last {
+                    let d = xi - i as f64;
+                    let (n, dn) = if l > 0.0 {
+                        // The mean over [d - l, d + l]; its derivative as the
+                        // domain moves is the difference of the ends.
+                        (
+                            mean(&|t| f(t).0, d - l, d + l),
+                            (f(d + l).0 - f(d - l).0) / (2.0 * l),
+                        )
+                    } else {
+                        f(d)
+                    };
+                    if n > 0.0 || dn != 0.0 {
+                        w.push((i, n.max(0.0), dn / h));
+                    }
+                }
             }
             Basis::Gimp => {
                 let lp = lp.min(h); // a wider domain would need more than four nodes
@@ -130,6 +222,59 @@ impl Basis {
     }
 }
 
+/// The mean of `g`, a polynomial between multiples of one half (the knots
+/// of both B-splines, in cells from their node), over `[a, b]`: 3-point
+/// Gauss on each piece, exact to degree 5.
+fn mean(g: &dyn Fn(f64) -> f64, a: f64, b: f64) -> f64 {
+    const GAUSS3: [(f64, f64); 3] = [
+        (-0.774_596_669_241_483_4, 5.0 / 9.0),
+        (0.0, 8.0 / 9.0),
+        (0.774_596_669_241_483_4, 5.0 / 9.0),
+    ];
+    let mut total = 0.0;
+    let mut left = a;
+    let mut knot = (2.0 * a).floor() / 2.0 + 0.5;
+    while left < b {
+        let right = knot.min(b);
+        let (c, r) = ((left + right) / 2.0, (right - left) / 2.0);
+        total += GAUSS3
+            .iter()
+            .map(|&(t, wt)| wt * r * g(c + r * t))
+            .sum::<f64>();
+        left = right;
+        knot += 0.5;
+    }
+    total / (b - a)
+}
+
+/// The quadratic B-spline centred at 0 on unit knots, and its derivative:
+/// `3/4 - d^2` for `|d| <= 1/2`, `(3/2 - |d|)^2 / 2` out to `3/2`.
+fn quadratic_bspline(d: f64) -> (f64, f64) {
+    let a = d.abs();
+    if a <= 0.5 {
+        (0.75 - d * d, -2.0 * d)
+    } else if a < 1.5 {
+        let r = 1.5 - a;
+        (0.5 * r * r, -r * d.signum())
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// The cubic B-spline centred at 0 on unit knots, and its derivative:
+/// `2/3 - d^2 + |d|^3 / 2` for `|d| <= 1`, `(2 - |d|)^3 / 6` out to 2.
+fn cubic_bspline(d: f64) -> (f64, f64) {
+    let a = d.abs();
+    if a <= 1.0 {
+        (2.0 / 3.0 - d * d + 0.5 * a * a * a, -2.0 * d + 1.5 * d * a)
+    } else if a < 2.0 {
+        let r = 2.0 - a;
+        (r * r * r / 6.0, -0.5 * r * r * d.signum())
+    } else {
+        (0.0, 0.0)
+    }
+}
+
 fn hat(s: f64, h: f64) -> f64 {
     (1.0 - s.abs() / h).max(0.0)
 }
@@ -144,7 +289,7 @@ fn hat_integral(s: f64, h: f64) -> f64 {
 mod smallvec1d {
     #[derive(Default)]
     pub struct Small {
-        items: [(i64, f64, f64); 5],
+        items: [(i64, f64, f64); 8],
         len: usize,
     }
     impl Small {
@@ -235,6 +380,70 @@ mod tests {
         Basis::Gimp.eval(&GRID, [0.3, 1.7], flat, &mut w);
         assert_eq!(w.len(), 4);
         assert!(w.iter().all(|w| w.n.is_finite()));
+    }
+
+    proptest! {
+        // B-splines at a point and averaged over a domain of half-widths
+        // `l`: partition of unity, gradients summing to zero, and the
+        // reproduction of x (nodal values x_i) and of x^2 (coefficients
+        // x_i^2 - c h^2, c = 1/4 quadratic and 1/3 cubic, whose mean over
+        // the domain is x^2 + l^2/3), value and gradient, anywhere on an
+        // unbounded grid.
+        #[test]
+        fn bsplines_reproduce_linear_and_quadratic_fields(x in -5.0..5.0f64, y in -5.0..5.0f64,
+                                                          lx in 0.0..0.35f64, ly in 0.0..0.35f64,
+                                                          at_point in proptest::bool::ANY,
+                                                          cubic in proptest::bool::ANY) {
+            let (basis, c) = if cubic { (Basis::BSpline3, 1.0 / 3.0) } else { (Basis::BSpline2, 0.25) };
+            let l = if at_point { [0.0, 0.0] } else { [lx, ly] };
+            let mut w = Vec::new();
+            basis.eval(&GRID, [x, y], Support::Rectangle(l), &mut w);
+            let per_direction = basis.degree() + if at_point { 1 } else { 2 };
+            prop_assert!(w.len() <= per_direction * per_direction);
+            let (mut n, mut g, mut lin, mut dlin, mut quad, mut dquad) = (0.0, [0.0; 2], [0.0; 2], [[0.0; 2]; 2], 0.0, [0.0; 2]);
+            for nw in &w {
+                let p = GRID.node_position(nw.node);
+                let q = p[0] * p[0] - c * GRID.h * GRID.h;
+                n += nw.n;
+                quad += nw.n * q;
+                for d in 0..2 {
+                    g[d] += nw.grad[d];
+                    lin[d] += nw.n * p[d];
+                    dquad[d] += nw.grad[d] * q;
+                    for e in 0..2 {
+                        dlin[d][e] += p[d] * nw.grad[e];
+                    }
+                }
+            }
+            prop_assert!((n - 1.0).abs() < 1e-12);
+            prop_assert!(g[0].abs() < 1e-11 && g[1].abs() < 1e-11);
+            prop_assert!((lin[0] - x).abs() < 1e-11 && (lin[1] - y).abs() < 1e-11);
+            prop_assert!((dlin[0][0] - 1.0).abs() < 1e-11 && dlin[0][1].abs() < 1e-11);
+            prop_assert!(dlin[1][0].abs() < 1e-11 && (dlin[1][1] - 1.0).abs() < 1e-11);
+            let mean = x * x + l[0] * l[0] / 3.0;
+            prop_assert!((quad - mean).abs() < 1e-10, "{} vs {}", quad, mean);
+            prop_assert!((dquad[0] - 2.0 * x).abs() < 1e-10 && dquad[1].abs() < 1e-10);
+        }
+
+        #[test]
+        fn bspline_gradients_match_finite_differences(x in -5.0..5.0f64, y in -5.0..5.0f64,
+                                                      l in 0.0..0.35f64, cubic in proptest::bool::ANY) {
+            let basis = if cubic { Basis::BSpline3 } else { Basis::BSpline2 };
+            let support = Support::Rectangle([l, 0.6 * l]);
+            let eps = 1e-6;
+            let value = |p: [f64; 2], key: NodeKey| {
+                let mut w = Vec::new();
+                basis.eval(&GRID, p, support, &mut w);
+                w.iter().find(|w| w.node == key).map_or(0.0, |w| w.n)
+            };
+            let mut w = Vec::new();
+            basis.eval(&GRID, [x, y], support, &mut w);
+            for nw in w {
+                let fx = (value([x + eps, y], nw.node) - value([x - eps, y], nw.node)) / (2.0 * eps);
+                let fy = (value([x, y + eps], nw.node) - value([x, y - eps], nw.node)) / (2.0 * eps);
+                prop_assert!((fx - nw.grad[0]).abs() < 1e-5 && (fy - nw.grad[1]).abs() < 1e-5);
+            }
+        }
     }
 
     #[test]

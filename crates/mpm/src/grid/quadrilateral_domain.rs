@@ -1,21 +1,26 @@
 //! GIMP on a point's own cell when that cell is not an axis-aligned
 //! rectangle: a turned rectangle's, a mapped quadrilateral's or a polar
-//! lattice's. The weights are the bilinear hats averaged over the cell `D`,
+//! lattice's. The weights are the grid's functions averaged over the cell
+//! `D`,
 //!
 //! `S_i = (1/A) int_D N_i`, `grad S_i = (1/A) int_D grad N_i`,
 //!
 //! the second being the derivative of the first as `D` moves with the
 //! point. Both integrals are exact: `D` (convex, straight-sided) is clipped
-//! to every grid cell it overlaps, each piece is cut into a fan of
-//! triangles, and the rule at the edge midpoints, exact for quadratics,
-//! integrates `N_i` (bilinear) and `grad N_i` (linear in the cell).
+//! to every knot span it overlaps (the grid's cells, or for quadratic
+//! B-splines the cells shifted by half a cell), where the functions are
+//! polynomials, and each piece is cut into a fan of triangles. For the
+//! hats, the rule at the edge midpoints (exact for quadratics) integrates
+//! `N_i` (bilinear) and `grad N_i`; for B-splines of degree `p` (a
+//! polynomial of degree `2p`), the collapsed (Duffy) `(p+1) x (p+1)` Gauss
+//! rule, exact to degree `2p + 1`.
 //!
 //! So `sum S_i = 1`, `sum grad S_i = 0`, `sum x_i (x) grad S_i = I`, and
 //! cells that tile the body give interior nodes a zero net force under a
 //! uniform stress, whatever the angle: the patch test. On an axis-aligned
-//! rectangle this is the tensor-product GIMP of [`super::basis`] (tested).
+//! rectangle this is the tensor product of [`super::basis`] (tested).
 
-use super::{Grid, NodeWeight, node_key};
+use super::{Basis, Grid, NodeWeight, node_key};
 
 /// The most vertices a convex quadrilateral clipped to a rectangle has.
 const MAX_VERTICES: usize = 8;
@@ -81,9 +86,8 @@ pub fn area(c: &[[f64; 2]; 4]) -> f64 {
     0.5 * (d1[0] * d2[1] - d1[1] * d2[0])
 }
 
-/// The lowest and highest cell `(i, j)` that the quadrilateral `corners`
-/// overlaps.
-pub fn cell_range(grid: &Grid, corners: &[[f64; 2]; 4]) -> ([i64; 2], [i64; 2]) {
+/// The lowest and highest corner of the quadrilateral's bounding box.
+pub fn bounds(corners: &[[f64; 2]; 4]) -> ([f64; 2], [f64; 2]) {
     let lo = [0, 1].map(|d| corners.iter().map(|c| c[d]).fold(f64::INFINITY, f64::min));
     let hi = [0, 1].map(|d| {
         corners
@@ -91,7 +95,51 @@ pub fn cell_range(grid: &Grid, corners: &[[f64; 2]; 4]) -> ([i64; 2], [i64; 2]) 
             .map(|c| c[d])
             .fold(f64::NEG_INFINITY, f64::max)
     });
+    (lo, hi)
+}
+
+/// The lowest and highest cell `(i, j)` that the quadrilateral `corners`
+/// overlaps.
+fn cell_range(grid: &Grid, corners: &[[f64; 2]; 4]) -> ([i64; 2], [i64; 2]) {
+    let (lo, hi) = bounds(corners);
     (grid.cell_of(lo), grid.cell_of(hi))
+}
+
+/// Pushes a zero weight for every node `(i, j)` with `lo <= (i, j) <= hi`,
+/// in `(i, j)` order, and returns the first one's index in `out`.
+fn push_slots(lo: [i64; 2], hi: [i64; 2], out: &mut Vec<NodeWeight>) -> usize {
+    let first = out.len();
+    for j in lo[1]..=hi[1] {
+        for i in lo[0]..=hi[0] {
+            out.push(NodeWeight {
+                node: node_key(i, j),
+                n: 0.0,
+                grad: [0.0, 0.0],
+            });
+        }
+    }
+    first
+}
+
+/// Drops the weights from `first` on that are zero with their gradient.
+fn drop_zeros(first: usize, out: &mut Vec<NodeWeight>) {
+    let mut k = first;
+    for i in first..out.len() {
+        if out[i].n != 0.0 || out[i].grad != [0.0, 0.0] {
+            out[k] = out[i];
+            k += 1;
+        }
+    }
+    out.truncate(k);
+}
+
+/// The part of `domain` in the axis-aligned box from `x0` to `x0 + h`.
+fn clip_to_box(domain: &Polygon, x0: [f64; 2], h: f64) -> Polygon {
+    domain
+        .clip(0, x0[0], 1.0)
+        .clip(0, x0[0] + h, -1.0)
+        .clip(1, x0[1], 1.0)
+        .clip(1, x0[1] + h, -1.0)
 }
 
 /// Appends to `out` the averaged hats of every node the convex
@@ -102,16 +150,7 @@ pub fn eval(grid: &Grid, corners: &[[f64; 2]; 4], out: &mut Vec<NodeWeight>) {
     let (lo, hi) = cell_range(grid, corners);
     // One slot per node of the overlapped cells, in (i, j) order.
     let width = (hi[0] - lo[0] + 2) as usize;
-    let first = out.len();
-    for j in lo[1]..=hi[1] + 1 {
-        for i in lo[0]..=hi[0] + 1 {
-            out.push(NodeWeight {
-                node: node_key(i, j),
-                n: 0.0,
-                grad: [0.0, 0.0],
-            });
-        }
-    }
+    let first = push_slots(lo, [hi[0] + 1, hi[1] + 1], out);
     let h = grid.h;
     let domain = Polygon::new(corners);
     for cj in lo[1]..=hi[1] {
@@ -120,11 +159,7 @@ pub fn eval(grid: &Grid, corners: &[[f64; 2]; 4], out: &mut Vec<NodeWeight>) {
                 grid.origin[0] + h * ci as f64,
                 grid.origin[1] + h * cj as f64,
             ];
-            let piece = domain
-                .clip(0, x0[0], 1.0)
-                .clip(0, x0[0] + h, -1.0)
-                .clip(1, x0[1], 1.0)
-                .clip(1, x0[1] + h, -1.0);
+            let piece = clip_to_box(&domain, x0, h);
             if piece.len < 3 {
                 continue;
             }
@@ -159,15 +194,86 @@ pub fn eval(grid: &Grid, corners: &[[f64; 2]; 4], out: &mut Vec<NodeWeight>) {
             }
         }
     }
-    let mut k = first;
-    for i in first..out.len() {
-        if out[i].n != 0.0 || out[i].grad != [0.0, 0.0] {
-            out[k] = out[i];
-            k += 1;
+    drop_zeros(first, out);
+}
+
+/// Appends to `out` the uniform B-splines of `degree` (2 or 3) averaged
+/// over the convex quadrilateral `corners` (absolute positions, either
+/// orientation), for every node it reaches.
+pub fn eval_bsplines(
+    grid: &Grid,
+    corners: &[[f64; 2]; 4],
+    degree: usize,
+    out: &mut Vec<NodeWeight>,
+) {
+    let basis = if degree == 2 {
+        Basis::BSpline2
+    } else {
+        Basis::BSpline3
+    };
+    // Knot spans start on the grid lines (cubic) or half a cell past them
+    // (quadratic, whose knots are the cells' middles).
+    let shift = if degree == 2 { 0.5 } else { 0.0 };
+    let h = grid.h;
+    let whole = area(corners);
+    let (lo, hi) = bounds(corners);
+    let span = |v: f64, d: usize| ((v - grid.origin[d]) / h - shift).floor() as i64;
+    let (span_lo, span_hi) = (
+        [span(lo[0], 0), span(lo[1], 1)],
+        [span(hi[0], 0), span(hi[1], 1)],
+    );
+    // The nodes whose functions reach the box.
+    let reach = basis.half_support();
+    let node = |v: f64, d: usize, side: f64| (v - grid.origin[d]) / h + side * reach;
+    let node_lo = [0, 1].map(|d| node(lo[d], d, -1.0).ceil() as i64);
+    let node_hi = [0, 1].map(|d| node(hi[d], d, 1.0).floor() as i64);
+    let width = (node_hi[0] - node_lo[0] + 1) as usize;
+    let first = push_slots(node_lo, node_hi, out);
+    let gauss: &[(f64, f64)] = if degree == 2 { &GAUSS3_01 } else { &GAUSS4_01 };
+    let domain = Polygon::new(corners);
+    for sj in span_lo[1]..=span_hi[1] {
+        for si in span_lo[0]..=span_hi[0] {
+            let x0 = [0, 1].map(|d| grid.origin[d] + h * ([si, sj][d] as f64 + shift));
+            let piece = clip_to_box(&domain, x0, h);
+            for k in 1..piece.len.max(2) - 1 {
+                let (a, b, c) = (piece.v[0], piece.v[k], piece.v[k + 1]);
+                // x = a + u (b - a) + u v (c - b), dx = 2 (area) u du dv.
+                let jacobian = cross(a, b, c) / whole;
+                for &(u, wu) in gauss {
+                    for &(v, wv) in gauss {
+                        let x = [0, 1].map(|d| a[d] + u * (b[d] - a[d]) + u * v * (c[d] - b[d]));
+                        let weight = wu * wv * u * jacobian;
+                        let wx = basis.eval_1d(h, x[0] - grid.origin[0], 0.0);
+                        let wy = basis.eval_1d(h, x[1] - grid.origin[1], 0.0);
+                        for &(j, sy, dsy) in wy.as_slice() {
+                            let row = first + (j - node_lo[1]) as usize * width;
+                            for &(i, sx, dsx) in wx.as_slice() {
+                                let w = &mut out[row + (i - node_lo[0]) as usize];
+                                w.n += weight * sx * sy;
+                                w.grad[0] += weight * dsx * sy;
+                                w.grad[1] += weight * sx * dsy;
+                            }
+                        }
+                    }
+                }
+            }
         }
     }
-    out.truncate(k);
+    drop_zeros(first, out);
 }
+
+/// Gauss-Legendre points and weights on `[0, 1]`, 3 and 4 points.
+const GAUSS3_01: [(f64, f64); 3] = [
+    (0.112_701_665_379_258_3, 5.0 / 18.0),
+    (0.5, 8.0 / 18.0),
+    (0.887_298_334_620_741_7, 5.0 / 18.0),
+];
+const GAUSS4_01: [(f64, f64); 4] = [
+    (0.069_431_844_202_973_71, 0.173_927_422_568_726_9),
+    (0.330_009_478_207_571_9, 0.326_072_577_431_273_1),
+    (0.669_990_521_792_428_1, 0.326_072_577_431_273_1),
+    (0.930_568_155_797_026_3, 0.173_927_422_568_726_9),
+];
 
 #[cfg(test)]
 mod tests {
@@ -187,9 +293,21 @@ mod tests {
     }
 
     fn weights(corners: &[[f64; 2]; 4]) -> Vec<NodeWeight> {
+        degree_weights(corners, 1)
+    }
+
+    /// The hats (degree 1) or the B-splines of `degree` averaged.
+    fn degree_weights(corners: &[[f64; 2]; 4], degree: usize) -> Vec<NodeWeight> {
         let mut w = Vec::new();
-        eval(&GRID, corners, &mut w);
+        match degree {
+            1 => eval(&GRID, corners, &mut w),
+            p => eval_bsplines(&GRID, corners, p, &mut w),
+        }
         w
+    }
+
+    fn basis(degree: usize) -> Basis {
+        [Basis::Gimp, Basis::BSpline2, Basis::BSpline3][degree - 1]
     }
 
     proptest! {
@@ -200,6 +318,7 @@ mod tests {
             x in -3.0..3.0f64, y in -3.0..3.0f64,
             la in 0.05..0.7f64, lb in 0.05..0.7f64, angle in 0.0..6.3f64,
             cx in -0.3..0.3f64, cy in -0.3..0.3f64, flip in proptest::bool::ANY,
+            degree in 1..=3usize,
         ) {
             let (s, co) = angle.sin_cos();
             let (a, b) = ([la * co, la * s], [-lb * s, lb * co]);
@@ -208,7 +327,7 @@ mod tests {
             if flip {
                 corners.reverse();
             }
-            let w = weights(&corners);
+            let w = degree_weights(&corners, degree);
             let n: f64 = w.iter().map(|w| w.n).sum();
             prop_assert!((n - 1.0).abs() < 1e-12, "{}", n);
             let mut first = [0.0; 2];
@@ -246,14 +365,16 @@ mod tests {
             prop_assert!((first[1] - centroid[1]).abs() < 1e-12);
         }
 
-        // On an upright rectangle the average is GIMP's tensor product.
+        // On an upright rectangle the average is the tensor product (GIMP,
+        // or the B-splines averaged in x and in y).
         #[test]
-        fn an_upright_cell_is_tensor_product_gimp(
-            x in -3.0..3.0f64, y in -3.0..3.0f64, lx in 0.01..0.7f64, ly in 0.01..0.7f64,
+        fn an_upright_cell_is_the_tensor_product(
+            x in -3.0..3.0f64, y in -3.0..3.0f64, lx in 0.01..0.35f64, ly in 0.01..0.35f64,
+            degree in 1..=3usize,
         ) {
-            let w = weights(&cell([x, y], [lx, 0.0], [0.0, ly], [0.0, 0.0]));
+            let w = degree_weights(&cell([x, y], [lx, 0.0], [0.0, ly], [0.0, 0.0]), degree);
             let mut gimp = Vec::new();
-            Basis::Gimp.eval(&GRID, [x, y], Support::Rectangle([lx, ly]), &mut gimp);
+            basis(degree).eval(&GRID, [x, y], Support::Rectangle([lx, ly]), &mut gimp);
             for g in &gimp {
                 let q = w.iter().find(|w| w.node == g.node).copied().unwrap_or(NodeWeight {
                     node: g.node, n: 0.0, grad: [0.0, 0.0],
@@ -269,15 +390,15 @@ mod tests {
         // The gradient is the derivative of the value as the cell moves.
         #[test]
         fn the_gradient_follows_the_moving_cell(
-            x in -3.0..3.0f64, y in -3.0..3.0f64, angle in 0.0..6.3f64,
+            x in -3.0..3.0f64, y in -3.0..3.0f64, angle in 0.0..6.3f64, degree in 1..=3usize,
         ) {
             let (s, co) = angle.sin_cos();
             let (a, b, c) = ([0.2 * co, 0.2 * s], [-0.15 * s, 0.15 * co], [0.02, -0.01]);
             let eps = 1e-6;
             let value = |p: [f64; 2], key| {
-                weights(&cell(p, a, b, c)).iter().find(|w| w.node == key).map_or(0.0, |w| w.n)
+                degree_weights(&cell(p, a, b, c), degree).iter().find(|w| w.node == key).map_or(0.0, |w| w.n)
             };
-            for nw in weights(&cell([x, y], a, b, c)) {
+            for nw in degree_weights(&cell([x, y], a, b, c), degree) {
                 let fx = (value([x + eps, y], nw.node) - value([x - eps, y], nw.node)) / (2.0 * eps);
                 let fy = (value([x, y + eps], nw.node) - value([x, y - eps], nw.node)) / (2.0 * eps);
                 prop_assert!((fx - nw.grad[0]).abs() < 1e-5, "{} vs {}", fx, nw.grad[0]);

@@ -259,3 +259,85 @@ fn papers_cantilever_converges_quadratically_and_its_reactions_balance() {
         );
     }
 }
+
+/// Where the grid lies, per basis: the small-load beam on IBM supports at
+/// h = 0.5 m over seven grid origins spread over a cell (`(k/7, 3k mod
+/// 7 / 7)`). Measured spreads (largest minus smallest, relative to the
+/// reference) of tip u_x | relative deflection: GIMP 1.6e-1 | 2.2e-2,
+/// bspline2 5.3e-2 | 5.0e-3, bspline3 3.5e-2 | 5.0e-3 (u_x is a thousandth
+/// of the deflection, so any coupling of bending into stretching shows in
+/// it); worst errors of the relative deflection GIMP 1.3e-2, bspline2 and
+/// bspline3 1.6e-2 (at this cell size the B-splines' systematic error is
+/// the larger, see the next test). Asserted:
+/// the B-splines' spread of the deflection under 6e-3 and under a third of
+/// GIMP's. The remaining spread is the boundary's (the supports' anchors
+/// and the pressure's quadrature move with the grid), which every basis
+/// shares.
+#[test]
+fn bsplines_depend_less_on_where_the_grid_lies() {
+    let h = 0.5;
+    let mut spreads = Vec::new();
+    for basis in ["gimp", "bspline2", "bspline3"] {
+        let mut ux = Vec::new();
+        let mut rel = Vec::new();
+        for k in 0..7 {
+            let shift = [k as f64 / 7.0, (3 * k % 7) as f64 / 7.0];
+            let mut case = with_supports(h, "edge", ibm_supports());
+            case["basis"] = basis.into();
+            let (u, r) = measure_case(case, h, shift);
+            ux.push((u - TIP_X) / TIP_X);
+            rel.push((r - RELATIVE_DEFLECTION) / RELATIVE_DEFLECTION);
+        }
+        let spread = |v: &[f64]| {
+            v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - v.iter().copied().fold(f64::INFINITY, f64::min)
+        };
+        let worst = |v: &[f64]| v.iter().map(|e| e.abs()).fold(0.0, f64::max);
+        eprintln!(
+            "{basis}, h {h}: u_x spread {:.2e} worst {:.2e}; relative deflection spread {:.2e} worst {:.2e}",
+            spread(&ux),
+            worst(&ux),
+            spread(&rel),
+            worst(&rel)
+        );
+        spreads.push(spread(&rel));
+    }
+    for (basis, s) in ["bspline2", "bspline3"].iter().zip(&spreads[1..]) {
+        assert!(*s < 6e-3 && *s < spreads[0] / 3.0, "{basis}: {spreads:?}");
+    }
+}
+
+/// The small-load beam on IBM supports with the B-splines (aligned grid,
+/// h = 1 .. 0.125; relative errors of the relative deflection | tip u_x):
+/// bspline2 6.25e-2, 1.64e-2, 4.42e-3, 1.42e-3 | 1.19e-2, 3.83e-3, 1.01e-3,
+/// 2.57e-4; bspline3 6.23e-2, 1.64e-2, 4.43e-3, 1.40e-3 | 1.01e-2, 3.44e-3,
+/// 9.14e-4, 2.33e-4. Orders 1.6 to 2.0. Asserted: the deflection's error
+/// falling at every refinement at an overall order above 1.6, under 2e-3
+/// at the finest, u_x under 1e-3. (The bilinear basis on this aligned grid
+/// is luckier, 2.0e-4, and loses it when the grid moves; see above.)
+#[test]
+fn bspline_cantilever_converges_to_the_finite_element_reference() {
+    for basis in ["bspline2", "bspline3"] {
+        let mut errors = Vec::new();
+        for h in [1.0, 0.5, 0.25, 0.125] {
+            let mut case = with_supports(h, "edge", ibm_supports());
+            case["basis"] = basis.into();
+            let (ux, rel) = measure_case(case, h, [0.0, 0.0]);
+            let e_ux = (ux - TIP_X) / TIP_X;
+            let e_rel = (rel - RELATIVE_DEFLECTION) / RELATIVE_DEFLECTION;
+            eprintln!(
+                "{basis}, h {h:<6} tip u_x {ux:.6} ({e_ux:+.2e})  relative deflection {rel:.6} ({e_rel:+.2e})"
+            );
+            errors.push((e_ux.abs(), e_rel.abs()));
+        }
+        for w in errors.windows(2) {
+            assert!(w[1].1 < w[0].1, "{basis}: {errors:?}");
+        }
+        let overall = (errors[0].1 / errors[3].1).log2() / 3.0;
+        assert!(
+            overall > 1.6 && errors[3].1 < 2e-3,
+            "{basis}: order {overall:.2}, {errors:?}"
+        );
+        assert!(errors[3].0 < 1e-3, "{basis}: {errors:?}");
+    }
+}

@@ -7,7 +7,7 @@ use crate::boundary::bspline::{bezier, bezier_derivative, local_segment};
 use crate::boundary::detection::BoundaryLoop;
 use crate::boundary::quadrature::gauss_points;
 use crate::boundary::reference_ring;
-use crate::grid::Grid;
+use crate::grid::{Basis, Grid};
 use crate::particles::MaterialPoints;
 use crate::supports::{Fix, Rotation};
 
@@ -105,6 +105,7 @@ pub fn anchors(
     loops: &[BoundaryLoop],
     points: &MaterialPoints,
     grid: &Grid,
+    basis: Basis,
 ) -> Vec<Anchor> {
     let mut out = Vec::new();
     for s in supports {
@@ -117,7 +118,7 @@ pub fn anchors(
             let ring = reference_ring(l, points);
             for &k in segments {
                 let segment = local_segment(&ring, k);
-                for (t, weight) in gauss_points(&segment, grid) {
+                for (t, weight) in gauss_points(&segment, grid, basis) {
                     let d = bezier_derivative(&segment, t);
                     let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
                     out.push(Anchor {

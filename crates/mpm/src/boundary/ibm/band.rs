@@ -52,7 +52,9 @@ impl BandTerms {
         band_width: f64,
         load_factor: f64,
     ) -> Self {
-        let Configuration { grid, conn, points } = *start;
+        let Configuration {
+            grid, conn, points, ..
+        } = *start;
         let mut terms = BandTerms {
             material_scale: 0.75 * band_width / grid.h,
             ..Default::default()
@@ -69,6 +71,7 @@ impl BandTerms {
                 .or_insert_with(|| current_ring(&loops[a.loop_index], points));
             let first = terms.shares.len();
             if !hat_shares(
+                start.basis,
                 grid,
                 a.position(),
                 &conn.nodes,
@@ -80,7 +83,8 @@ impl BandTerms {
             let d = bezier_derivative(&local_segment(current, a.segment), a.t);
             let length = a.weight * (d[0] * d[0] + d[1] * d[1]).sqrt();
             let a_nn = a.acoustic_tensor(points);
-            for key in nodes_beyond(grid, a.position(), a.normal) {
+            let cells = start.basis.reach_beyond_boundary();
+            for key in nodes_beyond(grid, a.position(), a.normal, cells) {
                 if conn.nodes.binary_search(&key).is_ok() {
                     beyond.entry(key).or_insert(i);
                 }

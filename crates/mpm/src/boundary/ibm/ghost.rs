@@ -53,17 +53,19 @@ pub(super) fn nodes_beyond(
     grid: &Grid,
     x: [f64; 2],
     n: [f64; 2],
+    cells: f64,
 ) -> impl Iterator<Item = NodeKey> + '_ {
     let [ci, cj] = grid.cell_of(x);
     let tol = 1e-9 * grid.h;
-    (cj - 1..=cj + 2)
-        .flat_map(move |j| (ci - 1..=ci + 2).map(move |i| node_key(i, j)))
+    let r = cells.ceil() as i64;
+    (cj - r..=cj + r + 1)
+        .flat_map(move |j| (ci - r..=ci + r + 1).map(move |i| node_key(i, j)))
         .filter(move |&key| {
             let p = grid.node_position(key);
             let r = [p[0] - x[0], p[1] - x[1]];
             let out = r[0] * n[0] + r[1] * n[1];
             let along = (r[0] * n[1] - r[1] * n[0]).abs();
-            out > 0.1 * grid.h && out <= grid.h + tol && along <= grid.h + tol
+            out > 0.1 * grid.h && out <= cells * grid.h + tol && along <= cells * grid.h + tol
         })
 }
 
@@ -81,7 +83,9 @@ pub(super) fn ties(
     beyond: &BTreeMap<NodeKey, usize>,
     rings: &BTreeMap<usize, Vec<[f64; 2]>>,
 ) -> Vec<GhostTie> {
-    let Configuration { grid, conn, points } = *start;
+    let Configuration {
+        grid, conn, points, ..
+    } = *start;
     let mut ties = Vec::new();
     for (&key, &anchor) in beyond {
         let a = &anchors[anchor];
@@ -128,7 +132,7 @@ mod tests {
         };
         // An anchor on x = 0 that has moved a hair left: the nodes on x = 0
         // are not beyond it, those on x = -1 within a cell along it are.
-        let found: Vec<[f64; 2]> = nodes_beyond(&grid, [-1e-4, 2.3], [-1.0, 0.0])
+        let found: Vec<[f64; 2]> = nodes_beyond(&grid, [-1e-4, 2.3], [-1.0, 0.0], 1.0)
             .map(|k| grid.node_position(k))
             .collect();
         assert_eq!(found, vec![[-1.0, 2.0], [-1.0, 3.0]]);
