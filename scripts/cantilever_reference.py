@@ -249,6 +249,21 @@ def richardson(f):
     return out
 
 
+def print_differences(ns, f):
+    """Prints the successive differences of `f` over the meshes `ns`, with
+    the observed orders and Richardson extrapolations; returns those."""
+    print(f"  {'meshes':>12} {'diff (coarse->fine)':>20} {'order p':>8} "
+          f"{'Richardson':>16} {'err.est':>10}")
+    rich = richardson(f)
+    for k in range(1, len(f)):
+        line = f"  {ns[k - 1]:>5}->{ns[k]:<6} {f[k] - f[k - 1]:>20.3e}"
+        if k >= 2:
+            p, fx, err = rich[k - 2]
+            line += f" {p:>8.3f} {fx:>16.10f} {err:>10.2e}"
+        print(line)
+    return rich
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--max-n", type=int, default=640,
@@ -282,15 +297,7 @@ def main():
     for key in keys:
         f = [r[key] for r in results]
         print(f"{key}")
-        print(f"  {'meshes':>12} {'diff (coarse->fine)':>20} {'order p':>8} "
-              f"{'Richardson':>16} {'err.est':>10}")
-        rich = richardson(f)
-        for k in range(1, len(f)):
-            line = f"  {ns[k - 1]:>5}->{ns[k]:<6} {f[k] - f[k - 1]:>20.3e}"
-            if k >= 2:
-                p, fx, err = rich[k - 2]
-                line += f" {p:>8.3f} {fx:>16.10f} {err:>10.2e}"
-            print(line)
+        rich = print_differences(ns, f)
         if key in EXPECTED and rich:
             p, fx, err = rich[-1]
             spread = abs(rich[-1][1] - rich[-2][1]) if len(rich) >= 2 else float("nan")

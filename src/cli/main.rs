@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use mpm_lab::{LabError, bench, study};
+use mpm_lab::{LabError, basis_study, bench, study};
 
 /// The built-in case `mpm run` solves when given no file.
 pub const DEFAULT_EXAMPLE: &str = "cantilever";
@@ -63,7 +63,9 @@ enum Command {
     /// Convergence studies written as tables (CSV, markdown) and SVG plots.
     Study {
         /// Which study: `cantilever` (the paper's Figure 3, both support
-        /// methods, and the IBM band width).
+        /// methods, and the IBM band width, for one basis) or `bases` (the
+        /// four bases on the paper's case: convergence, grid origins, load
+        /// steps, error against cost).
         name: String,
         /// Output directory.
         #[arg(long, default_value = "study")]
@@ -71,7 +73,8 @@ enum Command {
         /// A small sweep (two cell sizes, three point counts) in seconds.
         #[arg(long)]
         quick: bool,
-        /// Shape functions: linear (the paper's) or gimp.
+        /// Shape functions of `cantilever`: linear (the paper's), gimp,
+        /// bspline2 or bspline3.
         #[arg(long, default_value = "linear")]
         basis: String,
     },
@@ -107,8 +110,9 @@ fn main() -> ExitCode {
             basis,
         } => match name.as_str() {
             "cantilever" => study::cantilever(&out, quick, &basis).map_err(CliError::from),
+            "bases" => basis_study::bases(&out, quick).map_err(CliError::from),
             other => Err(CliError::input(format!(
-                "no study {other:?}; available: cantilever"
+                "no study {other:?}; available: cantilever, bases"
             ))),
         },
         Command::Serve(args) => serve::serve(args),

@@ -1,6 +1,7 @@
 //! Studies and benchmarks of the solver, offered by the `mpm` command as
 //! `mpm study` and `mpm bench`: the paper's convergence study written as
-//! tables and SVG plots ([`study`]), and cost against problem size written
+//! tables and SVG plots ([`study`]), the grid bases compared on it
+//! ([`basis_study`]), and cost against problem size written
 //! to BENCHMARKS.md ([`bench`]). They use only the solver crate.
 //!
 //! [`bench::bench`] measures each row in a child process (for its own peak
@@ -8,6 +9,7 @@
 //! POINTS`: a binary that offers `bench` must offer `bench-row` too, as
 //! [`bench::bench_row`].
 
+pub mod basis_study;
 pub mod bench;
 pub mod plot;
 pub mod study;
