@@ -292,10 +292,6 @@ mod tests {
             .map(|(s, t)| [0, 1].map(|d| x[d] + s * a[d] + t * b[d] + s * t * c[d]))
     }
 
-    fn weights(corners: &[[f64; 2]; 4]) -> Vec<NodeWeight> {
-        degree_weights(corners, 1)
-    }
-
     /// The hats (degree 1) or the B-splines of `degree` averaged.
     fn degree_weights(corners: &[[f64; 2]; 4], degree: usize) -> Vec<NodeWeight> {
         let mut w = Vec::new();
