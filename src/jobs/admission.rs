@@ -143,10 +143,10 @@ fn check_points(points: usize, limits: &Limits) -> Result<(), Rejection> {
 }
 
 /// Bytes one material point takes in a stored step, at most: its columns
-/// (`mpm::report::PointColumns`) are ten numbers of at most 24 characters
-/// (`-1.2345678901234567e-100`), the commas and brackets around them (17)
-/// and a body index (a test serialises the worst case).
-pub const STORED_BYTES_PER_POINT: f64 = 270.0;
+/// (`mpm::report::PointColumns`) are eleven numbers of at most 24
+/// characters (`-1.2345678901234567e-100`), the commas and brackets around
+/// them, a body index and a yield flag (a test serialises the worst case).
+pub const STORED_BYTES_PER_POINT: f64 = 305.0;
 /// Bytes one boundary point (a data point of a boundary curve) takes in a
 /// stored step, at most: eight polyline samples (8 x 52), up to three knots
 /// and three control points (at a corner; 3 x 25 + 3 x 52) and its index.
@@ -297,6 +297,8 @@ mod tests {
             volume: vec![worst; n],
             jacobian: vec![worst; n],
             body: vec![u32::MAX; n],
+            plastic_strain: vec![worst; n],
+            yielding: vec![false; n],
         };
         let per_point = |n| serde_json::to_string(&one(n)).unwrap().len();
         let marginal = (per_point(1001) - per_point(1)) as f64 / 1000.0;

@@ -14,7 +14,7 @@ use crate::boundary::{
 use crate::case::{BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, SupportMethod};
 use crate::geometry::Geometry;
 use crate::grid::{Basis, Grid};
-use crate::material::{Elastic, Material};
+use crate::material::{Elastic, Material, VonMises};
 use crate::newton::NewtonSettings;
 use crate::particles::MaterialPoints;
 use crate::particles::seeding::{self, Density, FillSize};
@@ -267,6 +267,15 @@ fn material(spec: &MaterialSpec) -> Material {
     match spec {
         MaterialSpec::Hencky { .. } => Material::Hencky(constants),
         MaterialSpec::LinearElastic { .. } => Material::LinearElastic(constants),
+        MaterialSpec::VonMises {
+            yield_stress,
+            hardening,
+            ..
+        } => Material::VonMises(VonMises {
+            elastic: constants,
+            yield_stress: *yield_stress,
+            hardening: *hardening,
+        }),
     }
 }
 

@@ -127,6 +127,12 @@ pub struct PointColumns {
     pub jacobian: Vec<f64>,
     /// Index of the body the point belongs to.
     pub body: Vec<u32>,
+    /// Accumulated plastic strain (zero for the elastic models).
+    #[serde(default)]
+    pub plastic_strain: Vec<f64>,
+    /// Whether the point flowed plastically in the step.
+    #[serde(default)]
+    pub yielding: Vec<bool>,
 }
 
 impl PointColumns {
@@ -143,6 +149,8 @@ impl PointColumns {
             volume: (0..n).map(|p| mp.volume(p)).collect(),
             jacobian: (0..n).map(|p| mp.jacobian(p)).collect(),
             body: mp.material.clone(),
+            plastic_strain: mp.history.iter().map(|h| h.plastic_strain).collect(),
+            yielding: mp.yielding.clone(),
         }
     }
 }

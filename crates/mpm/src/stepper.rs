@@ -386,15 +386,17 @@ impl Simulation {
             &mut mp.deformation,
             &mut mp.history,
             &mut mp.stress,
+            &mut mp.yielding,
         )
             .into_par_iter()
             .enumerate()
-            .for_each(|(p, (x, f, history, stress))| {
+            .for_each(|(p, (x, f, history, stress, yielding))| {
                 let (dx, grad_u) = increment(conn.point_links(p), u);
                 let df = Matrix2::identity() + grad_u;
                 x[0] += dx[0];
                 x[1] += dx[1];
                 *f = df * *f;
+                *yielding = responses[p].history.plastic_strain > history.plastic_strain;
                 *history = responses[p].history;
                 *stress = responses[p].cauchy;
             });

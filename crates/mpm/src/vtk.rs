@@ -27,6 +27,11 @@ pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
         .flat_map(|s| [s[0], s[1], s[3], s[2], 0.0, 0.0])
         .collect();
     let body: Vec<f64> = cols.body.iter().map(|&b| b as f64).collect();
+    let yielding: Vec<f64> = cols
+        .yielding
+        .iter()
+        .map(|&y| if y { 1.0 } else { 0.0 })
+        .collect();
     let connectivity: Vec<i64> = (0..n as i64).collect();
     let offsets: Vec<i64> = (1..=n as i64).collect();
     let types = vec![1u8; n]; // VTK_VERTEX
@@ -56,6 +61,14 @@ pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
     array(&mut xml, "volume", "Float64", 1, f64s(&cols.volume));
     array(&mut xml, "jacobian", "Float64", 1, f64s(&cols.jacobian));
     array(&mut xml, "body", "Float64", 1, f64s(&body));
+    array(
+        &mut xml,
+        "plastic_strain",
+        "Float64",
+        1,
+        f64s(&cols.plastic_strain),
+    );
+    array(&mut xml, "yielding", "Float64", 1, f64s(&yielding));
     xml.push_str("      </PointData>\n      <Points>\n");
     array(&mut xml, "position", "Float64", 3, f64s(&positions));
     xml.push_str("      </Points>\n      <Cells>\n");

@@ -276,6 +276,20 @@ pub enum MaterialSpec {
         poisson_ratio: f64,
         density: f64,
     },
+    /// Finite-strain J2 (von Mises) plasticity on Hencky elasticity, with
+    /// linear isotropic hardening: yield at `sigma_y + H alpha` in the von
+    /// Mises equivalent Kirchhoff stress (plane-strain shear strength
+    /// `sigma_y / sqrt(3)`).
+    VonMises {
+        youngs_modulus: f64,
+        poisson_ratio: f64,
+        density: f64,
+        /// Initial uniaxial yield stress `sigma_y` (Pa).
+        yield_stress: f64,
+        /// Hardening modulus `H` (Pa); 0 (default) is perfect plasticity.
+        #[serde(default)]
+        hardening: f64,
+    },
 }
 
 impl MaterialSpec {
@@ -291,6 +305,12 @@ impl MaterialSpec {
                 youngs_modulus,
                 poisson_ratio,
                 density,
+            }
+            | MaterialSpec::VonMises {
+                youngs_modulus,
+                poisson_ratio,
+                density,
+                ..
             } => (youngs_modulus, poisson_ratio, density),
         }
     }

@@ -418,6 +418,20 @@ impl Body {
                 format!("must be zero or positive, got {rho}"),
             ));
         }
+        if let MaterialSpec::VonMises {
+            yield_stress,
+            hardening,
+            ..
+        } = self.material
+        {
+            positive(&format!("{m}.yield_stress"), yield_stress)?;
+            if !(hardening >= 0.0 && hardening.is_finite()) {
+                return Err(CaseError::new(
+                    format!("{m}.hardening"),
+                    format!("must be zero or positive, got {hardening}"),
+                ));
+            }
+        }
         Ok(())
     }
 }

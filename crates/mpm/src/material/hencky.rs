@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix2, Matrix4};
 
-use super::{CauchyStress, Elastic, Response};
+use super::{CauchyStress, Elastic, History, Response};
 
 /// Hencky elasticity on the elastic left Cauchy-Green tensor:
 /// `b = dF b_n dF^T`, `e = ln(b) / 2`, `tau = lambda tr(e) I + 2 mu e`,
@@ -17,32 +17,12 @@ pub(super) fn hencky(c: &Elastic, b_n: &Matrix2<f64>, df: &Matrix2<f64>, j_start
     let eig = SymEigen2::new(&b);
     let e = eig.map(|l| 0.5 * l.ln());
     let (tau, tau_zz) = c.stress(&e);
-    let df_inv_t = df
-        .try_inverse()
-        .map(|m| m.transpose())
-        .unwrap_or_else(|| Matrix2::from_element(f64::NAN));
-    let p = tau * df_inv_t;
-    let mut tangent = Matrix4::zeros();
-    for j in 0..2 {
-        for jj in 0..2 {
-            let mut dir = Matrix2::zeros();
-            dir[(j, jj)] = 1.0;
-            let db = dir * b_n * df.transpose() + df * b_n * dir.transpose();
-            let de = eig.log_derivative(&db) * 0.5;
-            let (dtau, _) = c.stress(&de);
-            let dp = dtau * df_inv_t - tau * df_inv_t * dir.transpose() * df_inv_t;
-            for i in 0..2 {
-                for ii in 0..2 {
-                    tangent[(2 * i + ii, 2 * j + jj)] = dp[(i, ii)];
-                }
-            }
-        }
-    }
+    let (p, tangent) = piola_and_tangent(b_n, df, &eig, &tau, |de| c.stress(de).0);
     let j = j_start * df.determinant();
     Response {
         p,
         tangent,
-        history: b,
+        history: History::elastic(b),
         cauchy: CauchyStress {
             plane: [tau[(0, 0)] / j, tau[(1, 1)] / j, tau[(0, 1)] / j],
             zz: tau_zz / j,
@@ -50,14 +30,50 @@ pub(super) fn hencky(c: &Elastic, b_n: &Matrix2<f64>, df: &Matrix2<f64>, j_start
     }
 }
 
+/// `P = tau dF^-T` and its derivative `dP / d(dF)` (flattened as in the
+/// module docs of `material`), for a Kirchhoff stress `tau` that depends on
+/// `dF` through the logarithm of the trial elastic left Cauchy-Green tensor
+/// `b = dF b_n dF^T` (eigen-decomposed in `eig`): for each unit direction
+/// `E` of `dF`, `db = E b_n dF^T + dF b_n E^T`, `de = L[db] / 2` with `L`
+/// the derivative of the matrix logarithm, `dtau(de)` the model's, and
+/// `dP = dtau dF^-T - tau dF^-T E^T dF^-T`.
+pub(super) fn piola_and_tangent(
+    b_n: &Matrix2<f64>,
+    df: &Matrix2<f64>,
+    eig: &SymEigen2,
+    tau: &Matrix2<f64>,
+    dtau: impl Fn(&Matrix2<f64>) -> Matrix2<f64>,
+) -> (Matrix2<f64>, Matrix4<f64>) {
+    let df_inv_t = df
+        .try_inverse()
+        .map(|m| m.transpose())
+        .unwrap_or_else(|| Matrix2::from_element(f64::NAN));
+    let mut tangent = Matrix4::zeros();
+    for j in 0..2 {
+        for jj in 0..2 {
+            let mut dir = Matrix2::zeros();
+            dir[(j, jj)] = 1.0;
+            let db = dir * b_n * df.transpose() + df * b_n * dir.transpose();
+            let de = eig.log_derivative(&db) * 0.5;
+            let dp = dtau(&de) * df_inv_t - tau * df_inv_t * dir.transpose() * df_inv_t;
+            for i in 0..2 {
+                for ii in 0..2 {
+                    tangent[(2 * i + ii, 2 * j + jj)] = dp[(i, ii)];
+                }
+            }
+        }
+    }
+    (tau * df_inv_t, tangent)
+}
+
 /// Eigen-decomposition of a symmetric 2x2 matrix, `b = sum_a l_a n_a n_a^T`.
-struct SymEigen2 {
-    values: [f64; 2],
-    vectors: [nalgebra::Vector2<f64>; 2],
+pub(super) struct SymEigen2 {
+    pub(super) values: [f64; 2],
+    pub(super) vectors: [nalgebra::Vector2<f64>; 2],
 }
 
 impl SymEigen2 {
-    fn new(b: &Matrix2<f64>) -> Self {
+    pub(super) fn new(b: &Matrix2<f64>) -> Self {
         let (a, d, c) = (b[(0, 0)], b[(1, 1)], 0.5 * (b[(0, 1)] + b[(1, 0)]));
         let mean = 0.5 * (a + d);
         let radius = (0.25 * (a - d) * (a - d) + c * c).sqrt();
@@ -83,7 +99,7 @@ impl SymEigen2 {
     /// `sum_ab f_ab (n_a . db n_b) n_a n_b^T` with `f_aa = 1/l_a` and
     /// `f_ab = (ln l_a - ln l_b)/(l_a - l_b)` (its limit `1/l_a` when the
     /// eigenvalues coincide).
-    fn log_derivative(&self, db: &Matrix2<f64>) -> Matrix2<f64> {
+    pub(super) fn log_derivative(&self, db: &Matrix2<f64>) -> Matrix2<f64> {
         let [l0, l1] = self.values;
         let gap = l0 - l1;
         let f01 = if gap.abs() > 1e-8 * l0.abs() {

@@ -15,11 +15,14 @@
 
 mod hencky;
 mod small_strain;
+mod von_mises;
 
 use nalgebra::{Matrix2, Matrix4};
 
 use hencky::hencky;
 use small_strain::small_strain;
+pub use von_mises::VonMises;
+use von_mises::von_mises;
 
 /// Stress of a material point in the current configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -38,10 +41,33 @@ pub struct Response {
     pub p: Matrix2<f64>,
     /// `dP / d(dF)`, flattened as described in the module docs.
     pub tangent: Matrix4<f64>,
-    /// History to keep if the step converges (Hencky: elastic left
-    /// Cauchy-Green tensor `b`; linear: small strain).
-    pub history: Matrix2<f64>,
+    /// History to keep if the step converges.
+    pub history: History,
     pub cauchy: CauchyStress,
+}
+
+/// What a point carries from step to step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct History {
+    /// Hencky and von Mises: the in-plane elastic left Cauchy-Green tensor
+    /// `b`; linear elasticity: the small strain.
+    pub tensor: Matrix2<f64>,
+    /// Von Mises: `b`'s out-of-plane component (one for the others, whose
+    /// out-of-plane stretch stays one).
+    pub zz: f64,
+    /// Accumulated plastic strain `alpha` (zero for the elastic models).
+    pub plastic_strain: f64,
+}
+
+impl History {
+    /// An elastic model's history: `tensor` alone.
+    pub fn elastic(tensor: Matrix2<f64>) -> Self {
+        Self {
+            tensor,
+            zz: 1.0,
+            plastic_strain: 0.0,
+        }
+    }
 }
 
 /// The constitutive models of the case format.
@@ -49,6 +75,7 @@ pub struct Response {
 pub enum Material {
     Hencky(Elastic),
     LinearElastic(Elastic),
+    VonMises(VonMises),
 }
 
 /// Isotropic elastic constants.
@@ -80,18 +107,19 @@ impl Elastic {
 }
 
 impl Material {
-    /// The elastic constants (either model).
+    /// The elastic constants (any model).
     pub fn elastic(&self) -> Elastic {
         match *self {
             Material::Hencky(c) | Material::LinearElastic(c) => c,
+            Material::VonMises(m) => m.elastic,
         }
     }
 
     /// History of an undeformed, unstressed point.
-    pub fn initial_history(&self) -> Matrix2<f64> {
+    pub fn initial_history(&self) -> History {
         match self {
-            Material::Hencky(_) => Matrix2::identity(),
-            Material::LinearElastic(_) => Matrix2::zeros(),
+            Material::Hencky(_) | Material::VonMises(_) => History::elastic(Matrix2::identity()),
+            Material::LinearElastic(_) => History::elastic(Matrix2::zeros()),
         }
     }
 
@@ -100,10 +128,12 @@ impl Material {
     /// the start of the step (for the Cauchy stress). The gradient is passed
     /// rather than `dF` so that tiny strains are not lost to round-off in
     /// `dF - I`.
-    pub fn respond(&self, history: &Matrix2<f64>, grad_u: &Matrix2<f64>, j_start: f64) -> Response {
+    pub fn respond(&self, history: &History, grad_u: &Matrix2<f64>, j_start: f64) -> Response {
+        let df = Matrix2::identity() + grad_u;
         match self {
-            Material::Hencky(c) => hencky(c, history, &(Matrix2::identity() + grad_u), j_start),
-            Material::LinearElastic(c) => small_strain(c, history, grad_u),
+            Material::Hencky(c) => hencky(c, &history.tensor, &df, j_start),
+            Material::LinearElastic(c) => small_strain(c, &history.tensor, grad_u),
+            Material::VonMises(m) => von_mises(m, history, &df, j_start),
         }
     }
 }
@@ -118,13 +148,16 @@ mod tests {
     }
 
     /// A stretched, sheared, rotated history and increment: nothing special.
-    fn general_state(m: &Material) -> (Matrix2<f64>, Matrix2<f64>) {
+    fn general_state(m: &Material) -> (History, Matrix2<f64>) {
         let f_n = Matrix2::new(1.1, 0.2, -0.05, 0.9);
         let history = match m {
-            Material::Hencky(_) => f_n * f_n.transpose(),
             Material::LinearElastic(_) => Matrix2::new(0.01, 0.003, 0.003, -0.02),
+            _ => f_n * f_n.transpose(),
         };
-        (history, Matrix2::new(0.97, 0.11, -0.08, 1.04))
+        (
+            History::elastic(history),
+            Matrix2::new(0.97, 0.11, -0.08, 1.04),
+        )
     }
 
     #[test]
@@ -163,9 +196,14 @@ mod tests {
     fn tangent_is_exact_when_eigenvalues_coincide() {
         // b = I (unstressed) is the degenerate case of the log derivative.
         let m = materials()[0];
-        let r = m.respond(&Matrix2::identity(), &Matrix2::zeros(), 1.0);
+        let r = m.respond(
+            &History::elastic(Matrix2::identity()),
+            &Matrix2::zeros(),
+            1.0,
+        );
         // At the reference state the Hencky tangent is the linear elastic one.
-        let lin = materials()[1].respond(&Matrix2::zeros(), &Matrix2::zeros(), 1.0);
+        let lin =
+            materials()[1].respond(&History::elastic(Matrix2::zeros()), &Matrix2::zeros(), 1.0);
         assert!((r.tangent - lin.tangent).norm() < 1e-9 * lin.tangent.norm());
     }
 
@@ -176,7 +214,11 @@ mod tests {
         let m = materials()[0];
         let (s, c) = (60f64).to_radians().sin_cos();
         let r = Matrix2::new(c, -s, s, c);
-        let resp = m.respond(&Matrix2::identity(), &(r - Matrix2::identity()), 1.0);
+        let resp = m.respond(
+            &History::elastic(Matrix2::identity()),
+            &(r - Matrix2::identity()),
+            1.0,
+        );
         assert!(resp.p.norm() < 1e-9, "{}", resp.p);
         assert!(resp.cauchy.plane.iter().all(|s| s.abs() < 1e-9));
     }
@@ -189,7 +231,7 @@ mod tests {
         let m = Material::Hencky(Elastic::from_young_poisson(e, 0.0));
         let l = 0.6;
         let resp = m.respond(
-            &Matrix2::identity(),
+            &History::elastic(Matrix2::identity()),
             &Matrix2::new(0.0, 0.0, 0.0, l - 1.0),
             1.0,
         );

@@ -2,7 +2,7 @@
 
 use nalgebra::{Matrix2, Matrix4};
 
-use super::{CauchyStress, Elastic, Response};
+use super::{CauchyStress, Elastic, History, Response};
 
 /// Geometrically linear elasticity: `eps = eps_n + sym(grad_u)`, `P = sigma`.
 pub(super) fn small_strain(c: &Elastic, eps_n: &Matrix2<f64>, h: &Matrix2<f64>) -> Response {
@@ -23,7 +23,7 @@ pub(super) fn small_strain(c: &Elastic, eps_n: &Matrix2<f64>, h: &Matrix2<f64>) 
     Response {
         p: sigma,
         tangent,
-        history: eps,
+        history: History::elastic(eps),
         cauchy: CauchyStress {
             plane: [sigma[(0, 0)], sigma[(1, 1)], sigma[(0, 1)]],
             zz,

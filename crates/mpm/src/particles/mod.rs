@@ -6,7 +6,7 @@ use nalgebra::Matrix2;
 pub mod seeding;
 
 use crate::grid::Support;
-use crate::material::{CauchyStress, Material};
+use crate::material::{CauchyStress, History, Material};
 use seeding::{Domain, SeedPoint};
 
 #[derive(Debug, Clone, Default)]
@@ -28,7 +28,9 @@ pub struct MaterialPoints {
     /// Total deformation gradient `F` (in-plane block).
     pub deformation: Vec<Matrix2<f64>>,
     /// Constitutive history (see [`Material::respond`]).
-    pub history: Vec<Matrix2<f64>>,
+    pub history: Vec<History>,
+    /// Whether the point flowed plastically in the last step.
+    pub yielding: Vec<bool>,
     pub stress: Vec<CauchyStress>,
     /// One material per body of the case.
     pub materials: Vec<Material>,
@@ -50,6 +52,7 @@ impl MaterialPoints {
             self.domain.push(seed.domain);
             self.deformation.push(Matrix2::identity());
             self.history.push(material.initial_history());
+            self.yielding.push(false);
             self.stress.push(CauchyStress::default());
         }
     }

@@ -13,4 +13,5 @@ mod ibm;
 mod lame;
 mod locking;
 mod newton_convergence;
+mod plasticity;
 mod pressure;
