@@ -67,3 +67,87 @@ fn a_block_squeezed_past_yield_flows_at_the_plane_strain_strength() {
         assert!(order > 1.8, "step {}: {r:?}", s.step);
     }
 }
+
+/// Hill's thick cylinder (1950, *The Mathematical Theory of Plasticity*,
+/// ch. V): a plane-strain tube a = 1 m, b = 2 m of elastic-perfectly
+/// plastic von Mises material (k = sigma_y / sqrt(3)) under internal
+/// pressure p. Nearly incompressible (nu = 0.49, with F-bar against
+/// locking), as Hill's plane-strain solution assumes: yield starts at the
+/// bore at `p_y = k (1 - a^2 / b^2)` = 0.75 k, the plastic zone reaches
+/// `c` with `p = k (1 - c^2 / b^2 + 2 ln(c / a))`, and the tube collapses
+/// at `p_L = 2 k ln(b / a)` = 1.386 k. Strains stay small (sigma_y / E =
+/// 1e-3), so finite strain changes nothing at this precision.
+///
+/// Measured (h = 0.0625 m, polar points, 2 per cell, 5 steps), the
+/// largest radius of a point that flowed against Hill's c: 1.2031 / 1.1957
+/// m at p = k, 1.4219 / 1.4240 at 1.2 k, 1.6094 / 1.6000 at 1.3 k; nothing
+/// yields at 0.7 k. Asserted: within a point spacing (h / 2) of c. Pushed
+/// towards 1.45 k, the tube stops carrying more at 1.3806 k, 0.41% under
+/// Hill's p_L: the last converged load when the step can be cut no
+/// further (asserted within 1%).
+#[test]
+fn hills_thick_cylinder_yields_where_and_when_hill_says() {
+    let (e, sigma_y, h) = (1.0e6, 1.0e3, 0.0625);
+    let k = sigma_y / 3f64.sqrt();
+    let tube = |p: f64| {
+        json!({
+            "version": 1,
+            "analysis": { "load_steps": 5, "volumetric": "fbar" },
+            "grid": { "cell_size": h, "extent": { "min": [0.0, 0.0], "max": [2.5, 2.5] } },
+            "basis": "gimp",
+            "bodies": [{
+                "geometry": { "annulus_sector": { "center": [0.0, 0.0], "inner_radius": 1.0, "outer_radius": 2.0,
+                                                  "start_angle": 0.0, "end_angle": 90.0 } },
+                "points": { "per_cell": 2 },
+                "material": { "model": "von_mises", "youngs_modulus": e, "poisson_ratio": 0.49,
+                              "density": 0.0, "yield_stress": sigma_y }
+            }],
+            "loads": { "boundary": [ { "on": { "center": [0.0, 0.0], "radius": 1.0 }, "pressure": p } ] },
+            "supports": [ { "on": { "x": 0.0 }, "fix": "x" }, { "on": { "y": 0.0 }, "fix": "y" } ]
+        })
+    };
+    // Hill's plastic radius for p, by bisection on (a, b).
+    let hill_c = |p: f64| {
+        let f = |c: f64| k * (1.0 - c * c / 4.0 + 2.0 * c.ln()) - p;
+        let (mut lo, mut hi) = (1.0, 2.0);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if f(mid) > 0.0 { hi = mid } else { lo = mid }
+        }
+        0.5 * (lo + hi)
+    };
+    let (sim, _) = run(&tube(0.7 * k));
+    assert!(
+        sim.points.yielding.iter().all(|&y| !y),
+        "yield below p_y = 0.75 k"
+    );
+    for ratio in [1.0, 1.2, 1.3] {
+        let (sim, _) = run(&tube(ratio * k));
+        let mp = &sim.points;
+        let reach = (0..mp.len())
+            .filter(|&q| mp.history[q].plastic_strain > 0.0)
+            .map(|q| mp.reference[q][0].hypot(mp.reference[q][1]))
+            .fold(0.0, f64::max);
+        let c = hill_c(ratio * k);
+        eprintln!("p = {ratio} k: plastic zone to r = {reach:.4} m, Hill's c = {c:.4} m");
+        assert!((reach - c).abs() < h / 2.0, "p = {ratio} k: {reach} vs {c}");
+    }
+    let case = mpm::Case::from_json(&tube(1.45 * k).to_string()).unwrap();
+    let mut sim = mpm::Simulation::new(&case).unwrap();
+    match sim.run(&mut mpm::NoObserver) {
+        Err(mpm::newton::SolveError::SubstepsExhausted { load_factor, .. }) => {
+            let collapse = load_factor * 1.45 * k;
+            let limit = 2.0 * k * 2f64.ln();
+            eprintln!(
+                "collapse at {:.4} k, Hill's p_L = {:.4} k",
+                collapse / k,
+                limit / k
+            );
+            assert!(
+                (collapse - limit).abs() < 1e-2 * limit,
+                "{collapse} vs {limit}"
+            );
+        }
+        other => panic!("past the limit pressure the tube must collapse: {other:?}"),
+    }
+}
