@@ -14,7 +14,7 @@ use crate::boundary::{
 use crate::case::{BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, SupportMethod};
 use crate::geometry::Geometry;
 use crate::grid::{Basis, Grid};
-use crate::material::{Elastic, Material, VonMises};
+use crate::material::{DruckerPrager, Elastic, Material, VonMises};
 use crate::newton::NewtonSettings;
 use crate::particles::MaterialPoints;
 use crate::particles::seeding::{self, Density, FillSize};
@@ -276,6 +276,17 @@ fn material(spec: &MaterialSpec) -> Material {
             yield_stress: *yield_stress,
             hardening: *hardening,
         }),
+        MaterialSpec::DruckerPrager {
+            cohesion,
+            friction_angle,
+            dilation_angle,
+            ..
+        } => Material::DruckerPrager(DruckerPrager::plane_strain_match(
+            constants,
+            *cohesion,
+            friction_angle.to_radians(),
+            dilation_angle.unwrap_or(*friction_angle).to_radians(),
+        )),
     }
 }
 

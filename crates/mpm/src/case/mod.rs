@@ -290,6 +290,20 @@ pub enum MaterialSpec {
         #[serde(default)]
         hardening: f64,
     },
+    /// Finite-strain Drucker-Prager plasticity on Hencky elasticity,
+    /// perfectly plastic, its cone matched to Mohr-Coulomb in plane strain.
+    DruckerPrager {
+        youngs_modulus: f64,
+        poisson_ratio: f64,
+        density: f64,
+        /// Mohr-Coulomb cohesion `c` (Pa).
+        cohesion: f64,
+        /// Mohr-Coulomb friction angle `phi` (degrees).
+        friction_angle: f64,
+        /// Dilation angle `psi` (degrees); default: `phi` (associated flow).
+        #[serde(default)]
+        dilation_angle: Option<f64>,
+    },
 }
 
 impl MaterialSpec {
@@ -307,6 +321,12 @@ impl MaterialSpec {
                 density,
             }
             | MaterialSpec::VonMises {
+                youngs_modulus,
+                poisson_ratio,
+                density,
+                ..
+            }
+            | MaterialSpec::DruckerPrager {
                 youngs_modulus,
                 poisson_ratio,
                 density,
@@ -685,6 +705,31 @@ mod tests {
         let e = error_for(v);
         assert_eq!(e.path, "bodies[0].material.poisson_ratio");
         assert!(e.message.contains("[0, 0.5)"), "{e}");
+    }
+
+    #[test]
+    fn drucker_prager_parameters_are_checked_by_name() {
+        let soil = |c: f64, phi: f64, psi: Option<f64>| {
+            let mut v = column_json();
+            let mut m = serde_json::json!({"model": "drucker_prager", "youngs_modulus": 1e7,
+                "poisson_ratio": 0.3, "density": 0.0, "cohesion": c, "friction_angle": phi});
+            if let Some(psi) = psi {
+                m["dilation_angle"] = psi.into();
+            }
+            v["bodies"][0]["material"] = m;
+            v
+        };
+        assert!(Case::from_json(&soil(10e3, 20.0, None).to_string()).is_ok());
+        for (v, field) in [
+            (soil(0.0, 0.0, None), "cohesion"),
+            (soil(-1.0, 20.0, None), "cohesion"),
+            (soil(10e3, 75.0, None), "friction_angle"),
+            (soil(10e3, -1.0, None), "friction_angle"),
+            (soil(10e3, 20.0, Some(25.0)), "dilation_angle"),
+        ] {
+            let e = error_for(v);
+            assert_eq!(e.path, format!("bodies[0].material.{field}"), "{e}");
+        }
     }
 
     #[test]

@@ -432,6 +432,37 @@ impl Body {
                 ));
             }
         }
+        if let MaterialSpec::DruckerPrager {
+            cohesion,
+            friction_angle,
+            dilation_angle,
+            ..
+        } = self.material
+        {
+            let phi = friction_angle;
+            if !(cohesion >= 0.0 && cohesion.is_finite()) || (cohesion == 0.0 && phi == 0.0) {
+                return Err(CaseError::new(
+                    format!("{m}.cohesion"),
+                    format!(
+                        "must be zero or positive, and positive without friction, got {cohesion}"
+                    ),
+                ));
+            }
+            if !(0.0..=MAX_FRICTION_ANGLE).contains(&phi) {
+                return Err(CaseError::new(
+                    format!("{m}.friction_angle"),
+                    format!("must be in [0, {MAX_FRICTION_ANGLE}] degrees, got {phi}"),
+                ));
+            }
+            if let Some(psi) = dilation_angle
+                && !(0.0..=phi).contains(&psi)
+            {
+                return Err(CaseError::new(
+                    format!("{m}.dilation_angle"),
+                    format!("must be in [0, friction_angle = {phi}] degrees, got {psi}"),
+                ));
+            }
+        }
         Ok(())
     }
 }
@@ -735,6 +766,10 @@ fn check_convex_quadrilateral(path: &str, v: &[[f64; 2]; 4]) -> Result<(), CaseE
 /// Failed sub-increments a load step may allow: each costs up to a Newton
 /// solve.
 const MAX_CUTBACKS: u32 = 1000;
+
+/// The steepest friction angle taken (degrees): past it the cone's
+/// plane-strain match grows as `tan(phi)` and soils do not reach it.
+const MAX_FRICTION_ANGLE: f64 = 70.0;
 
 /// Vertices a polygon's ring may have: the simplicity check is quadratic in
 /// them (5e7 edge pairs at this size, a fraction of a second).

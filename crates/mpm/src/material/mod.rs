@@ -13,12 +13,16 @@
 //! `M[(i, j)] -> 2 i + j`, so the tangent is a 4x4 matrix
 //! `A[(2i + I, 2j + J)] = dP_iI / d(dF)_jJ`.
 
+mod drucker_prager;
 mod hencky;
+mod return_map;
 mod small_strain;
 mod von_mises;
 
 use nalgebra::{Matrix2, Matrix4};
 
+pub use drucker_prager::DruckerPrager;
+use drucker_prager::drucker_prager;
 use hencky::hencky;
 use small_strain::small_strain;
 pub use von_mises::VonMises;
@@ -49,10 +53,10 @@ pub struct Response {
 /// What a point carries from step to step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct History {
-    /// Hencky and von Mises: the in-plane elastic left Cauchy-Green tensor
+    /// Hencky and the plastic models: the in-plane elastic left Cauchy-Green tensor
     /// `b`; linear elasticity: the small strain.
     pub tensor: Matrix2<f64>,
-    /// Von Mises: `b`'s out-of-plane component (one for the others, whose
+    /// The plastic models: `b`'s out-of-plane component (one for the others, whose
     /// out-of-plane stretch stays one).
     pub zz: f64,
     /// Accumulated plastic strain `alpha` (zero for the elastic models).
@@ -76,6 +80,7 @@ pub enum Material {
     Hencky(Elastic),
     LinearElastic(Elastic),
     VonMises(VonMises),
+    DruckerPrager(DruckerPrager),
 }
 
 /// Isotropic elastic constants.
@@ -112,13 +117,16 @@ impl Material {
         match *self {
             Material::Hencky(c) | Material::LinearElastic(c) => c,
             Material::VonMises(m) => m.elastic,
+            Material::DruckerPrager(m) => m.elastic,
         }
     }
 
     /// History of an undeformed, unstressed point.
     pub fn initial_history(&self) -> History {
         match self {
-            Material::Hencky(_) | Material::VonMises(_) => History::elastic(Matrix2::identity()),
+            Material::Hencky(_) | Material::VonMises(_) | Material::DruckerPrager(_) => {
+                History::elastic(Matrix2::identity())
+            }
             Material::LinearElastic(_) => History::elastic(Matrix2::zeros()),
         }
     }
@@ -134,6 +142,39 @@ impl Material {
             Material::Hencky(c) => hencky(c, &history.tensor, &df, j_start),
             Material::LinearElastic(c) => small_strain(c, &history.tensor, grad_u),
             Material::VonMises(m) => von_mises(m, history, &df, j_start),
+            Material::DruckerPrager(m) => drucker_prager(m, history, &df, j_start),
+        }
+    }
+}
+
+/// Checks a model's tangent against central differences of its `P` at
+/// `df` (relative to the tangent's norm): `respond` is the model at a fixed
+/// history.
+#[cfg(test)]
+pub(crate) fn assert_tangent_is_the_derivative(
+    respond: impl Fn(&Matrix2<f64>) -> Response,
+    df: &Matrix2<f64>,
+    eps: f64,
+    tolerance: f64,
+    label: &str,
+) {
+    let tangent = respond(df).tangent;
+    let scale = tangent.norm();
+    for j in 0..2 {
+        for jj in 0..2 {
+            let mut dir = Matrix2::zeros();
+            dir[(j, jj)] = eps;
+            let fd = (respond(&(df + dir)).p - respond(&(df - dir)).p) / (2.0 * eps);
+            for i in 0..2 {
+                for ii in 0..2 {
+                    let a = tangent[(2 * i + ii, 2 * j + jj)];
+                    assert!(
+                        (a - fd[(i, ii)]).abs() < tolerance * scale,
+                        "{label}: dP{i}{ii}/dF{j}{jj} = {a}, finite difference {}",
+                        fd[(i, ii)]
+                    );
+                }
+            }
         }
     }
 }
@@ -167,28 +208,13 @@ mod tests {
         // 1e-5, so 1e-6 relative to the tangent's norm (~1e6) is a real check.
         for m in materials() {
             let (history, df) = general_state(&m);
-            let grad_u = df - Matrix2::identity();
-            let r = m.respond(&history, &grad_u, 1.0);
-            let eps = 1e-6;
-            for j in 0..2 {
-                for jj in 0..2 {
-                    let mut d = Matrix2::zeros();
-                    d[(j, jj)] = eps;
-                    let plus = m.respond(&history, &(grad_u + d), 1.0).p;
-                    let minus = m.respond(&history, &(grad_u - d), 1.0).p;
-                    let fd = (plus - minus) / (2.0 * eps);
-                    for i in 0..2 {
-                        for ii in 0..2 {
-                            let a = r.tangent[(2 * i + ii, 2 * j + jj)];
-                            assert!(
-                                (a - fd[(i, ii)]).abs() < 1e-6 * r.tangent.norm(),
-                                "{m:?}: dP{i}{ii}/dF{j}{jj} = {a}, finite difference {}",
-                                fd[(i, ii)]
-                            );
-                        }
-                    }
-                }
-            }
+            assert_tangent_is_the_derivative(
+                |df| m.respond(&history, &(df - Matrix2::identity()), 1.0),
+                &df,
+                1e-6,
+                1e-6,
+                &format!("{m:?}"),
+            );
         }
     }
 

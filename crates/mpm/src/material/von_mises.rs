@@ -10,7 +10,8 @@
 //! logarithmic strains `e_i = ln(l_i) / 2` (three of them) give the
 //! Kirchhoff stress `tau = kappa tr(e) 1 + 2 mu dev(e)`, and the return to
 //! the yield surface `q = sigma_y + H alpha` (`q = sqrt(3/2) |s|`) is the
-//! radial return of the small-strain theory in those strains:
+//! radial return of the small-strain theory in those strains
+//! (`return_map`):
 //!
 //! `dgamma = (q_tr - sigma_y - H alpha_n) / (3 mu + H)`,
 //! `s = (1 - 3 mu dgamma / q_tr) s_tr`, `alpha = alpha_n + dgamma`,
@@ -24,8 +25,8 @@
 
 use nalgebra::Matrix2;
 
-use super::hencky::{SymEigen2, piola_and_tangent};
-use super::{CauchyStress, Elastic, History, Response};
+use super::return_map::{Moduli, Returned, Trial, respond, unit};
+use super::{Elastic, History, Response};
 
 /// The model's constants.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -48,72 +49,34 @@ pub(super) fn von_mises(
 ) -> Response {
     let Elastic { lambda, mu } = m.elastic;
     let kappa = lambda + 2.0 * mu / 3.0;
-    let b_trial = df * state.tensor * df.transpose();
-    let eig = SymEigen2::new(&b_trial);
-    let e_trial = [
-        0.5 * eig.values[0].ln(),
-        0.5 * eig.values[1].ln(),
-        0.5 * state.zz.ln(),
-    ];
-    let volumetric = e_trial.iter().sum::<f64>();
-    let s_trial = e_trial.map(|e| 2.0 * mu * (e - volumetric / 3.0));
-    let norm = s_trial.iter().map(|s| s * s).sum::<f64>().sqrt();
+    let trial = Trial::new(state, df);
+    let (volumetric, deviator) = trial.split();
+    let (unit, norm) = unit(deviator.map(|e| 2.0 * mu * e));
     let q_trial = (1.5f64).sqrt() * norm;
     let yield_now = m.yield_stress + m.hardening * state.plastic_strain;
-    let (dgamma, theta) = if q_trial > yield_now * (1.0 + 1e-12) {
+    let mut moduli = Moduli::elastic(kappa, mu);
+    let dgamma = if q_trial > yield_now * (1.0 + 1e-12) {
         let dgamma = (q_trial - yield_now) / (3.0 * mu + m.hardening);
-        (dgamma, 1.0 - 3.0 * mu * dgamma / q_trial)
-    } else {
-        (0.0, 1.0)
-    };
-    // Principal Kirchhoff stresses and elastic strains after the return.
-    let tau = s_trial.map(|s| kappa * volumetric + theta * s);
-    let e_elastic = [0, 1, 2].map(|i| volumetric / 3.0 + theta * s_trial[i] / (2.0 * mu));
-    let in_plane = |v: [f64; 2]| -> Matrix2<f64> {
-        (0..2)
-            .map(|k| eig.vectors[k] * eig.vectors[k].transpose() * v[k])
-            .sum()
-    };
-    let tau_plane = in_plane([tau[0], tau[1]]);
-    let next = History {
-        tensor: in_plane([(2.0 * e_elastic[0]).exp(), (2.0 * e_elastic[1]).exp()]),
-        zz: (2.0 * e_elastic[2]).exp(),
-        plastic_strain: state.plastic_strain + dgamma,
-    };
-    // The algorithmic tangent in the trial strains, applied to an in-plane
-    // strain increment (its zz component is zero: dF_zz = 0).
-    let unit = if norm > 0.0 {
-        s_trial.map(|s| s / norm)
-    } else {
-        [0.0; 3]
-    };
-    let n_plane = in_plane([unit[0], unit[1]]);
-    let coupling = if dgamma > 0.0 {
-        6.0 * mu * mu * (1.0 / (3.0 * mu + m.hardening) - dgamma / q_trial)
+        let theta = 1.0 - 3.0 * mu * dgamma / q_trial;
+        moduli.identity = 2.0 * mu * theta;
+        moduli.trace = kappa - 2.0 * mu * theta / 3.0;
+        moduli.nn = -6.0 * mu * mu * (1.0 / (3.0 * mu + m.hardening) - dgamma / q_trial);
+        dgamma
     } else {
         0.0
     };
-    let dtau = |de: &Matrix2<f64>| -> Matrix2<f64> {
-        let tr = de.trace();
-        let n_de = (n_plane.transpose() * de).trace();
-        Matrix2::identity() * (kappa * tr - 2.0 * mu * theta * tr / 3.0) + de * (2.0 * mu * theta)
-            - n_plane * (coupling * n_de)
+    // The deviator scaled back by theta = 1 - 3 mu dgamma / q_tr.
+    let theta = moduli.identity / (2.0 * mu);
+    let elastic_strains = [0, 1, 2].map(|i| volumetric / 3.0 + theta * deviator[i]);
+    let tau = [0, 1, 2].map(|i| kappa * volumetric + 2.0 * mu * theta * deviator[i]);
+    let returned = Returned {
+        tau,
+        elastic_strains,
+        plastic_increment: dgamma,
+        unit,
+        moduli,
     };
-    let (p, tangent) = piola_and_tangent(&state.tensor, df, &eig, &tau_plane, dtau);
-    let j = j_start * df.determinant();
-    Response {
-        p,
-        tangent,
-        history: next,
-        cauchy: CauchyStress {
-            plane: [
-                tau_plane[(0, 0)] / j,
-                tau_plane[(1, 1)] / j,
-                tau_plane[(0, 1)] / j,
-            ],
-            zz: tau[2] / j,
-        },
-    }
+    respond(state, df, j_start, &trial, &returned)
 }
 
 #[cfg(test)]
@@ -249,27 +212,13 @@ mod tests {
                 plastic,
                 "the case is what it says"
             );
-            let eps = 1e-8;
-            let scale = r.tangent.norm();
-            for j in 0..2 {
-                for jj in 0..2 {
-                    let mut dir = Matrix2::zeros();
-                    dir[(j, jj)] = eps;
-                    let plus = von_mises(&m, &state, &(df + dir), 1.0).p;
-                    let minus = von_mises(&m, &state, &(df - dir), 1.0).p;
-                    let fd = (plus - minus) / (2.0 * eps);
-                    for i in 0..2 {
-                        for ii in 0..2 {
-                            let a = r.tangent[(2 * i + ii, 2 * j + jj)];
-                            assert!(
-                                (a - fd[(i, ii)]).abs() < 1e-6 * scale,
-                                "H {hardening}: {a} vs {}",
-                                fd[(i, ii)]
-                            );
-                        }
-                    }
-                }
-            }
+            crate::material::assert_tangent_is_the_derivative(
+                |df| von_mises(&m, &state, df, 1.0),
+                &df,
+                1e-8,
+                1e-6,
+                &format!("H {hardening}"),
+            );
         }
     }
 }

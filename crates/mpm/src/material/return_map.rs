@@ -1,0 +1,141 @@
+//! What the plastic models share: the elastic predictor on the trial
+//! elastic left Cauchy-Green tensor and the exponential map back to it
+//! (Simo 1992; de Souza Neto, Peric & Owen 2008, ch. 14).
+//!
+//! The trial `b_tr = dF b_n dF^T` (plane strain: its out-of-plane
+//! component carried from the step's start, `dF_zz = 1`) gives, in its
+//! principal directions, three logarithmic strains `e_i = ln(l_i) / 2`. A
+//! model returns them in those strains exactly as in the small-strain
+//! theory ([`Returned`]); the elastic strains it keeps go back into
+//! `b = sum exp(2 e_i) n_i n_i^T`.
+//!
+//! The returns of von Mises and Drucker-Prager are isotropic tensor
+//! functions of the trial strain made of its trace and its unit deviator
+//! `N`, so their derivative in those strains is the tensor expression
+//! [`Moduli`] (no spectral terms), chained to `dP / d(dF)` as the Hencky
+//! model's (`hencky::piola_and_tangent`).
+
+use nalgebra::Matrix2;
+
+use super::hencky::{SymEigen2, piola_and_tangent};
+use super::{CauchyStress, History, Response};
+
+/// The elastic predictor of a step.
+pub(super) struct Trial {
+    eig: SymEigen2,
+    /// Principal logarithmic strains: the two in-plane, then `zz`.
+    pub strains: [f64; 3],
+}
+
+impl Trial {
+    pub fn new(state: &History, df: &Matrix2<f64>) -> Self {
+        let eig = SymEigen2::new(&(df * state.tensor * df.transpose()));
+        let strains = [
+            0.5 * eig.values[0].ln(),
+            0.5 * eig.values[1].ln(),
+            0.5 * state.zz.ln(),
+        ];
+        Self { eig, strains }
+    }
+
+    /// The trace of the strains and their deviator.
+    pub fn split(&self) -> (f64, [f64; 3]) {
+        let volumetric = self.strains.iter().sum::<f64>();
+        (volumetric, self.strains.map(|e| e - volumetric / 3.0))
+    }
+}
+
+/// `dtau = identity de + trace tr(de) I + nn N (N : de) + n_tr N tr(de) +
+/// tr_n I (N : de)`, the derivative of the returned Kirchhoff stress in
+/// the trial strains; `N` is [`Returned::unit`].
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Moduli {
+    pub identity: f64,
+    pub trace: f64,
+    pub nn: f64,
+    pub n_tr: f64,
+    pub tr_n: f64,
+}
+
+impl Moduli {
+    /// Hencky's: `kappa tr(de) I + 2 mu dev(de)`.
+    pub fn elastic(kappa: f64, mu: f64) -> Self {
+        Self {
+            identity: 2.0 * mu,
+            trace: kappa - 2.0 * mu / 3.0,
+            ..Self::default()
+        }
+    }
+}
+
+/// A model's return in the principal trial strains.
+pub(super) struct Returned {
+    /// Principal Kirchhoff stresses (in-plane, then `zz`).
+    pub tau: [f64; 3],
+    /// Principal elastic logarithmic strains to keep.
+    pub elastic_strains: [f64; 3],
+    /// Increment of the accumulated plastic strain.
+    pub plastic_increment: f64,
+    /// Unit trial deviator (principal components), zero if there is none.
+    pub unit: [f64; 3],
+    pub moduli: Moduli,
+}
+
+/// The response of a returned trial state: `P`, its tangent, the history
+/// to keep (the exponential map of the elastic strains) and the Cauchy
+/// stress on `J = j_start det(dF)`.
+pub(super) fn respond(
+    state: &History,
+    df: &Matrix2<f64>,
+    j_start: f64,
+    trial: &Trial,
+    ret: &Returned,
+) -> Response {
+    let eig = &trial.eig;
+    let in_plane = |v: [f64; 3]| -> Matrix2<f64> {
+        (0..2)
+            .map(|k| eig.vectors[k] * eig.vectors[k].transpose() * v[k])
+            .sum()
+    };
+    let tau_plane = in_plane(ret.tau);
+    let next = History {
+        tensor: in_plane(ret.elastic_strains.map(|e| (2.0 * e).exp())),
+        zz: (2.0 * ret.elastic_strains[2]).exp(),
+        plastic_strain: state.plastic_strain + ret.plastic_increment,
+    };
+    // An in-plane strain increment: its zz component is zero (dF_zz = 0).
+    let n_plane = in_plane(ret.unit);
+    let m = ret.moduli;
+    let dtau = |de: &Matrix2<f64>| -> Matrix2<f64> {
+        let tr = de.trace();
+        let n_de = (n_plane.transpose() * de).trace();
+        de * m.identity
+            + Matrix2::identity() * (m.trace * tr + m.tr_n * n_de)
+            + n_plane * (m.nn * n_de + m.n_tr * tr)
+    };
+    let (p, tangent) = piola_and_tangent(&state.tensor, df, eig, &tau_plane, dtau);
+    let j = j_start * df.determinant();
+    Response {
+        p,
+        tangent,
+        history: next,
+        cauchy: CauchyStress {
+            plane: [
+                tau_plane[(0, 0)] / j,
+                tau_plane[(1, 1)] / j,
+                tau_plane[(0, 1)] / j,
+            ],
+            zz: ret.tau[2] / j,
+        },
+    }
+}
+
+/// `v / |v|`, or zero for a zero vector.
+pub(super) fn unit(v: [f64; 3]) -> ([f64; 3], f64) {
+    let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if norm > 0.0 {
+        (v.map(|x| x / norm), norm)
+    } else {
+        ([0.0; 3], 0.0)
+    }
+}
