@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use mpm_lab::{LabError, basis_study, bench, study};
+use mpm_lab::{LabError, basis_study, bench, footing_study, study};
 
 /// The built-in case `mpm run` solves when given no file.
 pub const DEFAULT_EXAMPLE: &str = "cantilever";
@@ -65,7 +65,9 @@ enum Command {
         /// Which study: `cantilever` (the paper's Figure 3, both support
         /// methods, and the IBM band width, for one basis) or `bases` (the
         /// four bases on the paper's case: convergence, grid origins, load
-        /// steps, error against cost).
+        /// steps, error against cost) or `footing` (the strip footing on
+        /// undrained and frictional soil: collapse loads at three cell
+        /// sizes, and a settlement of 0.5 B).
         name: String,
         /// Output directory.
         #[arg(long, default_value = "study")]
@@ -111,8 +113,9 @@ fn main() -> ExitCode {
         } => match name.as_str() {
             "cantilever" => study::cantilever(&out, quick, &basis).map_err(CliError::from),
             "bases" => basis_study::bases(&out, quick).map_err(CliError::from),
+            "footing" => footing_study::footing(&out, quick).map_err(CliError::from),
             other => Err(CliError::input(format!(
-                "no study {other:?}; available: cantilever, bases"
+                "no study {other:?}; available: cantilever, bases, footing"
             ))),
         },
         Command::Serve(args) => serve::serve(args),

@@ -1,7 +1,8 @@
 //! Studies and benchmarks of the solver, offered by the `mpm` command as
 //! `mpm study` and `mpm bench`: the paper's convergence study written as
 //! tables and SVG plots ([`study`]), the grid bases compared on it
-//! ([`basis_study`]), and cost against problem size written
+//! ([`basis_study`]), the strip footing on plastic soil
+//! ([`footing_study`]), and cost against problem size written
 //! to BENCHMARKS.md ([`bench`]). They use only the solver crate.
 //!
 //! [`bench::bench`] measures each row in a child process (for its own peak
@@ -11,6 +12,7 @@
 
 pub mod basis_study;
 pub mod bench;
+pub mod footing_study;
 pub mod plot;
 pub mod study;
 

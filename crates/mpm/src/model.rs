@@ -14,12 +14,12 @@ use crate::boundary::{
 use crate::case::{BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, SupportMethod};
 use crate::geometry::Geometry;
 use crate::grid::{Basis, Grid};
-use crate::material::{DruckerPrager, Elastic, Material, VonMises};
+use crate::material::{DruckerPrager, Elastic, Material, MohrCoulomb, VonMises};
 use crate::newton::NewtonSettings;
 use crate::particles::MaterialPoints;
 use crate::particles::seeding::{self, Density, FillSize};
 use crate::probes::Probes;
-use crate::stepper::{Simulation, Substepping};
+use crate::stepper::{Simulation, StepSize, Substepping};
 use crate::supports::{GridSupport, HeldDofs};
 
 /// Loop segments per loop, `(loop index, segments)`, that a selector picks.
@@ -157,6 +157,7 @@ impl Simulation {
                 ..Default::default()
             },
             fbar: case.analysis.volumetric == crate::case::Volumetric::Fbar,
+            step_size: StepSize::default(),
             substepping: Substepping {
                 min_fraction: case.analysis.substepping.min_fraction,
                 max_cutbacks: case.analysis.substepping.max_cutbacks as usize,
@@ -287,6 +288,17 @@ fn material(spec: &MaterialSpec) -> Material {
             friction_angle.to_radians(),
             dilation_angle.unwrap_or(*friction_angle).to_radians(),
         )),
+        MaterialSpec::MohrCoulomb {
+            cohesion,
+            friction_angle,
+            dilation_angle,
+            ..
+        } => Material::MohrCoulomb(MohrCoulomb {
+            elastic: constants,
+            cohesion: *cohesion,
+            friction: friction_angle.to_radians(),
+            dilation: dilation_angle.unwrap_or(*friction_angle).to_radians(),
+        }),
     }
 }
 

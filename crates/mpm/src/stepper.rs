@@ -54,6 +54,26 @@ pub struct Substepping {
     pub max_cutbacks: usize,
 }
 
+/// Where the step-size control stands between load steps: the size of the
+/// next sub-increment to try, as a fraction of a step's increment, and the
+/// easy sub-increments that led to it. A step starts where the last one
+/// ended, so a plastic flow that needed halves does not fail a whole
+/// step's try again at every step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct StepSize {
+    pub size: f64,
+    pub easy_in_a_row: usize,
+}
+
+impl Default for StepSize {
+    fn default() -> Self {
+        Self {
+            size: 1.0,
+            easy_in_a_row: 0,
+        }
+    }
+}
+
 impl Default for Substepping {
     fn default() -> Self {
         Self {
@@ -90,6 +110,7 @@ pub struct Simulation {
     pub(crate) n_supports: usize,
     pub settings: NewtonSettings,
     pub substepping: Substepping,
+    pub(crate) step_size: StepSize,
     /// F-bar against volumetric locking ([`crate::assembly::fbar`]).
     pub fbar: bool,
     pub load_steps: usize,
@@ -125,7 +146,8 @@ impl Simulation {
     /// halves, down to [`Substepping::min_fraction`] of the step; after two
     /// pieces in a row that converged easily (in at most
     /// [`EASY_ITERATIONS`], or half the iteration limit if that is fewer)
-    /// the size doubles again, up to the whole step.
+    /// the size doubles again, up to the whole step. The first try is the
+    /// size the last step ended with ([`StepSize`]).
     pub fn load_step(
         &mut self,
         step: usize,
@@ -136,9 +158,13 @@ impl Simulation {
         let easy_limit = EASY_ITERATIONS.min(self.settings.max_iterations / 2);
         // Progress through the step, and the size of the next try, as
         // fractions of its increment (powers of two: exact in binary).
-        let (mut done, mut size) = (0.0_f64, 1.0_f64);
+        let StepSize {
+            mut size,
+            mut easy_in_a_row,
+        } = self.step_size;
+        let mut done = 0.0_f64;
         let mut report: Option<StepReport> = None;
-        let (mut cutbacks, mut failed_iterations, mut easy_in_a_row) = (0, 0, 0);
+        let (mut cutbacks, mut failed_iterations) = (0, 0);
         while done < 1.0 {
             let last = done + size >= 1.0 - 1e-12;
             let reach = if last { 1.0 } else { done + size };
@@ -188,6 +214,10 @@ impl Simulation {
                 Err(e) => return Err(e),
             }
         }
+        self.step_size = StepSize {
+            size,
+            easy_in_a_row,
+        };
         let mut report = report.expect("the loop converged at least once");
         report.cutbacks = cutbacks;
         report.failed_iterations = failed_iterations;

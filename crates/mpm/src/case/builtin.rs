@@ -1,7 +1,13 @@
 //! Built-in cases, shipped in `crates/mpm/cases/` and compiled in.
 
 /// Names accepted by [`get`].
-pub const NAMES: [&str; 4] = ["column", "cantilever-grid", "cantilever", "plate-with-hole"];
+pub const NAMES: [&str; 5] = [
+    "column",
+    "cantilever-grid",
+    "cantilever",
+    "plate-with-hole",
+    "footing",
+];
 
 /// The JSON text of a built-in case.
 pub fn get(name: &str) -> Option<&'static str> {
@@ -11,6 +17,7 @@ pub fn get(name: &str) -> Option<&'static str> {
         "cantilever" => Some(include_str!("../../cases/cantilever.json")),
         // Made by scripts/plate_with_hole_mesh.py and scripts/gmsh_to_case.py.
         "plate-with-hole" => Some(include_str!("../../cases/plate-with-hole.json")),
+        "footing" => Some(include_str!("../../cases/footing.json")),
         _ => None,
     }
 }

@@ -304,6 +304,21 @@ pub enum MaterialSpec {
         #[serde(default)]
         dilation_angle: Option<f64>,
     },
+    /// Finite-strain Mohr-Coulomb plasticity on Hencky elasticity,
+    /// perfectly plastic, returned in principal stress space (planes,
+    /// edges and apex); Tresca without friction.
+    MohrCoulomb {
+        youngs_modulus: f64,
+        poisson_ratio: f64,
+        density: f64,
+        /// Cohesion `c` (Pa).
+        cohesion: f64,
+        /// Friction angle `phi` (degrees).
+        friction_angle: f64,
+        /// Dilation angle `psi` (degrees); default: `phi` (associated flow).
+        #[serde(default)]
+        dilation_angle: Option<f64>,
+    },
 }
 
 impl MaterialSpec {
@@ -327,6 +342,12 @@ impl MaterialSpec {
                 ..
             }
             | MaterialSpec::DruckerPrager {
+                youngs_modulus,
+                poisson_ratio,
+                density,
+                ..
+            }
+            | MaterialSpec::MohrCoulomb {
                 youngs_modulus,
                 poisson_ratio,
                 density,
@@ -708,10 +729,16 @@ mod tests {
     }
 
     #[test]
-    fn drucker_prager_parameters_are_checked_by_name() {
+    fn frictional_parameters_are_checked_by_name() {
+        for model in ["drucker_prager", "mohr_coulomb"] {
+            frictional_parameters_of(model);
+        }
+    }
+
+    fn frictional_parameters_of(model: &str) {
         let soil = |c: f64, phi: f64, psi: Option<f64>| {
             let mut v = column_json();
-            let mut m = serde_json::json!({"model": "drucker_prager", "youngs_modulus": 1e7,
+            let mut m = serde_json::json!({"model": model, "youngs_modulus": 1e7,
                 "poisson_ratio": 0.3, "density": 0.0, "cohesion": c, "friction_angle": phi});
             if let Some(psi) = psi {
                 m["dilation_angle"] = psi.into();

@@ -437,6 +437,12 @@ impl Body {
             friction_angle,
             dilation_angle,
             ..
+        }
+        | MaterialSpec::MohrCoulomb {
+            cohesion,
+            friction_angle,
+            dilation_angle,
+            ..
         } = self.material
         {
             let phi = friction_angle;

@@ -28,7 +28,7 @@
 
 use nalgebra::Matrix2;
 
-use super::return_map::{Moduli, Returned, Trial, respond, unit};
+use super::return_map::{InvariantModuli, Moduli, Returned, Trial, respond, unit};
 use super::{Elastic, History, Response};
 
 /// The model's constants.
@@ -88,7 +88,7 @@ pub(super) fn drucker_prager(
         elastic_strains: trial.strains,
         plastic_increment: 0.0,
         unit,
-        moduli: Moduli::elastic(bulk, mu),
+        moduli: Moduli::Invariant(InvariantModuli::elastic(bulk, mu)),
     };
     let returned = if phi_trial <= 1e-12 * scale {
         elastic
@@ -128,13 +128,13 @@ fn to_cone(
             * dgamma
             * (0.5 + m.eta_flow * m.eta_flow / 3.0).sqrt(),
         unit: elastic.unit,
-        moduli: Moduli {
+        moduli: Moduli::Invariant(InvariantModuli {
             identity: 2.0 * mu * theta,
             trace: bulk - 2.0 * mu * theta / 3.0 - bulk * bulk * m.eta * m.eta_flow / a,
             nn: 2.0 * mu * mu * (dgamma / j_trial - 1.0 / a),
             n_tr: -root2 * mu * m.eta * bulk / a,
             tr_n: -root2 * mu * bulk * m.eta_flow / a,
-        },
+        }),
     }
 }
 
@@ -153,7 +153,7 @@ fn to_apex(m: &DruckerPrager, elastic: &Returned, volumetric: f64, deviator_norm
         plastic_increment: (2.0f64 / 3.0).sqrt()
             * (plastic_deviator.powi(2) + plastic_volume.powi(2) / 3.0).sqrt(),
         unit: elastic.unit,
-        moduli: Moduli::default(),
+        moduli: Moduli::Invariant(InvariantModuli::default()),
     }
 }
 

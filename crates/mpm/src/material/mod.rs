@@ -15,6 +15,7 @@
 
 mod drucker_prager;
 mod hencky;
+mod mohr_coulomb;
 mod return_map;
 mod small_strain;
 mod von_mises;
@@ -24,6 +25,8 @@ use nalgebra::{Matrix2, Matrix4};
 pub use drucker_prager::DruckerPrager;
 use drucker_prager::drucker_prager;
 use hencky::hencky;
+pub use mohr_coulomb::MohrCoulomb;
+use mohr_coulomb::mohr_coulomb;
 use small_strain::small_strain;
 pub use von_mises::VonMises;
 use von_mises::von_mises;
@@ -81,6 +84,7 @@ pub enum Material {
     LinearElastic(Elastic),
     VonMises(VonMises),
     DruckerPrager(DruckerPrager),
+    MohrCoulomb(MohrCoulomb),
 }
 
 /// Isotropic elastic constants.
@@ -118,15 +122,17 @@ impl Material {
             Material::Hencky(c) | Material::LinearElastic(c) => c,
             Material::VonMises(m) => m.elastic,
             Material::DruckerPrager(m) => m.elastic,
+            Material::MohrCoulomb(m) => m.elastic,
         }
     }
 
     /// History of an undeformed, unstressed point.
     pub fn initial_history(&self) -> History {
         match self {
-            Material::Hencky(_) | Material::VonMises(_) | Material::DruckerPrager(_) => {
-                History::elastic(Matrix2::identity())
-            }
+            Material::Hencky(_)
+            | Material::VonMises(_)
+            | Material::DruckerPrager(_)
+            | Material::MohrCoulomb(_) => History::elastic(Matrix2::identity()),
             Material::LinearElastic(_) => History::elastic(Matrix2::zeros()),
         }
     }
@@ -143,6 +149,7 @@ impl Material {
             Material::LinearElastic(c) => small_strain(c, &history.tensor, grad_u),
             Material::VonMises(m) => von_mises(m, history, &df, j_start),
             Material::DruckerPrager(m) => drucker_prager(m, history, &df, j_start),
+            Material::MohrCoulomb(m) => mohr_coulomb(m, history, &df, j_start),
         }
     }
 }

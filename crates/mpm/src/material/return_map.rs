@@ -11,9 +11,11 @@
 //!
 //! The returns of von Mises and Drucker-Prager are isotropic tensor
 //! functions of the trial strain made of its trace and its unit deviator
-//! `N`, so their derivative in those strains is the tensor expression
-//! [`Moduli`] (no spectral terms), chained to `dP / d(dF)` as the Hencky
-//! model's (`hencky::piola_and_tangent`).
+//! `N`, so their derivative in those strains is a tensor expression
+//! ([`InvariantModuli`], no spectral terms); Mohr-Coulomb's is given in
+//! principal strains and adds the spin of the principal directions. Either
+//! is chained to `dP / d(dF)` as the Hencky model's
+//! (`hencky::piola_and_tangent`).
 
 use nalgebra::Matrix2;
 
@@ -45,11 +47,22 @@ impl Trial {
     }
 }
 
+/// The derivative of the returned Kirchhoff stress in the trial strains.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Moduli {
+    /// A return made of the trace and the unit deviator `N`
+    /// ([`Returned::unit`]) of the trial strain.
+    Invariant(InvariantModuli),
+    /// `d tau_a / d e_b` in the trial's principal strains (in-plane, then
+    /// `zz`); the tangent adds the spin of the principal directions,
+    /// `(tau_0 - tau_1) / (e_0 - e_1)` on the in-plane shear.
+    Principal([[f64; 3]; 3]),
+}
+
 /// `dtau = identity de + trace tr(de) I + nn N (N : de) + n_tr N tr(de) +
-/// tr_n I (N : de)`, the derivative of the returned Kirchhoff stress in
-/// the trial strains; `N` is [`Returned::unit`].
+/// tr_n I (N : de)`.
 #[derive(Debug, Clone, Copy, Default)]
-pub(super) struct Moduli {
+pub(super) struct InvariantModuli {
     pub identity: f64,
     pub trace: f64,
     pub nn: f64,
@@ -57,7 +70,7 @@ pub(super) struct Moduli {
     pub tr_n: f64,
 }
 
-impl Moduli {
+impl InvariantModuli {
     /// Hencky's: `kappa tr(de) I + 2 mu dev(de)`.
     pub fn elastic(kappa: f64, mu: f64) -> Self {
         Self {
@@ -105,13 +118,40 @@ pub(super) fn respond(
     };
     // An in-plane strain increment: its zz component is zero (dF_zz = 0).
     let n_plane = in_plane(ret.unit);
-    let m = ret.moduli;
+    let [n0, n1] = eig.vectors;
+    let spin = match ret.moduli {
+        Moduli::Principal(d) => {
+            let gap = trial.strains[0] - trial.strains[1];
+            if gap.abs() > 1e-9 {
+                (ret.tau[0] - ret.tau[1]) / gap
+            } else {
+                d[0][0] - d[0][1]
+            }
+        }
+        Moduli::Invariant(_) => 0.0,
+    };
     let dtau = |de: &Matrix2<f64>| -> Matrix2<f64> {
-        let tr = de.trace();
-        let n_de = (n_plane.transpose() * de).trace();
-        de * m.identity
-            + Matrix2::identity() * (m.trace * tr + m.tr_n * n_de)
-            + n_plane * (m.nn * n_de + m.n_tr * tr)
+        match ret.moduli {
+            Moduli::Invariant(m) => {
+                let tr = de.trace();
+                let n_de = (n_plane.transpose() * de).trace();
+                de * m.identity
+                    + Matrix2::identity() * (m.trace * tr + m.tr_n * n_de)
+                    + n_plane * (m.nn * n_de + m.n_tr * tr)
+            }
+            Moduli::Principal(d) => {
+                let de_p = [n0.dot(&(de * n0)), n1.dot(&(de * n1))];
+                let shear = n0.dot(&(de * n1));
+                (0..2)
+                    .map(|a| {
+                        eig.vectors[a]
+                            * eig.vectors[a].transpose()
+                            * (d[a][0] * de_p[0] + d[a][1] * de_p[1])
+                    })
+                    .sum::<Matrix2<f64>>()
+                    + (n0 * n1.transpose() + n1 * n0.transpose()) * (spin * shear)
+            }
+        }
     };
     let (p, tangent) = piola_and_tangent(&state.tensor, df, eig, &tau_plane, dtau);
     let j = j_start * df.determinant();

@@ -25,7 +25,7 @@
 
 use nalgebra::Matrix2;
 
-use super::return_map::{Moduli, Returned, Trial, respond, unit};
+use super::return_map::{InvariantModuli, Moduli, Returned, Trial, respond, unit};
 use super::{Elastic, History, Response};
 
 /// The model's constants.
@@ -54,7 +54,7 @@ pub(super) fn von_mises(
     let (unit, norm) = unit(deviator.map(|e| 2.0 * mu * e));
     let q_trial = (1.5f64).sqrt() * norm;
     let yield_now = m.yield_stress + m.hardening * state.plastic_strain;
-    let mut moduli = Moduli::elastic(kappa, mu);
+    let mut moduli = InvariantModuli::elastic(kappa, mu);
     let dgamma = if q_trial > yield_now * (1.0 + 1e-12) {
         let dgamma = (q_trial - yield_now) / (3.0 * mu + m.hardening);
         let theta = 1.0 - 3.0 * mu * dgamma / q_trial;
@@ -74,7 +74,7 @@ pub(super) fn von_mises(
         elastic_strains,
         plastic_increment: dgamma,
         unit,
-        moduli,
+        moduli: Moduli::Invariant(moduli),
     };
     respond(state, df, j_start, &trial, &returned)
 }

@@ -1,0 +1,582 @@
+//! `mpm study footing`: a rigid strip footing on weightless soil, the
+//! built-in `footing` case (half model: soil 5 m x 3 m, footing B = 1 m,
+//! c = 10 kPa, E = 100 MPa; grid origin at -0.3 h, so the footing's edge
+//! x = 0.5 m and the soil's sides lie off the grid lines at every cell
+//! size):
+//!
+//! - undrained clay (von Mises, `sigma_y = sqrt(3) c`, nu = 0.49, F-bar),
+//!   smooth and rough, pushed 0.01 B by the implicit boundary method at
+//!   three cell sizes: the pressure `q / c` against Prandtl's `2 + pi`;
+//! - frictional soil (Drucker-Prager matched to Mohr-Coulomb in plane
+//!   strain, phi = 20 degrees, associated, nu = 0.3) loaded by a uniform
+//!   pressure on the footing's stretch, ramped until the solve fails: the
+//!   collapse pressure is bracketed by the last converged load and the
+//!   smallest increment that failed, against the Prandtl-Reissner
+//!   `N_c = (N_q - 1) cot(phi)`; Mohr-Coulomb itself the same way. The
+//!   Drucker-Prager soil pushed by the IBM is run too, and where it fails
+//!   is reported;
+//! - the undrained smooth footing pushed to a settlement of 0.5 B.
+//!
+//! The footing's load is the IBM support's reaction (twice the half
+//! model's), as pressure over B.
+
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::fs;
+use std::path::Path;
+use std::time::Instant;
+
+use mpm::case::builtin;
+use mpm::{Case, NoObserver, Simulation, SolveError};
+use serde_json::{Value, json};
+
+use crate::LabError;
+use crate::plot::{COLOURS, Plot, Series};
+
+/// Cell sizes of the refinement (m).
+const CELLS: [f64; 3] = [0.25, 0.125, 0.0625];
+/// The footing's half-width (m): B = 1 m.
+const HALF_WIDTH: f64 = 0.5;
+/// Cohesion (Pa), as in the built-in case.
+const COHESION: f64 = 10e3;
+/// The frictional soil's friction angle (degrees).
+const PHI: f64 = 20.0;
+/// Settlement of the refinement runs (fraction of B), and their steps.
+const SETTLEMENT: f64 = 0.01;
+const SETTLEMENT_STEPS: usize = 10;
+/// The large-deformation run: settlement (fraction of B), steps, cell.
+const LARGE_SETTLEMENT: f64 = 0.5;
+const LARGE_STEPS: usize = 100;
+const LARGE_CELL: f64 = 0.25;
+/// The frictional pressure ramp: up to this multiple of N_c c, in steps.
+const RAMP_TO: f64 = 1.5;
+const RAMP_STEPS: usize = 30;
+
+/// Prandtl's undrained bearing capacity factor.
+pub fn prandtl() -> f64 {
+    2.0 + PI
+}
+
+/// Prandtl-Reissner `N_c = (N_q - 1) cot(phi)`, `N_q = e^(pi tan(phi))
+/// tan^2(45 + phi / 2)` (phi in degrees).
+pub fn prandtl_reissner(phi: f64) -> f64 {
+    let t = phi.to_radians().tan();
+    let n_q = (PI * t).exp() * (PI / 4.0 + phi.to_radians() / 2.0).tan().powi(2);
+    (n_q - 1.0) / t
+}
+
+/// The soil under the footing.
+#[derive(Clone, Copy)]
+pub enum Soil {
+    Undrained,
+    /// Drucker-Prager with this friction angle (degrees), associated.
+    Frictional(f64),
+    /// Mohr-Coulomb with this friction angle (degrees), associated.
+    MohrCoulomb(f64),
+}
+
+/// How the footing is loaded.
+#[derive(Clone, Copy)]
+pub enum Loading {
+    /// Pushed down by this settlement (m) by the IBM; rough holds x too.
+    Pushed { settlement: f64, rough: bool },
+    /// A uniform pressure (Pa) on the footing's stretch.
+    Pressure(f64),
+}
+
+/// The built-in footing case at cell size `h` (origin at -0.3 h), with
+/// its soil, loading and load steps.
+pub fn footing_case(h: f64, soil: Soil, loading: Loading, steps: usize) -> Value {
+    let mut case = builtin::json("footing").expect("footing is built in");
+    case["grid"]["cell_size"] = json!(h);
+    case["grid"]["origin"] = json!([-0.3 * h, -0.3 * h]);
+    case["analysis"]["load_steps"] = json!(steps);
+    let frictional = match soil {
+        Soil::Undrained => None,
+        Soil::Frictional(phi) => Some(("drucker_prager", phi)),
+        Soil::MohrCoulomb(phi) => Some(("mohr_coulomb", phi)),
+    };
+    if let Some((model, phi)) = frictional {
+        case["bodies"][0]["material"] = json!({
+            "model": model, "youngs_modulus": 1.0e8, "poisson_ratio": 0.3,
+            "density": 0.0, "cohesion": COHESION, "friction_angle": phi });
+    }
+    match loading {
+        Loading::Pushed { settlement, rough } => {
+            case["supports"][0]["displacement"] = json!([0.0, -settlement]);
+            case["supports"][0]["fix"] = json!(if rough { "xy" } else { "y" });
+        }
+        Loading::Pressure(q) => {
+            let stretch = case["supports"][0]["on"].clone();
+            let supports = case["supports"].as_array_mut().expect("supports");
+            supports.remove(0);
+            case["loads"] = json!({ "boundary": [ { "on": stretch, "pressure": q } ] });
+        }
+    }
+    case
+}
+
+/// One run's curve: settlement / B against q / c, step by step.
+pub struct Curve {
+    pub points: Vec<(f64, f64)>,
+    pub newton_iterations: usize,
+    pub cutbacks: usize,
+    pub seconds: f64,
+    pub n_points: usize,
+    /// Why it stopped early, with the last converged load factor.
+    pub failure: Option<(f64, String)>,
+}
+
+/// Runs `case` step by step, reading the footing's pressure from the
+/// first support's reaction (pushed) or the load factor (pressure).
+pub fn run_curve(case: &Value, loading: Loading) -> Result<Curve, LabError> {
+    let case = Case::from_json(&case.to_string())
+        .map_err(|e| LabError::Failed(format!("footing case: {e}")))?;
+    let mut sim = Simulation::new(&case).map_err(|e| LabError::Failed(e.to_string()))?;
+    let start = Instant::now();
+    let mut curve = Curve {
+        points: vec![(0.0, 0.0)],
+        newton_iterations: 0,
+        cutbacks: 0,
+        seconds: 0.0,
+        n_points: sim.points.len(),
+        failure: None,
+    };
+    for step in 1..=sim.load_steps {
+        match sim.load_step(step, &mut NoObserver) {
+            Ok(report) => {
+                curve.newton_iterations += report.newton.iterations + report.failed_iterations;
+                curve.cutbacks += report.cutbacks;
+                let settlement = -report.probes[0].displacement[1] / (2.0 * HALF_WIDTH);
+                let q = match loading {
+                    Loading::Pushed { .. } => -report.reactions[0][1] / HALF_WIDTH,
+                    Loading::Pressure(q) => q * report.load_factor,
+                };
+                curve.points.push((settlement, q / COHESION));
+            }
+            Err(e) => {
+                let converged = match &e {
+                    SolveError::SubstepsExhausted { load_factor, .. } => *load_factor,
+                    _ => (step - 1) as f64 / sim.load_steps as f64,
+                };
+                curve.failure = Some((converged, e.to_string()));
+                break;
+            }
+        }
+    }
+    curve.seconds = start.elapsed().as_secs_f64();
+    Ok(curve)
+}
+
+/// The study's runs.
+struct Results {
+    smooth: Vec<(f64, Curve)>,
+    rough: Vec<(f64, Curve)>,
+    frictional: Vec<(f64, Curve, f64)>,
+    undrained_pressure: Vec<(f64, Curve, f64)>,
+    mohr_coulomb: Vec<(f64, Curve, f64)>,
+    frictional_pushed: Option<Curve>,
+    large: Option<Curve>,
+}
+
+pub fn footing(out: &Path, quick: bool) -> Result<(), LabError> {
+    fs::create_dir_all(out)?;
+    let cells: &[f64] = if quick { &CELLS[..2] } else { &CELLS };
+    let pushed = |rough| Loading::Pushed {
+        settlement: SETTLEMENT * 2.0 * HALF_WIDTH,
+        rough,
+    };
+    let mut results = Results {
+        smooth: Vec::new(),
+        rough: Vec::new(),
+        frictional: Vec::new(),
+        undrained_pressure: Vec::new(),
+        mohr_coulomb: Vec::new(),
+        frictional_pushed: None,
+        large: None,
+    };
+    for &h in cells {
+        for rough in [false, true] {
+            let loading = pushed(rough);
+            let curve = run_curve(
+                &footing_case(h, Soil::Undrained, loading, SETTLEMENT_STEPS),
+                loading,
+            )?;
+            eprintln!("undrained h {h} rough {rough}: {}", summary(&curve));
+            if rough {
+                results.rough.push((h, curve));
+            } else {
+                results.smooth.push((h, curve));
+            }
+        }
+        let q_max = RAMP_TO * prandtl_reissner(PHI) * COHESION;
+        let loading = Loading::Pressure(q_max);
+        for soil in [Soil::Frictional(PHI), Soil::MohrCoulomb(PHI)] {
+            let curve = run_curve(&footing_case(h, soil, loading, RAMP_STEPS), loading)?;
+            let list = match soil {
+                Soil::MohrCoulomb(_) => &mut results.mohr_coulomb,
+                _ => &mut results.frictional,
+            };
+            eprintln!("frictional h {h}: {}", summary(&curve));
+            list.push((h, curve, q_max));
+        }
+        let q_max = RAMP_TO * prandtl() * COHESION;
+        let loading = Loading::Pressure(q_max);
+        let curve = run_curve(
+            &footing_case(h, Soil::Undrained, loading, RAMP_STEPS),
+            loading,
+        )?;
+        eprintln!("undrained pressure h {h}: {}", summary(&curve));
+        results.undrained_pressure.push((h, curve, q_max));
+    }
+    let loading = pushed(false);
+    let curve = run_curve(
+        &footing_case(CELLS[0], Soil::Frictional(PHI), loading, SETTLEMENT_STEPS),
+        loading,
+    )?;
+    eprintln!("frictional pushed h {}: {}", CELLS[0], summary(&curve));
+    results.frictional_pushed = Some(curve);
+    if !quick {
+        let loading = Loading::Pushed {
+            settlement: LARGE_SETTLEMENT * 2.0 * HALF_WIDTH,
+            rough: false,
+        };
+        let curve = run_curve(
+            &footing_case(LARGE_CELL, Soil::Undrained, loading, LARGE_STEPS),
+            loading,
+        )?;
+        eprintln!("large: {}", summary(&curve));
+        results.large = Some(curve);
+    }
+    fs::write(out.join("footing.md"), markdown(&results, quick))?;
+    fs::write(out.join("footing.csv"), csv(&results))?;
+    fs::write(out.join("footing.svg"), curves_svg(&results))?;
+    if let Some(large) = &results.large {
+        fs::write(out.join("footing_large.svg"), large_svg(large))?;
+    }
+    Ok(())
+}
+
+fn summary(c: &Curve) -> String {
+    let last = c.points.last().copied().unwrap_or_default();
+    format!(
+        "q/c {:.4} at {:.4} B, {} iterations, {} cutbacks, {:.1} s{}",
+        last.1,
+        last.0,
+        c.newton_iterations,
+        c.cutbacks,
+        c.seconds,
+        c.failure
+            .as_ref()
+            .map(|(lf, e)| format!(", stopped after load factor {lf:.6}: {e}"))
+            .unwrap_or_default()
+    )
+}
+
+/// The pushed runs' pressure at the end (q / c).
+fn end_pressure(c: &Curve) -> f64 {
+    c.points.last().map(|p| p.1).unwrap_or(f64::NAN)
+}
+
+/// The collapse bracket of a pressure ramp (q / c): the last converged
+/// load and the next step's.
+fn collapse(c: &Curve, q_max: f64) -> (f64, f64) {
+    let converged = c.failure.as_ref().map(|f| f.0).unwrap_or(1.0);
+    let scale = q_max / COHESION;
+    (
+        converged * scale,
+        (converged + 1.0 / (RAMP_STEPS as f64 * 1024.0)) * scale,
+    )
+}
+
+/// Observed orders of successive errors.
+fn orders(errors: &[f64]) -> String {
+    errors
+        .windows(2)
+        .map(|w| format!("{:.2}", (w[0].abs() / w[1].abs()).log2()))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn markdown(r: &Results, quick: bool) -> String {
+    let mut md = String::new();
+    let p = prandtl();
+    let n_c = prandtl_reissner(PHI);
+    let _ = writeln!(
+        md,
+        "# Strip footing on weightless soil (`mpm study footing{}`)\n\n\
+         Written by `crates/mpm-lab/src/footing_study.rs`; the case is the built-in `footing` \
+         (half model, B = 1 m, c = 10 kPa, E = 100 MPa, GIMP, 2x2 points per cell, grid origin \
+         at -0.3 h so the footing's edge lies off the grid lines).\n",
+        if quick { " --quick" } else { "" }
+    );
+    for (name, runs) in [("smooth", &r.smooth), ("rough", &r.rough)] {
+        let _ = writeln!(
+            md,
+            "## Undrained, {name}, pushed {SETTLEMENT} B by the IBM in {SETTLEMENT_STEPS} steps\n\n\
+             Prandtl: q / c = 2 + pi = {p:.4}.\n\n\
+             | h (m) | points | q / c at {:.3} B | q / c at {SETTLEMENT} B | error | Newton iterations | cutbacks | wall (s) |\n\
+             |---|---|---|---|---|---|---|---|",
+            SETTLEMENT / 2.0
+        );
+        let mut errors = Vec::new();
+        for (h, c) in runs.iter() {
+            let half = c
+                .points
+                .get(SETTLEMENT_STEPS / 2)
+                .map(|p| p.1)
+                .unwrap_or(f64::NAN);
+            let q = end_pressure(c);
+            errors.push(q - p);
+            let _ = writeln!(
+                md,
+                "| {h} | {} | {half:.4} | {q:.4}{} | {:+.2}% | {} | {} | {:.1} |",
+                c.n_points,
+                if c.failure.is_some() {
+                    " (stopped)"
+                } else {
+                    ""
+                },
+                100.0 * (q - p) / p,
+                c.newton_iterations,
+                c.cutbacks,
+                c.seconds
+            );
+        }
+        let _ = writeln!(md, "\nObserved orders of the error: {}.\n", orders(&errors));
+    }
+    for (model, runs, n_c) in [
+        ("undrained, von Mises", &r.undrained_pressure, p),
+        (
+            "frictional, Drucker-Prager matched in plane strain, phi = 20, associated",
+            &r.frictional,
+            n_c,
+        ),
+        (
+            "frictional, Mohr-Coulomb, phi = 20, associated",
+            &r.mohr_coulomb,
+            n_c,
+        ),
+    ] {
+        let _ = writeln!(
+            md,
+            "## Uniform pressure ({model}), ramped to \
+             {RAMP_TO} times the exact in {RAMP_STEPS} steps\n\n\
+             Exact: q / c = {n_c:.4} (Prandtl's 2 + pi undrained; Prandtl-Reissner's N_c with friction). The collapse pressure lies between the last converged \
+             load and that plus the smallest increment tried (1/1024 of a step).\n\n\
+             | h (m) | points | collapse q / c | error | settlement at the last load (B) | Newton iterations | wall (s) |\n\
+             |---|---|---|---|---|---|---|"
+        );
+        let mut errors = Vec::new();
+        for (h, c, q_max) in runs.iter() {
+            let (lo, hi) = collapse(c, *q_max);
+            errors.push(lo - n_c);
+            let _ = writeln!(
+                md,
+                "| {h} | {} | {lo:.4} to {hi:.4} | {:+.2}% | {:.5} | {} | {:.1} |",
+                c.n_points,
+                100.0 * (lo - n_c) / n_c,
+                c.points.last().map(|p| p.0).unwrap_or(f64::NAN),
+                c.newton_iterations,
+                c.seconds
+            );
+        }
+        let _ = writeln!(md, "\nObserved orders of the error: {}.\n", orders(&errors));
+    }
+    if let Some(c) = &r.frictional_pushed {
+        let _ = writeln!(
+            md,
+            "The same soil pushed {SETTLEMENT} B by the IBM at h = {}: {}.\n",
+            CELLS[0],
+            summary(c)
+        );
+    }
+    if let Some(c) = &r.large {
+        let at = |s: f64| {
+            c.points
+                .iter()
+                .find(|p| p.0 >= s - 1e-9)
+                .map(|p| format!("{:.3}", p.1))
+                .unwrap_or_else(|| "-".into())
+        };
+        let _ = writeln!(
+            md,
+            "## Undrained, smooth, pushed {LARGE_SETTLEMENT} B in {LARGE_STEPS} steps (h = {LARGE_CELL})\n\n\
+             {}.\n\n\
+             | settlement (B) | 0.01 | 0.05 | 0.1 | 0.2 | 0.3 | 0.4 | 0.5 |\n|---|---|---|---|---|---|---|---|\n\
+             | q / c | {} | {} | {} | {} | {} | {} | {} |\n",
+            summary(c),
+            at(0.01),
+            at(0.05),
+            at(0.1),
+            at(0.2),
+            at(0.3),
+            at(0.4),
+            at(0.5)
+        );
+    }
+    md
+}
+
+fn csv(r: &Results) -> String {
+    let mut out = String::from("run,h,settlement_over_b,q_over_c\n");
+    let mut rows = |name: &str, h: f64, c: &Curve| {
+        for (s, q) in &c.points {
+            let _ = writeln!(out, "{name},{h},{s},{q}");
+        }
+    };
+    for (h, c) in &r.smooth {
+        rows("undrained_smooth", *h, c);
+    }
+    for (h, c) in &r.rough {
+        rows("undrained_rough", *h, c);
+    }
+    for (h, c, _) in &r.frictional {
+        rows("drucker_prager_pressure", *h, c);
+    }
+    for (h, c, _) in &r.mohr_coulomb {
+        rows("mohr_coulomb_pressure", *h, c);
+    }
+    if let Some(c) = &r.large {
+        rows("undrained_smooth_large", LARGE_CELL, c);
+    }
+    out
+}
+
+fn curves_svg(r: &Results) -> String {
+    let mut series = Vec::new();
+    for (k, (h, c)) in r.smooth.iter().enumerate() {
+        series.push(Series {
+            label: format!("undrained smooth h = {h}"),
+            points: c.points.clone(),
+            colour: COLOURS[k],
+            dashed: false,
+        });
+    }
+    for (k, (h, c, _)) in r.frictional.iter().enumerate() {
+        series.push(Series {
+            label: format!("DP phi = {PHI} pressure h = {h}"),
+            points: c.points.clone(),
+            colour: COLOURS[3 + k],
+            dashed: false,
+        });
+    }
+    let x_max = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.0))
+        .fold(0.0, f64::max);
+    for (label, value) in [
+        ("Prandtl 2 + pi", prandtl()),
+        ("Prandtl-Reissner N_c", prandtl_reissner(PHI)),
+    ] {
+        series.push(Series {
+            label: label.into(),
+            points: vec![(0.0, value), (x_max, value)],
+            colour: "#444444",
+            dashed: true,
+        });
+    }
+    Plot {
+        title: "Strip footing: pressure against settlement".into(),
+        x_label: "settlement / B".into(),
+        y_label: "q / c".into(),
+        log_x: false,
+        log_y: false,
+    }
+    .svg(&series)
+}
+
+fn large_svg(c: &Curve) -> String {
+    Plot {
+        title: format!(
+            "Smooth footing on undrained clay to {LARGE_SETTLEMENT} B (h = {LARGE_CELL} m)"
+        ),
+        x_label: "settlement / B".into(),
+        y_label: "q / c".into(),
+        log_x: false,
+        log_y: false,
+    }
+    .svg(&[
+        Series {
+            label: "MPM, IBM-pushed".into(),
+            points: c.points.clone(),
+            colour: COLOURS[0],
+            dashed: false,
+        },
+        Series {
+            label: "Prandtl 2 + pi".into(),
+            points: vec![(0.0, prandtl()), (LARGE_SETTLEMENT, prandtl())],
+            colour: "#444444",
+            dashed: true,
+        },
+    ])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The undrained smooth footing pushed by the IBM, its edge off the
+    /// grid lines, at h = 0.25 and 0.125 m (4 steps to 0.004 B): the
+    /// pressure is above Prandtl's (GIMP with F-bar is stiff, an upper
+    /// bound), the error falls at first order (measured 0.9 to 0.95 in
+    /// `mpm study footing`: the edge's singular stress spreads over a cell),
+    /// and the Richardson extrapolation with that order lands within 5% of
+    /// 2 + pi. The 5% holds the extrapolation's O(h^2) remainder and the
+    /// rise with settlement (0.2% over 0.004 B); the measured gap is 2%.
+    #[test]
+    fn the_undrained_footing_converges_to_prandtl() {
+        let p = prandtl();
+        let loading = Loading::Pushed {
+            settlement: 0.004,
+            rough: false,
+        };
+        let q: Vec<f64> = [0.25, 0.125]
+            .iter()
+            .map(|&h| {
+                let c = run_curve(&footing_case(h, Soil::Undrained, loading, 4), loading).unwrap();
+                assert!(c.failure.is_none(), "h {h}: {}", summary(&c));
+                end_pressure(&c)
+            })
+            .collect();
+        let (e1, e2) = (q[0] - p, q[1] - p);
+        assert!(e1 > 0.0 && e2 > 0.0, "above Prandtl: {q:?}");
+        let order = (e1 / e2).log2();
+        assert!((0.7..1.3).contains(&order), "order {order}: {q:?}");
+        let extrapolated = q[1] - (q[0] - q[1]);
+        assert!(
+            (extrapolated - p).abs() < 0.05 * p,
+            "extrapolated {extrapolated} against {p}: {q:?}"
+        );
+    }
+
+    /// The frictional footing (Drucker-Prager, phi = 20 degrees,
+    /// associated) under a ramped pressure at h = 0.25 m: it carries 0.9
+    /// N_c and collapses within 8% of the Prandtl-Reissner N_c (measured
+    /// +5.0% here and -1.3% at h = 0.125 in `mpm study footing`).
+    #[test]
+    fn the_frictional_footing_collapses_at_prandtl_reissner() {
+        let n_c = prandtl_reissner(PHI);
+        let q_max = RAMP_TO * n_c * COHESION;
+        let loading = Loading::Pressure(q_max);
+        let c = run_curve(
+            &footing_case(0.25, Soil::Frictional(PHI), loading, RAMP_STEPS),
+            loading,
+        )
+        .unwrap();
+        let (lo, _) = collapse(&c, q_max);
+        assert!(c.failure.is_some(), "collapses below {RAMP_TO} N_c");
+        assert!(lo > 0.9 * n_c, "carries 0.9 N_c: {}", summary(&c));
+        assert!((lo - n_c).abs() < 0.08 * n_c, "{lo} against {n_c}");
+    }
+
+    /// N_c at 20 degrees is 14.83 (the issue's value; Terzaghi's tables).
+    #[test]
+    fn prandtl_reissner_at_twenty_degrees() {
+        assert!(
+            (prandtl_reissner(20.0) - 14.835).abs() < 1e-3,
+            "{}",
+            prandtl_reissner(20.0)
+        );
+    }
+}

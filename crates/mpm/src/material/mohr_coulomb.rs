@@ -1,0 +1,355 @@
+//! Mohr-Coulomb plasticity at finite strain, perfectly plastic, with a
+//! dilation angle of its own, returned in principal stress space: de Souza
+//! Neto, Peric & Owen (2008), "Computational Methods for Plasticity",
+//! section 8.2 (boxes 8.4 to 8.7), in the framework of `return_map`.
+//!
+//! With the principal Kirchhoff stresses ordered `s1 >= s2 >= s3` (tension
+//! positive; the out-of-plane one among them), the yield function of the
+//! main plane and its flow vector are
+//!
+//! `Phi = (s1 - s3) + (s1 + s3) sin(phi) - 2 c cos(phi)`,
+//! `n = (1 + sin(psi), 0, -(1 - sin(psi)))`.
+//!
+//! The trial state goes back along `D n` (`D` the elastic moduli in
+//! principal strains) to the main plane; if that breaks the ordering it
+//! goes to the edge it overshot: where the main plane meets the plane of
+//! `(s1, s2)` (`s2 = s3`) or of `(s2, s3)` (`s1 = s2`), with two
+//! multipliers; if one of those is negative or the ordering still breaks,
+//! to the apex `s = c cot(phi)` (none without friction: Tresca). The
+//! algorithmic moduli in principal strains are `D - D n_g A^-1 n_f^T D`
+//! over the active planes (`A_ij = n_f,i . D n_g,j`), zero at the apex;
+//! the tangent adds the spin of the principal directions
+//! ([`super::return_map::Moduli`]).
+
+use nalgebra::{Matrix2, Matrix3, Vector3};
+
+use super::return_map::{Moduli, Returned, Trial, respond};
+use super::{Elastic, History, Response};
+
+/// The model's constants.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MohrCoulomb {
+    pub elastic: Elastic,
+    /// Cohesion `c` (Pa).
+    pub cohesion: f64,
+    /// Friction angle `phi` (radians).
+    pub friction: f64,
+    /// Dilation angle `psi` (radians).
+    pub dilation: f64,
+}
+
+/// A plane of the yield surface: the major and minor principal stresses it
+/// joins (indices into the ordered stresses).
+#[derive(Clone, Copy)]
+struct Plane(usize, usize);
+
+impl MohrCoulomb {
+    fn plane_vector(&self, plane: Plane, angle: f64) -> Vector3<f64> {
+        let mut n = Vector3::zeros();
+        n[plane.0] = 1.0 + angle.sin();
+        n[plane.1] = -(1.0 - angle.sin());
+        n
+    }
+
+    fn yield_value(&self, s: &Vector3<f64>, plane: Plane) -> f64 {
+        let (a, b) = (s[plane.0], s[plane.1]);
+        (a - b) + (a + b) * self.friction.sin() - 2.0 * self.cohesion * self.friction.cos()
+    }
+
+    /// The elastic moduli in principal strains: `lambda 1 1^T + 2 mu I`.
+    fn moduli(&self) -> Matrix3<f64> {
+        let Elastic { lambda, mu } = self.elastic;
+        Matrix3::from_element(lambda) + Matrix3::identity() * (2.0 * mu)
+    }
+
+    /// The return to the active `planes` from the ordered trial stresses:
+    /// the stresses, the multipliers, and the algorithmic moduli; `None` if
+    /// the system is singular.
+    fn return_to(
+        &self,
+        s: &Vector3<f64>,
+        planes: &[Plane],
+    ) -> Option<(Vector3<f64>, Vec<f64>, Matrix3<f64>)> {
+        let d = self.moduli();
+        let flow: Vec<Vector3<f64>> = planes
+            .iter()
+            .map(|&p| d * self.plane_vector(p, self.dilation))
+            .collect();
+        let normal: Vec<Vector3<f64>> = planes
+            .iter()
+            .map(|&p| d * self.plane_vector(p, self.friction))
+            .collect();
+        let k = planes.len();
+        let mut a = nalgebra::DMatrix::zeros(k, k);
+        let mut rhs = nalgebra::DVector::zeros(k);
+        for i in 0..k {
+            rhs[i] = self.yield_value(s, planes[i]);
+            for j in 0..k {
+                a[(i, j)] = self.plane_vector(planes[i], self.friction).dot(&flow[j]);
+            }
+        }
+        let a_inv = a.try_inverse()?;
+        let gammas = &a_inv * rhs;
+        let mut stress = *s;
+        let mut ep = d;
+        for i in 0..k {
+            stress -= flow[i] * gammas[i];
+            for j in 0..k {
+                ep -= flow[i] * normal[j].transpose() * a_inv[(i, j)];
+            }
+        }
+        Some((stress, gammas.iter().copied().collect(), ep))
+    }
+}
+
+/// Whether `s` is ordered `s1 >= s2 >= s3` to within `tol`.
+fn ordered(s: &Vector3<f64>, tol: f64) -> bool {
+    s[0] >= s[1] - tol && s[1] >= s[2] - tol
+}
+
+/// The trial response to `df` from `state`, with the state to keep if the
+/// step converges; as `von_mises`.
+pub(super) fn mohr_coulomb(
+    m: &MohrCoulomb,
+    state: &History,
+    df: &Matrix2<f64>,
+    j_start: f64,
+) -> Response {
+    let Elastic { lambda, mu } = m.elastic;
+    let trial = Trial::new(state, df);
+    let e = Vector3::from(trial.strains);
+    let d = m.moduli();
+    let tau_trial = d * e;
+    // Order the principal stresses, largest first.
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| tau_trial[b].total_cmp(&tau_trial[a]));
+    let s = Vector3::from_fn(|i, _| tau_trial[order[i]]);
+    let scale = m.cohesion + s.abs().max();
+    let tol = 1e-12 * scale;
+    let main = Plane(0, 2);
+    let (stress, ep) = if m.yield_value(&s, main) <= tol {
+        (s, d)
+    } else {
+        let valid = |r: &Option<(Vector3<f64>, Vec<f64>, Matrix3<f64>)>| {
+            r.as_ref()
+                .is_some_and(|(st, g, _)| ordered(st, tol) && g.iter().all(|&g| g >= -tol))
+        };
+        let on_plane = m.return_to(&s, &[main]);
+        // The edge the main plane's return overshot towards: s2 past s1
+        // (s1 = s2, with the plane of (s2, s3)) or s3 past s2 (s2 = s3,
+        // with the plane of (s1, s2)).
+        let overshot_major = on_plane.as_ref().is_some_and(|(st, _, _)| st[1] > st[0]);
+        let edge = if overshot_major {
+            Plane(1, 2)
+        } else {
+            Plane(0, 1)
+        };
+        let on_edge = || m.return_to(&s, &[main, edge]);
+        let apex = || {
+            let p = m.cohesion / m.friction.tan();
+            (Vector3::from_element(p), Matrix3::zeros())
+        };
+        if valid(&on_plane) {
+            let (st, _, ep) = on_plane.expect("valid");
+            (st, ep)
+        } else {
+            let corner = on_edge();
+            if valid(&corner) || m.friction == 0.0 {
+                let (st, _, ep) = corner.expect("two planes of Tresca meet");
+                (st, ep)
+            } else {
+                apex()
+            }
+        }
+    };
+    // Back to the trial's principal directions (in-plane, then zz).
+    let mut tau = [0.0; 3];
+    let mut moduli = [[0.0; 3]; 3];
+    for i in 0..3 {
+        tau[order[i]] = stress[i];
+        for j in 0..3 {
+            moduli[order[i]][order[j]] = ep[(i, j)];
+        }
+    }
+    let mean_part = lambda / (3.0 * lambda + 2.0 * mu) * tau.iter().sum::<f64>();
+    let elastic_strains = tau.map(|t| (t - mean_part) / (2.0 * mu));
+    let plastic = (0..3)
+        .map(|i| (trial.strains[i] - elastic_strains[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let returned = Returned {
+        tau,
+        elastic_strains,
+        plastic_increment: (2.0f64 / 3.0).sqrt() * plastic,
+        unit: [0.0; 3],
+        moduli: Moduli::Principal(moduli),
+    };
+    respond(state, df, j_start, &trial, &returned)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// E = 20 MPa, nu = 0.3, c = 10 kPa.
+    fn soil(phi_degrees: f64, psi_degrees: f64) -> MohrCoulomb {
+        MohrCoulomb {
+            elastic: Elastic::from_young_poisson(20e6, 0.3),
+            cohesion: 10e3,
+            friction: phi_degrees.to_radians(),
+            dilation: psi_degrees.to_radians(),
+        }
+    }
+
+    /// The trial of principal logarithmic strains `e` (x, y, zz) from the
+    /// virgin state: `b_zz` carries the out-of-plane one.
+    fn trial(e: [f64; 3]) -> (History, Matrix2<f64>) {
+        let state = History {
+            tensor: Matrix2::identity(),
+            zz: (2.0 * e[2]).exp(),
+            plastic_strain: 0.0,
+        };
+        (state, Matrix2::new(e[0].exp(), 0.0, 0.0, e[1].exp()))
+    }
+
+    /// Principal Kirchhoff stresses (x, y, zz) of an axis-aligned response.
+    fn principal(r: &Response, df: &Matrix2<f64>) -> Vector3<f64> {
+        let j = df.determinant();
+        Vector3::new(r.cauchy.plane[0], r.cauchy.plane[1], r.cauchy.zz) * j
+    }
+
+    /// Plane-strain isochoric stretch `diag(l, 1/l)` past yield, without
+    /// dilation, solved by hand: the trial `2 mu (a, -a, 0)`, `a = ln l`,
+    /// goes back along `D (1, 0, -1) = 2 mu (1, 0, -1)`, so `s_zz = 0`,
+    /// `s_xx = -s_yy`, and the main plane gives `s_xx = c cos(phi)`.
+    #[test]
+    fn a_stretch_past_yield_returns_to_the_plane_as_solved_by_hand() {
+        for phi in [0.0f64, 20.0, 35.0] {
+            let m = soil(phi, 0.0);
+            let a: f64 = 0.002;
+            let (state, df) = trial([a, -a, 0.0]);
+            let r = mohr_coulomb(&m, &state, &df, 1.0);
+            let s = principal(&r, &df);
+            let expected = m.cohesion * phi.to_radians().cos();
+            let tol = 1e-9 * m.cohesion;
+            assert!((s[0] - expected).abs() < tol, "phi {phi}: {s}");
+            assert!(
+                (s[1] + expected).abs() < tol && s[2].abs() < tol,
+                "phi {phi}: {s}"
+            );
+            let dgamma = a - expected / (2.0 * m.elastic.mu);
+            let alpha = (2.0f64 / 3.0).sqrt() * 2f64.sqrt() * dgamma;
+            assert!(
+                (r.history.plastic_strain - alpha).abs() < 1e-12,
+                "phi {phi}"
+            );
+        }
+    }
+
+    /// The six planes of the hexagonal pyramid, unordered.
+    fn yield_values(m: &MohrCoulomb, s: &Vector3<f64>) -> Vec<(usize, usize, f64)> {
+        let mut out = Vec::new();
+        for a in 0..3 {
+            for b in 0..3 {
+                if a != b {
+                    out.push((a, b, m.yield_value(s, Plane(a, b))));
+                }
+            }
+        }
+        out
+    }
+
+    /// Returns of every kind checked against the theory's conditions
+    /// (Koiter's flow rule at edges): the stress is on the surface and
+    /// inside every plane; the plastic strain `e_tr - D^-1 s` is a
+    /// non-negative combination of the flow vectors of the planes it lies
+    /// on (one on a plane, two on an edge), or it is at the apex
+    /// `c cot(phi)`. Trials: a stretch (plane), triaxial compression
+    /// (left edge, `s2 = s3`), triaxial extension (right edge, `s1 = s2`)
+    /// and an expansion (apex); associated and not.
+    #[test]
+    fn returns_of_every_kind_meet_the_flow_rule() {
+        let cases = [
+            ("plane", [0.002, -0.003, -0.0005], 1),
+            ("left edge", [0.002, -0.0025, -0.0025], 2),
+            ("right edge", [0.0015, 0.0015, -0.004], 2),
+            ("apex", [0.01, 0.01, 0.01], 0),
+        ];
+        for (phi, psi) in [(20.0, 20.0), (30.0, 10.0)] {
+            let m = soil(phi, psi);
+            let d = m.moduli();
+            for (name, e, active_planes) in cases {
+                let (state, df) = trial(e);
+                let r = mohr_coulomb(&m, &state, &df, 1.0);
+                let s = principal(&r, &df);
+                let tol = 1e-7 * m.cohesion;
+                let values = yield_values(&m, &s);
+                assert!(
+                    values.iter().all(|v| v.2 < tol),
+                    "{name}: outside {values:?}"
+                );
+                if active_planes == 0 {
+                    let apex = m.cohesion / m.friction.tan();
+                    assert!(
+                        (s - Vector3::from_element(apex)).norm() < tol,
+                        "{name}: {s}"
+                    );
+                    continue;
+                }
+                let on: Vec<_> = values.iter().filter(|v| v.2.abs() < tol).collect();
+                assert_eq!(on.len(), active_planes, "{name}, phi {phi}: {values:?}");
+                let plastic = Vector3::from(e) - d.try_inverse().unwrap() * s;
+                // Least squares on the active planes' flow vectors, then
+                // the residual and the signs.
+                let flows: Vec<Vector3<f64>> = on
+                    .iter()
+                    .map(|v| m.plane_vector(Plane(v.0, v.1), m.dilation))
+                    .collect();
+                let basis = nalgebra::DMatrix::from_fn(3, flows.len(), |i, j| flows[j][i]);
+                let rhs = nalgebra::DVector::from_column_slice(plastic.as_slice());
+                let gammas =
+                    (basis.transpose() * &basis).try_inverse().unwrap() * basis.transpose() * &rhs;
+                let residual = (&basis * &gammas - &rhs).norm();
+                assert!(
+                    residual < 1e-9,
+                    "{name}: the flow is off the planes' by {residual}"
+                );
+                assert!(
+                    gammas.iter().all(|&g| g > 0.0),
+                    "{name}: multipliers {gammas}"
+                );
+            }
+        }
+    }
+
+    /// The tangent against central differences of `P`, turned off the
+    /// principal axes by a small shear, at each kind of return and in the
+    /// elastic range.
+    #[test]
+    fn the_tangent_is_the_derivative_of_the_return_map() {
+        let shear = Matrix2::new(0.0, 0.0004, -0.0002, 0.0);
+        let cases = [
+            ("elastic", [0.0001, -0.00005, 0.0]),
+            ("plane", [0.002, -0.003, -0.0005]),
+            ("left edge", [0.002, -0.0024, -0.0025]),
+            ("right edge", [0.0016, 0.0014, -0.004]),
+            ("apex", [0.01, 0.012, 0.01]),
+        ];
+        for (phi, psi) in [(20.0, 20.0), (30.0, 10.0), (0.0, 0.0)] {
+            let m = soil(phi, psi);
+            for (name, e) in cases {
+                if phi == 0.0 && name == "apex" {
+                    continue;
+                }
+                let (state, df) = trial(e);
+                crate::material::assert_tangent_is_the_derivative(
+                    |df| mohr_coulomb(&m, &state, df, 1.0),
+                    &(df + shear),
+                    1e-9,
+                    1e-6,
+                    &format!("{name}, phi {phi}, psi {psi}"),
+                );
+            }
+        }
+    }
+}
