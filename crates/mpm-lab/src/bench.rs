@@ -154,9 +154,13 @@ fn return_map_cost() -> Result<String, LabError> {
             "drucker_prager",
             json!({ "cohesion": 577.0, "friction_angle": 20.0 }),
         ),
+        (
+            "mohr_coulomb",
+            json!({ "cohesion": 577.0, "friction_angle": 20.0 }),
+        ),
     ];
     let mut text = String::from(
-        "## Return map in the point loop\n\n\
+        "\n## Return map in the point loop\n\n\
          A 1 m block of 40,000 points (GIMP, 2x2 per cell, E = 1 MPa, nu = 0.3) squeezed 5% in 5 steps by the \
          implicit boundary method, every plastic point yielding from the first step. Point-loop time (stress, \
          tangent and internal force of every point) per point per residual evaluation (Newton iterations plus \
