@@ -21,7 +21,7 @@
 //! the tangent adds the spin of the principal directions
 //! ([`super::return_map::Moduli`]).
 
-use nalgebra::{Matrix2, Matrix3, Vector3};
+use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 
 use super::return_map::{Moduli, Returned, Trial, respond};
 use super::{Elastic, History, Response};
@@ -65,40 +65,43 @@ impl MohrCoulomb {
     /// The return to the active `planes` from the ordered trial stresses:
     /// the stresses, the multipliers, and the algorithmic moduli; `None` if
     /// the system is singular.
-    fn return_to(
-        &self,
-        s: &Vector3<f64>,
-        planes: &[Plane],
-    ) -> Option<(Vector3<f64>, Vec<f64>, Matrix3<f64>)> {
+    fn return_to<const K: usize>(&self, s: &Vector3<f64>, planes: [Plane; K]) -> Option<Return<K>> {
         let d = self.moduli();
-        let flow: Vec<Vector3<f64>> = planes
-            .iter()
-            .map(|&p| d * self.plane_vector(p, self.dilation))
-            .collect();
-        let normal: Vec<Vector3<f64>> = planes
-            .iter()
-            .map(|&p| d * self.plane_vector(p, self.friction))
-            .collect();
-        let k = planes.len();
-        let mut a = nalgebra::DMatrix::zeros(k, k);
-        let mut rhs = nalgebra::DVector::zeros(k);
-        for i in 0..k {
-            rhs[i] = self.yield_value(s, planes[i]);
-            for j in 0..k {
-                a[(i, j)] = self.plane_vector(planes[i], self.friction).dot(&flow[j]);
-            }
-        }
+        let flow = planes.map(|p| d * self.plane_vector(p, self.dilation));
+        let normal = planes.map(|p| d * self.plane_vector(p, self.friction));
+        let a = SMatrix::<f64, K, K>::from_fn(|i, j| {
+            self.plane_vector(planes[i], self.friction).dot(&flow[j])
+        });
+        let rhs = SVector::<f64, K>::from_fn(|i, _| self.yield_value(s, planes[i]));
         let a_inv = a.try_inverse()?;
-        let gammas = &a_inv * rhs;
+        let gammas = a_inv * rhs;
         let mut stress = *s;
         let mut ep = d;
-        for i in 0..k {
+        for i in 0..K {
             stress -= flow[i] * gammas[i];
-            for j in 0..k {
+            for j in 0..K {
                 ep -= flow[i] * normal[j].transpose() * a_inv[(i, j)];
             }
         }
-        Some((stress, gammas.iter().copied().collect(), ep))
+        Some(Return {
+            stress,
+            multipliers: gammas.into(),
+            moduli: ep,
+        })
+    }
+}
+
+/// A return to `K` planes.
+struct Return<const K: usize> {
+    stress: Vector3<f64>,
+    multipliers: [f64; K],
+    moduli: Matrix3<f64>,
+}
+
+impl<const K: usize> Return<K> {
+    /// Ordered to within `tol`, with no negative multiplier.
+    fn valid(&self, tol: f64) -> bool {
+        ordered(&self.stress, tol) && self.multipliers.iter().all(|&g| g >= -tol)
     }
 }
 
@@ -130,36 +133,26 @@ pub(super) fn mohr_coulomb(
     let (stress, ep) = if m.yield_value(&s, main) <= tol {
         (s, d)
     } else {
-        let valid = |r: &Option<(Vector3<f64>, Vec<f64>, Matrix3<f64>)>| {
-            r.as_ref()
-                .is_some_and(|(st, g, _)| ordered(st, tol) && g.iter().all(|&g| g >= -tol))
-        };
-        let on_plane = m.return_to(&s, &[main]);
+        let on_plane = m.return_to(&s, [main]);
         // The edge the main plane's return overshot towards: s2 past s1
         // (s1 = s2, with the plane of (s2, s3)) or s3 past s2 (s2 = s3,
         // with the plane of (s1, s2)).
-        let overshot_major = on_plane.as_ref().is_some_and(|(st, _, _)| st[1] > st[0]);
+        let overshot_major = on_plane.as_ref().is_some_and(|r| r.stress[1] > r.stress[0]);
         let edge = if overshot_major {
             Plane(1, 2)
         } else {
             Plane(0, 1)
         };
-        let on_edge = || m.return_to(&s, &[main, edge]);
-        let apex = || {
-            let p = m.cohesion / m.friction.tan();
-            (Vector3::from_element(p), Matrix3::zeros())
-        };
-        if valid(&on_plane) {
-            let (st, _, ep) = on_plane.expect("valid");
-            (st, ep)
-        } else {
-            let corner = on_edge();
-            if valid(&corner) || m.friction == 0.0 {
-                let (st, _, ep) = corner.expect("two planes of Tresca meet");
-                (st, ep)
-            } else {
-                apex()
-            }
+        match on_plane {
+            Some(r) if r.valid(tol) => (r.stress, r.moduli),
+            _ => match m.return_to(&s, [main, edge]) {
+                Some(r) if r.valid(tol) || m.friction == 0.0 => (r.stress, r.moduli),
+                // Tresca's edges always hold; with friction, the apex.
+                _ => (
+                    Vector3::from_element(m.cohesion / m.friction.tan()),
+                    Matrix3::zeros(),
+                ),
+            },
         }
     };
     // Back to the trial's principal directions (in-plane, then zz).
