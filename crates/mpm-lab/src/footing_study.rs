@@ -137,8 +137,17 @@ pub struct Curve {
     pub cutbacks: usize,
     pub seconds: f64,
     pub n_points: usize,
-    /// Why it stopped early, with the last converged load factor.
-    pub failure: Option<(f64, String)>,
+    /// Why it stopped early.
+    pub failure: Option<Stop>,
+}
+
+/// Where a run stopped: the last load factor it carried and, when it
+/// stopped because the increment could be cut no further, the size of the
+/// last try past it (as a load-factor increment).
+pub struct Stop {
+    pub carried: f64,
+    pub last_try: Option<f64>,
+    pub message: String,
 }
 
 /// Runs `case` step by step, reading the footing's pressure from the
@@ -169,11 +178,22 @@ pub fn run_curve(case: &Value, loading: Loading) -> Result<Curve, LabError> {
                 curve.points.push((settlement, q / COHESION));
             }
             Err(e) => {
-                let converged = match &e {
-                    SolveError::SubstepsExhausted { load_factor, .. } => *load_factor,
-                    _ => (step - 1) as f64 / sim.load_steps as f64,
+                let n = sim.load_steps as f64;
+                let (carried, last_try) = match &e {
+                    SolveError::SubstepsExhausted {
+                        load_factor,
+                        fraction,
+                        ..
+                    } => (*load_factor, Some(fraction / n)),
+                    // Not cut: what the step carried before it is unknown
+                    // here; the last whole step is what is certain.
+                    _ => ((step - 1) as f64 / n, None),
                 };
-                curve.failure = Some((converged, e.to_string()));
+                curve.failure = Some(Stop {
+                    carried,
+                    last_try,
+                    message: e.to_string(),
+                });
                 break;
             }
         }
@@ -304,7 +324,10 @@ fn summary(c: &Curve) -> String {
         c.seconds,
         c.failure
             .as_ref()
-            .map(|(lf, e)| format!(", stopped after load factor {lf:.6}: {e}"))
+            .map(|f| format!(
+                ", stopped after load factor {:.6}: {}",
+                f.carried, f.message
+            ))
             .unwrap_or_default()
     )
 }
@@ -314,15 +337,17 @@ fn end_pressure(c: &Curve) -> f64 {
     c.points.last().map(|p| p.1).unwrap_or(f64::NAN)
 }
 
-/// The collapse bracket of a pressure ramp (q / c): the last converged
-/// load and the next step's.
-fn collapse(c: &Curve, q_max: f64) -> (f64, f64) {
-    let converged = c.failure.as_ref().map(|f| f.0).unwrap_or(1.0);
+/// Where a pressure ramp stopped (q / c): the last load it carried and,
+/// if it stopped because the increment could be cut no further, the load
+/// of the last (smallest) try past it; `None` if it carried the whole
+/// ramp.
+fn collapse(c: &Curve, q_max: f64) -> Option<(f64, Option<f64>)> {
+    let stop = c.failure.as_ref()?;
     let scale = q_max / COHESION;
-    (
-        converged * scale,
-        (converged + 1.0 / (RAMP_STEPS as f64 * 1024.0)) * scale,
-    )
+    Some((
+        stop.carried * scale,
+        stop.last_try.map(|d| (stop.carried + d) * scale),
+    ))
 }
 
 /// How much softer the last load step was than the first: the settlement
@@ -416,20 +441,30 @@ fn markdown(r: &Results, quick: bool) -> String {
             md,
             "## Uniform pressure ({model}), ramped to \
              {RAMP_TO} times the exact in {RAMP_STEPS} steps\n\n\
-             Exact: q / c = {n_c:.4} (Prandtl's 2 + pi undrained; Prandtl-Reissner's N_c with friction). The collapse pressure lies between the last converged \
-             load and that plus the smallest increment tried (1/1024 of a step). Runaway: the last \
-             step's settlement per unit pressure over the first step's (a collapse runs away; a \
-             run that stops on a straight curve stopped for another reason).\n\n\
+             Exact: q / c = {n_c:.4} (Prandtl's 2 + pi undrained; Prandtl-Reissner's N_c with friction). \
+             Collapse q / c: the last load the run carried, and the load of the smallest try past \
+             it, which failed. A failed Newton is no proof that no equilibrium exists: the runaway \
+             (the last step's settlement per unit pressure over the first step's) is the evidence \
+             of a collapse; a run that stops on a straight curve stopped for another reason.\n\n\
              | h (m) | points | collapse q / c | error | settlement at the last load (B) | runaway | Newton iterations | wall (s) |\n\
              |---|---|---|---|---|---|---|---|"
         );
         let mut errors = Vec::new();
         for (h, c, q_max) in runs.iter() {
-            let (lo, hi) = collapse(c, *q_max);
+            let Some((lo, hi)) = collapse(c, *q_max) else {
+                let _ = writeln!(
+                    md,
+                    "| {h} | {} | no collapse up to {:.4} | | | | | |",
+                    c.n_points,
+                    q_max / COHESION
+                );
+                continue;
+            };
             errors.push(lo - n_c);
+            let tried = hi.map_or("(not cut)".to_string(), |hi| format!("to {hi:.4}"));
             let _ = writeln!(
                 md,
-                "| {h} | {} | {lo:.4} to {hi:.4} | {:+.2}% | {:.5} | {:.1} | {} | {:.1} |",
+                "| {h} | {} | {lo:.4} {tried} | {:+.2}% | {:.5} | {:.1} | {} | {:.1} |",
                 c.n_points,
                 100.0 * (lo - n_c) / n_c,
                 c.points.last().map(|p| p.0).unwrap_or(f64::NAN),
@@ -658,8 +693,7 @@ mod tests {
             fbar: false,
         };
         let c = run_curve(&footing_case(0.125, soil, loading, RAMP_STEPS), loading).unwrap();
-        let (lo, _) = collapse(&c, q_max);
-        assert!(c.failure.is_some(), "collapses below {RAMP_TO} N_c");
+        let (lo, _) = collapse(&c, q_max).expect("collapses below the ramp's end");
         assert!(
             (n_c..1.2 * n_c).contains(&lo),
             "{lo} against {n_c}: {}",

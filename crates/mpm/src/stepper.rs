@@ -54,15 +54,22 @@ pub struct Substepping {
     pub max_cutbacks: usize,
 }
 
-/// Where the step-size control stands between load steps: the size of the
-/// next sub-increment to try, as a fraction of a step's increment, and the
-/// easy sub-increments that led to it. A step starts where the last one
-/// ended, so a plastic flow that needed halves does not fail a whole
-/// step's try again at every step.
+/// Where the step-size control stands between load steps. A step starts at
+/// the size of the last one's last sub-increment (a fraction of a step's
+/// increment), so a plastic flow that needs halves does not fail a whole
+/// step's try again at every step. To let a size cut at a hard spot grow
+/// back, a step that follows enough clean steps (no cut) probes twice the
+/// size; a probe that has to be cut doubles the clean steps the next one
+/// waits for (1, 2, 4, ...), and one that holds resets the wait to one.
+/// Steady flow that needs its small size so pays a number of failed
+/// probes that grows as the logarithm of the steps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct StepSize {
     pub size: f64,
     pub easy_in_a_row: usize,
+    /// Clean steps since the last cut, and how many the next probe waits for.
+    pub clean_steps: usize,
+    pub wait: usize,
 }
 
 impl Default for StepSize {
@@ -70,6 +77,35 @@ impl Default for StepSize {
         Self {
             size: 1.0,
             easy_in_a_row: 0,
+            clean_steps: 0,
+            wait: 1,
+        }
+    }
+}
+
+impl StepSize {
+    /// The size a step starts at, within `[min_fraction, 1]`, and whether
+    /// it is a probe.
+    fn first_try(&self, min_fraction: f64) -> (f64, bool) {
+        let probe = self.size < 1.0 && self.clean_steps >= self.wait;
+        let size = if probe { 2.0 * self.size } else { self.size };
+        (size.clamp(min_fraction.min(1.0), 1.0), probe)
+    }
+
+    /// The state after a step that ended at `size`, with `cutbacks` failed
+    /// tries, that started with a probe or not.
+    fn after(&self, size: f64, easy_in_a_row: usize, cutbacks: usize, probe: bool) -> Self {
+        let (clean_steps, wait) = match (cutbacks > 0, probe) {
+            (true, true) => (0, 2 * self.wait),
+            (true, false) => (0, self.wait),
+            (false, true) => (1, 1),
+            (false, false) => (self.clean_steps + 1, self.wait),
+        };
+        Self {
+            size,
+            easy_in_a_row,
+            clean_steps,
+            wait,
         }
     }
 }
@@ -147,7 +183,8 @@ impl Simulation {
     /// pieces in a row that converged easily (in at most
     /// [`EASY_ITERATIONS`], or half the iteration limit if that is fewer)
     /// the size doubles again, up to the whole step. The first try is the
-    /// size the last step ended with ([`StepSize`]).
+    /// size the last step ended with, or twice it when probing
+    /// ([`StepSize`]).
     pub fn load_step(
         &mut self,
         step: usize,
@@ -158,10 +195,8 @@ impl Simulation {
         let easy_limit = EASY_ITERATIONS.min(self.settings.max_iterations / 2);
         // Progress through the step, and the size of the next try, as
         // fractions of its increment (powers of two: exact in binary).
-        let StepSize {
-            mut size,
-            mut easy_in_a_row,
-        } = self.step_size;
+        let (mut size, probe) = self.step_size.first_try(self.substepping.min_fraction);
+        let mut easy_in_a_row = self.step_size.easy_in_a_row;
         let mut done = 0.0_f64;
         let mut report: Option<StepReport> = None;
         let (mut cutbacks, mut failed_iterations) = (0, 0);
@@ -214,10 +249,7 @@ impl Simulation {
                 Err(e) => return Err(e),
             }
         }
-        self.step_size = StepSize {
-            size,
-            easy_in_a_row,
-        };
+        self.step_size = self.step_size.after(size, easy_in_a_row, cutbacks, probe);
         let mut report = report.expect("the loop converged at least once");
         report.cutbacks = cutbacks;
         report.failed_iterations = failed_iterations;
@@ -475,6 +507,41 @@ mod tests {
     use super::*;
     use crate::case::Case;
     use crate::newton::Equilibrium;
+
+    /// A size cut at a hard spot grows back once steps pass cleanly, one
+    /// doubling per clean step; in flow that needs the small size, failed
+    /// probes wait 1, 2, 4 clean steps apart.
+    #[test]
+    fn a_cut_size_grows_back_and_failed_probes_back_off() {
+        let min = 1.0 / 1024.0;
+        let cut = StepSize {
+            size: 0.25,
+            easy_in_a_row: 0,
+            clean_steps: 0,
+            wait: 1,
+        };
+        // Recovery: every probe holds.
+        let mut s = cut;
+        let mut sizes = Vec::new();
+        for _ in 0..4 {
+            let (size, probe) = s.first_try(min);
+            sizes.push(size);
+            s = s.after(size, 0, 0, probe);
+        }
+        assert_eq!(sizes, [0.25, 0.5, 1.0, 1.0]);
+        // Steady flow: every probe is cut back to the old size.
+        let mut s = cut;
+        let mut probes = Vec::new();
+        for step in 0..12 {
+            let (size, probe) = s.first_try(min);
+            if probe {
+                probes.push(step);
+            }
+            s = s.after(0.25, 0, usize::from(probe), probe);
+            assert!(size == 0.25 || (probe && size == 0.5));
+        }
+        assert_eq!(probes, [1, 4, 9]);
+    }
 
     /// Condition number (2-norm) of the first step's tangent on the free
     /// DOFs, from the dense inverse built column by column with the

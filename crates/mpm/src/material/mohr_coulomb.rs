@@ -257,15 +257,16 @@ mod tests {
     /// inside every plane; the plastic strain `e_tr - D^-1 s` is a
     /// non-negative combination of the flow vectors of the planes it lies
     /// on (one on a plane, two on an edge), or it is at the apex
-    /// `c cot(phi)`. Trials: a stretch (plane), triaxial compression
-    /// (left edge, `s2 = s3`), triaxial extension (right edge, `s1 = s2`)
+    /// `c cot(phi)`. Trials (tension positive): a stretch (plane),
+    /// triaxial extension (the edge `s2 = s3`), triaxial compression (the
+    /// edge `s1 = s2`)
     /// and an expansion (apex); associated and not.
     #[test]
     fn returns_of_every_kind_meet_the_flow_rule() {
         let cases = [
             ("plane", [0.002, -0.003, -0.0005], 1),
-            ("left edge", [0.002, -0.0025, -0.0025], 2),
-            ("right edge", [0.0015, 0.0015, -0.004], 2),
+            ("edge s2 = s3", [0.002, -0.0025, -0.0025], 2),
+            ("edge s1 = s2", [0.0015, 0.0015, -0.004], 2),
             ("apex", [0.01, 0.01, 0.01], 0),
         ];
         for (phi, psi) in [(20.0, 20.0), (30.0, 10.0)] {
@@ -324,8 +325,8 @@ mod tests {
         let cases = [
             ("elastic", [0.0001, -0.00005, 0.0]),
             ("plane", [0.002, -0.003, -0.0005]),
-            ("left edge", [0.002, -0.0024, -0.0025]),
-            ("right edge", [0.0016, 0.0014, -0.004]),
+            ("edge s2 = s3", [0.002, -0.0024, -0.0025]),
+            ("edge s1 = s2", [0.0016, 0.0014, -0.004]),
             ("apex", [0.01, 0.012, 0.01]),
         ];
         for (phi, psi) in [(20.0, 20.0), (30.0, 10.0), (0.0, 0.0)] {
