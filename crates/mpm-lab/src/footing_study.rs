@@ -7,14 +7,16 @@
 //! - undrained clay (von Mises, `sigma_y = sqrt(3) c`, nu = 0.49, F-bar),
 //!   smooth and rough, pushed 0.01 B by the implicit boundary method at
 //!   three cell sizes: the pressure `q / c` against Prandtl's `2 + pi`;
-//! - frictional soil (Drucker-Prager matched to Mohr-Coulomb in plane
-//!   strain, phi = 20 degrees, associated, nu = 0.3) loaded by a uniform
-//!   pressure on the footing's stretch, ramped until the solve fails: the
-//!   collapse pressure is bracketed by the last converged load and the
-//!   smallest increment that failed, against the Prandtl-Reissner
-//!   `N_c = (N_q - 1) cot(phi)`; Mohr-Coulomb itself the same way. The
-//!   Drucker-Prager soil pushed by the IBM is run too, and where it fails
-//!   is reported;
+//! - the same clay under a uniform pressure on the footing's stretch,
+//!   ramped until the solve stops;
+//! - frictional soil (phi = 20 degrees, associated, nu = 0.3, no F-bar) as
+//!   Drucker-Prager matched to Mohr-Coulomb in plane strain and as
+//!   Mohr-Coulomb, under the ramped pressure, against the Prandtl-Reissner
+//!   `N_c = (N_q - 1) cot(phi)`; and Drucker-Prager with F-bar, which stops
+//!   short of collapse (README, Material models). A ramp's result is the
+//!   last load it carried and the smallest try past it; the runaway of
+//!   the settlement tells a collapse from a stall. The Drucker-Prager soil
+//!   pushed by the IBM is run too;
 //! - the undrained smooth footing pushed to a settlement of 0.5 B.
 //!
 //! The footing's load is the IBM support's reaction (twice the half
