@@ -22,6 +22,7 @@
 pub mod assembly;
 pub mod boundary;
 pub mod case;
+pub mod checkpoint;
 pub mod configuration;
 pub mod equilibrium;
 pub mod geometry;
@@ -41,6 +42,7 @@ pub mod triangulation;
 pub mod vtk;
 
 pub use case::{Case, CaseError, CaseErrorKind};
+pub use checkpoint::{Checkpoint, CheckpointError};
 pub use newton::{NewtonSettings, SolveError};
 pub use observer::{NoObserver, Observer, StepState};
 pub use particles::MaterialPoints;

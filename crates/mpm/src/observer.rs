@@ -2,16 +2,33 @@
 //! runner and the job service implement [`Observer`].
 
 use crate::boundary::{self, BoundaryLoop, BoundaryOutput};
+use crate::checkpoint::Checkpoint;
 use crate::particles::MaterialPoints;
 use crate::report::StepReport;
+use crate::stepper::Simulation;
 
 /// The state after a converged step, as observers see it.
 pub struct StepState<'a> {
     pub points: &'a MaterialPoints,
     pub loops: &'a [BoundaryLoop],
+    simulation: &'a Simulation,
 }
 
-impl StepState<'_> {
+impl<'a> StepState<'a> {
+    pub(crate) fn new(simulation: &'a Simulation) -> Self {
+        Self {
+            points: &simulation.points,
+            loops: &simulation.loops,
+            simulation,
+        }
+    }
+
+    /// The run's state after this step, to resume from
+    /// ([`Simulation::restore`]).
+    pub fn checkpoint(&self) -> Checkpoint {
+        self.simulation.checkpoint()
+    }
+
     /// The boundary curves through the points' current positions (built on
     /// request: interpolation costs work proportional to the boundary).
     pub fn boundaries(&self) -> Vec<BoundaryOutput> {

@@ -150,23 +150,21 @@ pub struct Simulation {
     /// F-bar against volumetric locking ([`crate::assembly::fbar`]).
     pub fbar: bool,
     pub load_steps: usize,
+    /// Load steps converged (and committed) so far.
+    pub(crate) steps_done: usize,
 }
 
 impl Simulation {
-    /// Runs every load step, reporting each to `observer`.
+    /// Runs the load steps not yet done (all of them, unless the run was
+    /// restored from a [`crate::Checkpoint`]), reporting each to `observer`.
     pub fn run(&mut self, observer: &mut dyn Observer) -> Result<RunReport, SolveError> {
         let start = Instant::now();
-        let mut steps = Vec::with_capacity(self.load_steps);
-        for step in 1..=self.load_steps {
+        let mut steps = Vec::with_capacity(self.load_steps - self.steps_done);
+        for step in self.steps_done + 1..=self.load_steps {
             observer.step_started(step, self.load_steps);
             let report = self.load_step(step, observer)?;
-            observer.step_finished(
-                &report,
-                &StepState {
-                    points: &self.points,
-                    loops: &self.loops,
-                },
-            );
+            self.steps_done = step;
+            observer.step_finished(&report, &StepState::new(self));
             steps.push(report);
         }
         Ok(RunReport {

@@ -53,6 +53,16 @@ pub struct Anchor {
 }
 
 impl Anchor {
+    /// Its displacement since the reference configuration (what a
+    /// checkpoint keeps of it).
+    pub fn moved(&self) -> [f64; 2] {
+        self.moved
+    }
+
+    pub(crate) fn set_moved(&mut self, moved: [f64; 2]) {
+        self.moved = moved;
+    }
+
     /// The prescribed displacement at load factor `lambda`:
     /// `lambda d + (R(lambda theta) - I)(X - c)`.
     pub(super) fn prescribed_at(&self, lambda: f64) -> [f64; 2] {
