@@ -1,13 +1,12 @@
 //! Service settings. Every one has a command-line flag and an environment
 //! variable (see `mpm serve --help` and the README).
 
-use std::path::PathBuf;
 use std::time::Duration;
 
 // The defaults, shared by `Config::new` and the flags of `mpm serve`.
 /// Where `mpm serve` listens.
 pub const DEFAULT_ADDR: &str = "127.0.0.1:8080";
-/// The database file of `mpm serve`.
+/// The database of `mpm serve`: a SQLite file beside it.
 pub const DEFAULT_DATABASE: &str = "mpm.sqlite";
 pub const DEFAULT_WORKERS: usize = 1;
 pub const DEFAULT_LEASE: Duration = Duration::from_secs(30);
@@ -29,8 +28,9 @@ pub const DEFAULT_JOB_TIME_LIMIT: Duration = Duration::from_secs(3600);
 
 #[derive(Debug, Clone)]
 pub struct Config {
-    /// SQLite file, created on first start.
-    pub database: PathBuf,
+    /// The database: a SQLite file (a path or `sqlite://PATH`, created on
+    /// first start) or a PostgreSQL URL (`postgres://...`).
+    pub database: String,
     /// Jobs solved at once. Each solve uses rayon's pool of all cores, so
     /// one worker is the default; more workers share the cores.
     pub workers: usize,
@@ -41,6 +41,12 @@ pub struct Config {
     pub max_attempts: u32,
     /// How often an idle worker looks for jobs whose lease expired.
     pub poll_interval: Duration,
+    /// Every how many load steps a running job stores its solver state to
+    /// resume from; 0 picks by size ([`checkpoint_interval`]).
+    pub checkpoint_every: usize,
+    /// Ended jobs older than this are deleted (checked every few minutes
+    /// by the serving process).
+    pub retention: Option<Duration>,
     /// When set, every endpoint but /health needs `Authorization: Bearer`.
     pub token: Option<String>,
     pub limits: Limits,
@@ -60,15 +66,48 @@ pub struct Limits {
     pub admission_time_limit: Duration,
 }
 
+/// Every how many load steps a job's solver state is stored, with the
+/// interval 0 ("auto"): every step up to this many points, and above it
+/// every `points / AUTO_CHECKPOINT_POINTS` steps (rounded up), so that
+/// checkpoints write about 2.6 MB a step at most (130 bytes a point).
+pub const AUTO_CHECKPOINT_POINTS: usize = 20_000;
+
+/// The checkpoint interval in load steps for a job of `points` points,
+/// given the setting `every` (0: auto).
+pub fn checkpoint_interval(every: usize, points: usize) -> usize {
+    if every > 0 {
+        every
+    } else {
+        points.div_ceil(AUTO_CHECKPOINT_POINTS).max(1)
+    }
+}
+
+/// The database URL with its password, if any, replaced by `***` (for
+/// logs and error messages).
+pub fn redact(database: &str) -> String {
+    let Some((scheme, rest)) = database.split_once("://") else {
+        return database.to_string();
+    };
+    match rest.split_once('@') {
+        Some((user_info, host)) if user_info.contains(':') => {
+            let user = user_info.split(':').next().unwrap_or_default();
+            format!("{scheme}://{user}:***@{host}")
+        }
+        _ => database.to_string(),
+    }
+}
+
 impl Config {
     /// Defaults for a database file, as documented in the README.
-    pub fn new(database: PathBuf) -> Self {
+    pub fn new(database: impl Into<String>) -> Self {
         Self {
-            database,
+            database: database.into(),
             workers: DEFAULT_WORKERS,
             lease: DEFAULT_LEASE,
             max_attempts: DEFAULT_MAX_ATTEMPTS,
             poll_interval: DEFAULT_POLL_INTERVAL,
+            checkpoint_every: 0,
+            retention: None,
             token: None,
             limits: Limits {
                 max_body_bytes: DEFAULT_MAX_BODY_BYTES,
@@ -80,5 +119,28 @@ impl Config {
                 admission_time_limit: DEFAULT_ADMISSION_TIME_LIMIT,
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_password_in_the_database_url_is_not_shown() {
+        assert_eq!(
+            redact("postgres://mpm:s3cret@db:5432/jobs"),
+            "postgres://mpm:***@db:5432/jobs"
+        );
+        assert_eq!(redact("postgres://db/jobs"), "postgres://db/jobs");
+        assert_eq!(redact("jobs.sqlite"), "jobs.sqlite");
+    }
+
+    #[test]
+    fn checkpoints_thin_out_with_size() {
+        assert_eq!(checkpoint_interval(0, 1_000), 1);
+        assert_eq!(checkpoint_interval(0, 20_000), 1);
+        assert_eq!(checkpoint_interval(0, 100_000), 5);
+        assert_eq!(checkpoint_interval(3, 100_000), 3);
     }
 }

@@ -1,9 +1,11 @@
 //! The job service around the `mpm` solver: an HTTP API (axum) over a job
-//! queue in SQLite (sqlx), solved by a pool of worker threads.
+//! queue in SQLite or PostgreSQL (sqlx), solved by pools of worker threads.
 //!
-//! [`Server::start`] opens the database, starts the workers and serves;
-//! [`Server::shutdown`] stops serving, hands running jobs back to the queue
-//! and waits for the workers.
+//! [`Server::start`] opens the database, starts its workers (none with
+//! `workers = 0`) and serves; [`Server::shutdown`] stops serving, hands
+//! running jobs back to the queue and waits for the workers.
+//! [`Workers::start`] solves without serving, for machines that share a
+//! PostgreSQL queue with the serving ones.
 
 pub mod config;
 pub mod http;
@@ -18,7 +20,7 @@ use tokio::net::TcpListener;
 use tokio::sync::{Notify, Semaphore, watch};
 use tokio::task::JoinHandle;
 
-pub use config::{Config, Limits};
+pub use config::{Config, Limits, redact};
 use http::AppState;
 use jobs::Store;
 use worker::{RunningJobs, WorkerPool};
@@ -45,16 +47,20 @@ pub enum StartError {
     },
 }
 
+async fn open_store(config: &Config) -> Result<Store, StartError> {
+    Store::open(&config.database)
+        .await
+        .map_err(|source| StartError::Database {
+            path: redact(&config.database),
+            source,
+        })
+}
+
 impl Server {
     /// Opens the database, starts the workers and serves on `addr`. Call
     /// from within a multi-threaded tokio runtime.
     pub async fn start(config: Config, addr: SocketAddr) -> Result<Server, StartError> {
-        let store = Store::open(&config.database)
-            .await
-            .map_err(|source| StartError::Database {
-                path: config.database.display().to_string(),
-                source,
-            })?;
+        let store = open_store(&config).await?;
         let listener = TcpListener::bind(addr)
             .await
             .map_err(|source| StartError::Bind { addr, source })?;
@@ -66,8 +72,11 @@ impl Server {
         let running = Arc::new(RunningJobs::default());
         let workers =
             WorkerPool::start(store.clone(), config.clone(), wake.clone(), running.clone());
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         let (stop, mut stopped) = watch::channel(false);
+        if let Some(retention) = config.retention {
+            tokio::spawn(prune_ended_jobs(store.clone(), retention, stopped.clone()));
+        }
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         let app = http::router(AppState {
             store,
             config,
@@ -103,5 +112,57 @@ impl Server {
         }
         let workers = self.workers;
         let _ = tokio::task::spawn_blocking(move || workers.shutdown()).await;
+    }
+}
+
+/// Solver workers without an HTTP server: they claim jobs from a database
+/// that serving processes fill.
+pub struct Workers {
+    pool: WorkerPool,
+}
+
+impl Workers {
+    /// Opens the database and starts `config.workers` workers. Call from
+    /// within a multi-threaded tokio runtime.
+    pub async fn start(config: Config) -> Result<Workers, StartError> {
+        let store = open_store(&config).await?;
+        let pool = WorkerPool::start(
+            store,
+            Arc::new(config),
+            Arc::new(Notify::new()),
+            Arc::new(RunningJobs::default()),
+        );
+        Ok(Workers { pool })
+    }
+
+    /// Stops claiming; running jobs go back to the queue at their next
+    /// Newton iteration, to resume from their checkpoints.
+    pub async fn shutdown(self) {
+        let pool = self.pool;
+        let _ = tokio::task::spawn_blocking(move || pool.shutdown()).await;
+    }
+}
+
+/// How often the serving process deletes jobs past their retention.
+const PRUNE_INTERVAL: std::time::Duration = std::time::Duration::from_secs(300);
+
+/// Deletes ended jobs older than `retention`, at start and every
+/// [`PRUNE_INTERVAL`], until `stopped` turns true.
+async fn prune_ended_jobs(
+    store: Store,
+    retention: std::time::Duration,
+    mut stopped: watch::Receiver<bool>,
+) {
+    loop {
+        let before = jobs::store::now() - retention.as_secs_f64();
+        match store.prune(before).await {
+            Ok(0) => {}
+            Ok(n) => tracing::info!(jobs = n, "deleted ended jobs past their retention"),
+            Err(e) => tracing::warn!(error = %e, "pruning ended jobs failed; will retry"),
+        }
+        tokio::select! {
+            _ = tokio::time::sleep(PRUNE_INTERVAL) => {}
+            _ = stopped.wait_for(|stop| *stop) => return,
+        }
     }
 }

@@ -2,6 +2,9 @@
 //! off the async runtime. Each running job holds a lease that a small task
 //! on the runtime renews; the solver reports every finished step, which the
 //! worker stores at once, so a client can read step 1 while step 2 runs.
+//! Every few steps ([`crate::config::checkpoint_interval`]) the solver's
+//! state is stored with the step; a job claimed again (its worker died, or
+//! was stopped) resumes from it.
 
 use std::collections::HashMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -10,7 +13,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use mpm::{Case, Observer, Simulation, StepReport, StepState};
+use mpm::{Case, Checkpoint, Observer, Simulation, StepReport, StepState};
 use tokio::runtime::Handle;
 use tokio::sync::Notify;
 
@@ -167,6 +170,7 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
         job: job.id,
         flags: &flags,
         deadline: started + shared.config.limits.job_time_limit,
+        checkpoint_every: 1,
         timed_out: false,
         store_error: None,
     };
@@ -177,6 +181,11 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
             .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
         let mut sim = Simulation::new(&case)
             .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
+        observer.checkpoint_every =
+            crate::config::checkpoint_interval(shared.config.checkpoint_every, sim.points.len());
+        if let Some((step, state)) = &job.checkpoint {
+            resume(&mut sim, job.id, *step, state);
+        }
         sim.run(&mut observer).map_err(Failure::from)
     }));
     renewal.abort();
@@ -217,6 +226,18 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
         tracing::error!(job = job.id, error = %e, "recording the job's end failed; its lease will expire and it will be retried");
     }
     tracing::info!(job = job.id, seconds, "job ended");
+}
+
+/// Restores a claimed job's checkpoint. One that does not fit (a solver of
+/// another version wrote it) is logged and the job starts over from step
+/// 1, its stored steps overwritten as it goes.
+fn resume(sim: &mut Simulation, job: i64, step: i64, state: &[u8]) {
+    match Checkpoint::from_bytes(state).and_then(|c| sim.restore(&c)) {
+        Ok(()) => tracing::info!(job, step, "resuming from the checkpoint"),
+        Err(e) => {
+            tracing::warn!(job, step, error = %e, "the checkpoint cannot be resumed; starting over")
+        }
+    }
 }
 
 /// How a run ends in the store.
@@ -290,6 +311,8 @@ struct JobObserver<'a> {
     job: i64,
     flags: &'a StopFlags,
     deadline: Instant,
+    /// Store the solver's state with every this many steps.
+    checkpoint_every: usize,
     timed_out: bool,
     store_error: Option<String>,
 }
@@ -297,12 +320,17 @@ struct JobObserver<'a> {
 impl Observer for JobObserver<'_> {
     fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
         let document = StoredStep::new(report, state);
+        let checkpoint = report
+            .step
+            .is_multiple_of(self.checkpoint_every)
+            .then(|| state.checkpoint().to_bytes());
         let saved = self.shared.runtime.block_on(self.shared.store.save_step(
             self.job,
             self.owner,
             report.step as i64,
             report.newton.iterations as i64,
             &document,
+            checkpoint.as_deref(),
         ));
         match saved {
             Ok(true) => {}

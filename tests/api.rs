@@ -1,4 +1,6 @@
-//! The HTTP API against a real server and a real SQLite file.
+//! The HTTP API against a real server, on a real SQLite file and on a real
+//! PostgreSQL database: every test runs on both (`sqlite::` and
+//! `postgres::`).
 
 mod common;
 
@@ -12,7 +14,6 @@ use serde_json::{Value, json};
 
 const LONG: Duration = Duration::from_secs(120);
 
-#[test]
 fn a_job_runs_to_success_and_its_steps_match_the_cli() {
     let app = spawn_app();
     let case = example("cantilever-grid");
@@ -80,7 +81,6 @@ fn rejection(app: &common::TestApp, body: &str) -> (u16, String, Option<String>)
     )
 }
 
-#[test]
 fn invalid_submissions_are_4xx_naming_the_field_and_create_nothing() {
     let app = spawn_app_with(|c| {
         c.limits.max_points = 1000;
@@ -136,7 +136,6 @@ fn invalid_submissions_are_4xx_naming_the_field_and_create_nothing() {
     assert_eq!(app.total_jobs(), 0);
 }
 
-#[test]
 fn cancel_stops_a_running_job_keeping_its_steps_and_cancels_a_queued_one() {
     let app = spawn_app();
     let running = app.submit(&slow_case(400));
@@ -165,7 +164,6 @@ fn cancel_stops_a_running_job_keeping_its_steps_and_cancels_a_queued_one() {
     assert_eq!(status, 404);
 }
 
-#[test]
 fn a_failed_solve_says_where_and_the_service_keeps_serving() {
     let app = spawn_app();
     let mut case = example("cantilever-grid");
@@ -185,7 +183,6 @@ fn a_failed_solve_says_where_and_the_service_keeps_serving() {
     assert_eq!(app.wait_for(next, LONG, is_final)["status"], "succeeded");
 }
 
-#[test]
 fn fifty_concurrent_submissions_are_all_accepted_and_all_finish() {
     let app = spawn_app();
     let mut case = example("column");
@@ -218,7 +215,6 @@ fn fifty_concurrent_submissions_are_all_accepted_and_all_finish() {
     assert_eq!(app.get("/jobs?status=done").0, 400);
 }
 
-#[test]
 fn a_token_guards_every_endpoint_but_health() {
     let app = spawn_app_with(|c| c.token = Some("s3cret".into()));
     assert_eq!(app.get("/health").0, 200);
@@ -239,7 +235,6 @@ fn a_token_guards_every_endpoint_but_health() {
 /// The contract and the server agree: the spec documents exactly the
 /// routes the router declares, its example case is accepted, and every
 /// documented GET answers.
-#[test]
 fn openapi_matches_the_routes_and_its_example_is_accepted() {
     let spec: serde_yaml::Value = serde_yaml::from_str(mpm_service::http::OPENAPI).unwrap();
     let paths = spec["paths"].as_mapping().unwrap();
@@ -295,7 +290,6 @@ fn peak_memory() -> u64 {
 /// 0.4 ms a request (median of 21, release build, this machine). Asserted with room for a loaded
 /// machine: under 2 s each (seeding would take tens of seconds) and under
 /// 200 MB of peak memory in all (seeding would take gigabytes).
-#[test]
 fn bodies_over_the_limits_are_refused_from_their_lattice_counts() {
     let app = spawn_app();
     let with = |geometry: Value, lattice: &str| {
@@ -346,7 +340,6 @@ fn error_of(app: &common::TestApp, method: &str, path: &str) -> (u16, String, Va
 /// Path and query parse errors and wrong methods answered with axum's plain
 /// text (or an empty body) until the extractors and the router's fallbacks
 /// kept the contract; an offset near i64::MAX overflowed the next link.
-#[test]
 fn errors_from_paths_queries_and_methods_keep_the_contract() {
     let app = spawn_app();
     for path in ["/jobs/abc", "/jobs/9223372036854775808", "/jobs/1/steps/x"] {
@@ -371,7 +364,6 @@ fn errors_from_paths_queries_and_methods_keep_the_contract() {
 /// With a token: the scheme is read in any case (RFC 7235), and an unknown
 /// route or method answers 401 like the known ones, so routes cannot be
 /// listed without the token.
-#[test]
 fn a_token_is_read_in_any_case_and_hides_the_routes() {
     let app = spawn_app_with(|c| c.token = Some("s3cret".into()));
     let get = |path: &str, authorization: &str| match app
@@ -396,7 +388,6 @@ fn a_token_is_read_in_any_case_and_hides_the_routes() {
 /// A full queue answers 429 with Retry-After and creates nothing; a place
 /// freed (here by a cancel) takes the next submission. No worker runs, so
 /// the queue's length is what was submitted.
-#[test]
 fn a_full_queue_answers_429_with_retry_after() {
     let app = spawn_app_with(|c| {
         c.workers = 0;
@@ -462,7 +453,6 @@ fn submit_with(
 /// (200, same id and Location), even racing itself or with the queue full.
 /// The key with another body is 422; a malformed key is 400 naming the
 /// header. Nothing runs (no workers), so the jobs counted are the ones made.
-#[test]
 fn an_idempotency_key_makes_a_retried_submission_return_the_same_job() {
     let app = spawn_app_with(|c| {
         c.workers = 0;
@@ -537,7 +527,6 @@ fn an_idempotency_key_makes_a_retried_submission_return_the_same_job() {
 /// over its own limit. The estimate bounds what a run stores: the
 /// cantilever's step documents, as served, take between half of it and
 /// all of it.
-#[test]
 fn a_job_that_would_store_too_much_is_refused_naming_the_field() {
     let app = spawn_app();
     let case = example("cantilever-grid");
@@ -587,7 +576,6 @@ fn a_job_that_would_store_too_much_is_refused_naming_the_field() {
 /// with Retry-After, and nothing is queued. The case is a sliver on the
 /// grid's lattice whose seeding scans 2e8 lattice sites (two columns; about 3 s) for a handful of points:
 /// slow, but small in memory.
-#[test]
 fn a_submission_whose_check_runs_out_of_time_is_503() {
     let app = spawn_app_with(|c| {
         c.limits.admission_time_limit = Duration::from_millis(50);
@@ -605,3 +593,20 @@ fn a_submission_whose_check_runs_out_of_time_is_503() {
     );
     assert_eq!(app.total_jobs(), 0);
 }
+
+common::on_both_databases!(
+    a_job_runs_to_success_and_its_steps_match_the_cli,
+    invalid_submissions_are_4xx_naming_the_field_and_create_nothing,
+    cancel_stops_a_running_job_keeping_its_steps_and_cancels_a_queued_one,
+    a_failed_solve_says_where_and_the_service_keeps_serving,
+    fifty_concurrent_submissions_are_all_accepted_and_all_finish,
+    a_token_guards_every_endpoint_but_health,
+    openapi_matches_the_routes_and_its_example_is_accepted,
+    bodies_over_the_limits_are_refused_from_their_lattice_counts,
+    errors_from_paths_queries_and_methods_keep_the_contract,
+    a_token_is_read_in_any_case_and_hides_the_routes,
+    a_full_queue_answers_429_with_retry_after,
+    an_idempotency_key_makes_a_retried_submission_return_the_same_job,
+    a_job_that_would_store_too_much_is_refused_naming_the_field,
+    a_submission_whose_check_runs_out_of_time_is_503,
+);

@@ -5,6 +5,7 @@
 //! - `mpm example [NAME]` prints a built-in case (lists them without a name).
 //! - `mpm bench` measures cost against problem size and writes a report.
 //! - `mpm serve` runs the HTTP job service (see the README and openapi.yaml).
+//! - `mpm worker` solves the service's jobs on another machine.
 
 mod run;
 mod serve;
@@ -82,6 +83,9 @@ enum Command {
     },
     /// Run the HTTP job service (every flag also reads an environment variable).
     Serve(serve::ServeArgs),
+    /// Solve jobs from a shared database without serving HTTP (workers on
+    /// other machines; every flag also reads an environment variable).
+    Worker(serve::WorkerArgs),
     /// One row of `mpm bench`, printed as JSON (used by `mpm bench`).
     #[command(hide = true)]
     BenchRow { scene: usize, points: usize },
@@ -119,6 +123,7 @@ fn main() -> ExitCode {
             ))),
         },
         Command::Serve(args) => serve::serve(args),
+        Command::Worker(args) => serve::worker(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,31 +1,72 @@
-//! `mpm serve`: the job service with its settings from flags or environment.
+//! `mpm serve` (the job service) and `mpm worker` (its solvers on another
+//! machine), with their settings from flags or environment.
 
+use std::io::IsTerminal;
 use std::net::SocketAddr;
-use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::Args;
-use mpm_service::{Config, Server, config};
+use mpm_service::{Config, Server, Workers, config, redact};
 
 use crate::CliError;
 
+/// What the serving and the solving roles share: the database, the
+/// workers and how they run jobs, and the log format.
 #[derive(Args)]
-pub struct ServeArgs {
-    /// Address to listen on (port 0 picks a free port).
-    #[arg(long, env = "MPM_ADDR", default_value = config::DEFAULT_ADDR)]
-    addr: SocketAddr,
-    /// SQLite database file, created on first start.
+pub struct SolverArgs {
+    /// The database: a SQLite file (a path or sqlite://PATH, created on
+    /// first start) or a PostgreSQL URL (postgres://user:password@host/db),
+    /// which several serving and worker processes may share.
     #[arg(long, env = "MPM_DATABASE", default_value = config::DEFAULT_DATABASE)]
-    database: PathBuf,
-    /// Jobs solved at once; each uses all cores through rayon.
+    database: String,
+    /// Jobs solved at once in this process; each uses all cores through
+    /// rayon. `mpm serve --workers 0` serves without solving.
     #[arg(long, env = "MPM_WORKERS", default_value_t = config::DEFAULT_WORKERS)]
     workers: usize,
     /// Threads in rayon's pool for the solver (default: one per core).
     #[arg(long, env = "MPM_SOLVER_THREADS")]
     solver_threads: Option<usize>,
+    /// Wall-time limit of one job, in seconds; a job over it fails.
+    #[arg(long, env = "MPM_JOB_TIME_LIMIT", default_value_t = config::DEFAULT_JOB_TIME_LIMIT.as_secs())]
+    job_time_limit: u64,
+    /// Lease of a running job, in seconds; a job whose worker died is
+    /// claimed again this long after its last renewal.
+    #[arg(long, env = "MPM_LEASE_SECONDS", default_value_t = config::DEFAULT_LEASE.as_secs_f64())]
+    lease_seconds: f64,
+    /// Runs of one job (first plus retries after crashes) before it fails.
+    #[arg(long, env = "MPM_MAX_ATTEMPTS", default_value_t = config::DEFAULT_MAX_ATTEMPTS)]
+    max_attempts: u32,
+    /// Store a running job's solver state every this many load steps, to
+    /// resume from after a crash or restart; 0 picks by size (every step up
+    /// to 20,000 points, then every points/20,000 steps).
+    #[arg(long, env = "MPM_CHECKPOINT_EVERY", default_value_t = 0)]
+    checkpoint_every: usize,
+    /// Log lines as `text` (colour only on a terminal) or `json` (one
+    /// object a line, for container log collectors).
+    #[arg(long, env = "MPM_LOG_FORMAT", default_value = "text")]
+    log_format: LogFormat,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum LogFormat {
+    Text,
+    Json,
+}
+
+#[derive(Args)]
+pub struct ServeArgs {
+    #[command(flatten)]
+    solver: SolverArgs,
+    /// Address to listen on (port 0 picks a free port).
+    #[arg(long, env = "MPM_ADDR", default_value = config::DEFAULT_ADDR)]
+    addr: SocketAddr,
     /// Bearer token required on every endpoint but /health.
     #[arg(long, env = "MPM_TOKEN", hide_env_values = true)]
     token: Option<String>,
+    /// Delete ended jobs (and their results) this many days after they
+    /// ended; kept for ever when not given.
+    #[arg(long, env = "MPM_RETENTION_DAYS")]
+    retention_days: Option<f64>,
     /// Largest accepted request body, in bytes.
     #[arg(long, env = "MPM_MAX_BODY_BYTES", default_value_t = config::DEFAULT_MAX_BODY_BYTES)]
     max_body_bytes: usize,
@@ -42,30 +83,34 @@ pub struct ServeArgs {
     /// points and load steps before it is queued).
     #[arg(long, env = "MPM_MAX_JOB_BYTES", default_value_t = config::DEFAULT_MAX_JOB_BYTES)]
     max_job_bytes: u64,
-    /// Wall-time limit of one job, in seconds; a job over it fails.
-    #[arg(long, env = "MPM_JOB_TIME_LIMIT", default_value_t = config::DEFAULT_JOB_TIME_LIMIT.as_secs())]
-    job_time_limit: u64,
     /// Time limit of checking one submission (seeding its bodies), in
     /// seconds; past it the submission gets 503.
     #[arg(long, env = "MPM_ADMISSION_TIME_LIMIT", default_value_t = config::DEFAULT_ADMISSION_TIME_LIMIT.as_secs_f64())]
     admission_time_limit: f64,
-    /// Lease of a running job, in seconds; a job whose worker died is
-    /// claimed again this long after its last renewal.
-    #[arg(long, env = "MPM_LEASE_SECONDS", default_value_t = config::DEFAULT_LEASE.as_secs_f64())]
-    lease_seconds: f64,
-    /// Runs of one job (first plus retries after crashes) before it fails.
-    #[arg(long, env = "MPM_MAX_ATTEMPTS", default_value_t = config::DEFAULT_MAX_ATTEMPTS)]
-    max_attempts: u32,
 }
 
-pub fn serve(args: ServeArgs) -> Result<(), CliError> {
-    tracing_subscriber::fmt()
+/// `mpm worker`: solves jobs from a shared database without serving.
+#[derive(Args)]
+pub struct WorkerArgs {
+    #[command(flatten)]
+    solver: SolverArgs,
+}
+
+/// Logging, the rayon pool and the settings shared by both roles.
+fn solver_config(args: SolverArgs) -> Result<Config, CliError> {
+    let logs = tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_env("MPM_LOG")
                 .unwrap_or_else(|_| "info".into()),
         )
         .with_writer(std::io::stderr)
-        .init();
+        // Colour codes only where a terminal shows them, not in container
+        // logs or files.
+        .with_ansi(std::io::stderr().is_terminal());
+    match args.log_format {
+        LogFormat::Text => logs.init(),
+        LogFormat::Json => logs.json().init(),
+    }
     if let Some(n) = args.solver_threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
@@ -77,14 +122,26 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
             "--lease-seconds must be a positive number of seconds",
         ));
     };
+    if args.max_attempts == 0 {
+        return Err(CliError::input("--max-attempts must be positive"));
+    }
+    let mut config = Config::new(args.database);
+    config.workers = args.workers;
+    config.lease = lease;
+    config.poll_interval = config.poll_interval.min(config.lease / 3);
+    config.max_attempts = args.max_attempts;
+    config.checkpoint_every = args.checkpoint_every;
+    config.limits.job_time_limit = Duration::from_secs(args.job_time_limit);
+    Ok(config)
+}
+
+pub fn serve(args: ServeArgs) -> Result<(), CliError> {
+    let mut config = solver_config(args.solver)?;
     let Some(admission_time_limit) = seconds(args.admission_time_limit) else {
         return Err(CliError::input(
             "--admission-time-limit must be a positive number of seconds",
         ));
     };
-    if args.workers == 0 || args.max_attempts == 0 {
-        return Err(CliError::input("workers and max-attempts must be positive"));
-    }
     if args.token.as_deref().is_some_and(|t| t.trim().is_empty()) {
         // An empty token would match no request's, or turn authentication
         // off if it were read as "none": neither is what was meant.
@@ -92,28 +149,31 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
             "--token (MPM_TOKEN) is empty: give a token, or unset it to run without one",
         ));
     }
-    let mut config = Config::new(args.database);
-    config.workers = args.workers;
+    if let Some(days) = args.retention_days {
+        config.retention = Some(seconds(days * 86_400.0).ok_or_else(|| {
+            CliError::input("--retention-days must be a positive number of days")
+        })?);
+    }
     config.token = args.token;
-    config.lease = lease;
-    config.poll_interval = config.poll_interval.min(config.lease / 3);
-    config.max_attempts = args.max_attempts;
     config.limits.max_body_bytes = args.max_body_bytes;
     config.limits.max_points = args.max_points;
     config.limits.max_load_steps = args.max_load_steps;
     config.limits.max_queued = args.max_queued;
     config.limits.max_job_bytes = args.max_job_bytes;
-    config.limits.job_time_limit = Duration::from_secs(args.job_time_limit);
     config.limits.admission_time_limit = admission_time_limit;
 
     let runtime = tokio::runtime::Runtime::new()?;
     let served = runtime.block_on(async {
-        let database = config.database.display().to_string();
+        let database = redact(&config.database);
+        let workers = config.workers;
         let server = Server::start(config, args.addr)
             .await
             .map_err(|e| CliError::failed(e.to_string()))?;
         // Scripts (and the tests) read the bound address from this line.
-        println!("listening on http://{} (database {database})", server.addr);
+        println!(
+            "listening on http://{} (database {database}, {workers} workers)",
+            server.addr
+        );
         shutdown_signal().await;
         tracing::info!("shutting down: running jobs go back to the queue");
         server.shutdown().await;
@@ -123,6 +183,27 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
     // whose client was answered 503. Exit without waiting for it.
     runtime.shutdown_timeout(Duration::from_millis(100));
     served
+}
+
+pub fn worker(args: WorkerArgs) -> Result<(), CliError> {
+    let config = solver_config(args.solver)?;
+    if config.workers == 0 {
+        return Err(CliError::input("--workers must be positive for mpm worker"));
+    }
+    let runtime = tokio::runtime::Runtime::new()?;
+    runtime.block_on(async {
+        let database = redact(&config.database);
+        let workers = config.workers;
+        let pool = Workers::start(config)
+            .await
+            .map_err(|e| CliError::failed(e.to_string()))?;
+        // Scripts (and the tests) wait for this line.
+        println!("solving jobs from {database} with {workers} workers");
+        shutdown_signal().await;
+        tracing::info!("shutting down: running jobs go back to the queue");
+        pool.shutdown().await;
+        Ok(())
+    })
 }
 
 /// A positive, finite number of seconds as a duration.

@@ -14,7 +14,9 @@ use serde_json::{Value, json};
 
 use super::views::{JobView, ResultView};
 use super::{ApiError, AppState};
-use crate::jobs::{CancelOutcome, Earlier, Inserted, JobRow, JobStatus, NewJob, Store, admission};
+use crate::jobs::{
+    CancelOutcome, DeleteOutcome, Earlier, Inserted, JobRow, JobStatus, NewJob, Store, admission,
+};
 
 /// `POST /jobs`: validate, store, queue. With an `Idempotency-Key`, a
 /// retry of the same body returns the job the first request made (200).
@@ -268,6 +270,22 @@ pub async fn cancel(
     };
     let job = find(&state.store, id).await?;
     Ok((code, Json(JobView::new(&job))).into_response())
+}
+
+/// `DELETE /jobs/{id}`: removes an ended job with its steps (204); a queued
+/// or running job answers 409 until cancelled.
+pub async fn delete(
+    State(state): State<AppState>,
+    IdPath(id): IdPath<i64>,
+) -> Result<StatusCode, ApiError> {
+    match state.store.delete(id).await? {
+        DeleteOutcome::Deleted => Ok(StatusCode::NO_CONTENT),
+        DeleteOutcome::NotEnded(status) => Err(ApiError::Conflict(format!(
+            "job {id} is {}: cancel it first",
+            status.as_str()
+        ))),
+        DeleteOutcome::NotFound => Err(not_found(id)),
+    }
 }
 
 /// `GET /jobs/{id}/case`: the case as it was submitted.

@@ -22,7 +22,7 @@ use tokio::sync::{Notify, Semaphore, watch};
 pub use error::ApiError;
 
 use crate::config::Config;
-use crate::jobs::Store;
+use crate::jobs::{Backend, Store};
 use crate::worker::RunningJobs;
 
 /// The contract, served at `/openapi.yaml`.
@@ -45,7 +45,7 @@ pub struct AppState {
 pub fn router(state: AppState) -> Router {
     let protected = Router::new()
         .route("/jobs", post(jobs::submit).get(jobs::list))
-        .route("/jobs/{id}", get(jobs::job))
+        .route("/jobs/{id}", get(jobs::job).delete(jobs::delete))
         .route("/jobs/{id}/cancel", post(jobs::cancel))
         .route("/jobs/{id}/case", get(jobs::case))
         .route("/jobs/{id}/steps", get(steps::steps))
@@ -87,11 +87,28 @@ async fn method_not_allowed(State(state): State<AppState>, headers: HeaderMap) -
 async fn health(State(state): State<AppState>) -> Response {
     let checked = async {
         state.store.ping().await?;
-        state.store.size_bytes().await
+        Ok::<_, sqlx::Error>((state.store.size_bytes().await?, state.store.counts().await?))
     };
     match checked.await {
-        Ok(bytes) => {
-            Json(json!({"status": "ok", "database": "ok", "database_bytes": bytes})).into_response()
+        Ok((bytes, counts)) => {
+            let jobs: serde_json::Map<String, serde_json::Value> = counts
+                .into_iter()
+                .map(|(status, n)| (status.as_str().to_string(), n.into()))
+                .collect();
+            let backend = match state.store.backend() {
+                Backend::Sqlite => "sqlite",
+                Backend::Postgres => "postgres",
+            };
+            Json(json!({
+                "status": "ok",
+                "database": "ok",
+                "backend": backend,
+                "database_bytes": bytes,
+                "jobs": jobs,
+                "max_queued": state.config.limits.max_queued,
+                "workers": state.config.workers,
+            }))
+            .into_response()
         }
         Err(e) => {
             tracing::error!(error = %e, "health check: database unavailable");

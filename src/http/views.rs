@@ -20,6 +20,9 @@ pub struct JobView {
     pub progress: Progress,
     pub newton_iterations: i64,
     pub attempts: i64,
+    /// The step the latest run resumed after, from its checkpoint (null:
+    /// it ran from step 1).
+    pub resumed_from_step: Option<i64>,
     pub cancel_requested: bool,
     pub created_at: String,
     pub started_at: Option<String>,
@@ -63,6 +66,7 @@ impl JobView {
             },
             newton_iterations: job.newton_iterations,
             attempts: job.attempts,
+            resumed_from_step: job.resumed_from,
             cancel_requested: job.cancel_requested,
             created_at: rfc3339(job.created_at),
             started_at: job.started_at.map(rfc3339),

@@ -314,7 +314,7 @@ mod tests {
 
     #[test]
     fn limits_name_the_field() {
-        let mut limits = Config::new("unused".into()).limits;
+        let mut limits = Config::new("unused").limits;
         let case = Case::from_json(&example().to_string()).unwrap();
         limits.max_load_steps = 4;
         assert!(matches!(

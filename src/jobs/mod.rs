@@ -1,5 +1,5 @@
-//! The job queue: what may be queued, statuses, failures and the SQLite
-//! store.
+//! The job queue: what may be queued, statuses, failures and the store
+//! (SQLite or PostgreSQL).
 
 pub mod admission;
 mod failure;
@@ -8,4 +8,6 @@ pub mod store;
 
 pub use failure::{Failure, FailureKind};
 pub use status::JobStatus;
-pub use store::{CancelOutcome, Claimed, Earlier, Inserted, JobRow, NewJob, Store};
+pub use store::{
+    Backend, CancelOutcome, Claimed, DeleteOutcome, Earlier, Inserted, JobRow, NewJob, Store,
+};

@@ -1,11 +1,20 @@
-//! Jobs and their results in SQLite: every statement the service runs.
+//! Jobs and their results in SQLite or PostgreSQL: every statement the
+//! service runs.
+//!
+//! One text per statement serves both databases: `$n` placeholders (SQLite
+//! reads them too), `TRUE`/`FALSE`, `ON CONFLICT` upserts, `CASE` for
+//! `MAX`. Where the two differ (claiming, the database's size) the dialect
+//! is spelled out. [`on_pool!`] runs a statement on whichever pool the
+//! store holds, so each is type-checked against both drivers.
 //!
 //! Claiming is one compare-and-set `UPDATE ... RETURNING`, never a SELECT
 //! followed by an UPDATE: in SQLite a deferred transaction doing both gives
 //! `database is locked` under competing workers, which busy_timeout does not
-//! cure. A claimed job carries a lease (owner, expiry) that its worker renews
-//! while it runs; a job whose lease expired is claimable again, up to the
-//! attempt limit.
+//! cure; in PostgreSQL the candidate row is taken `FOR UPDATE SKIP LOCKED`,
+//! so competing workers pass over each other's rows instead of waiting. A
+//! claimed job carries a lease (owner, expiry) that its worker renews while
+//! it runs; a job whose lease expired is claimable again, up to the attempt
+//! limit, and resumes from its checkpoint if it has one.
 //!
 //! The few statements assembled with `format!` insert only constants of this
 //! module (column lists, status names from [`JobStatus`]); every value from a
@@ -15,11 +24,9 @@ use std::path::Path;
 use std::str::FromStr;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use sqlx::query::Query;
-use sqlx::sqlite::{
-    SqliteArguments, SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous,
-};
-use sqlx::{AssertSqlSafe, FromRow, Sqlite, SqliteExecutor, SqlitePool};
+use sqlx::postgres::{PgPool, PgPoolOptions};
+use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
+use sqlx::{AssertSqlSafe, FromRow, SqlitePool};
 
 use super::{Failure, FailureKind, JobStatus};
 use crate::step::StoredStep;
@@ -36,6 +43,7 @@ pub fn now() -> f64 {
 #[derive(Debug, Clone, FromRow)]
 pub struct JobRow {
     pub id: i64,
+    #[sqlx(try_from = "String")]
     pub status: JobStatus,
     pub title: Option<String>,
     pub points: i64,
@@ -49,6 +57,8 @@ pub struct JobRow {
     pub finished_at: Option<f64>,
     pub solve_seconds: Option<f64>,
     pub error: Option<String>,
+    /// The step the latest run resumed after, if it resumed.
+    pub resumed_from: Option<i64>,
 }
 
 const QUEUED: &str = JobStatus::Queued.as_str();
@@ -56,14 +66,17 @@ const RUNNING: &str = JobStatus::Running.as_str();
 const CANCELLED: &str = JobStatus::Cancelled.as_str();
 
 const JOB_COLUMNS: &str = "id, status, title, points, load_steps, steps_done, newton_iterations, attempts, \
-     cancel_requested, created_at, started_at, finished_at, solve_seconds, error";
+     cancel_requested, created_at, started_at, finished_at, solve_seconds, error, resumed_from";
 
 /// A job a worker has just claimed.
-#[derive(Debug, Clone, FromRow)]
+#[derive(Debug, Clone)]
 pub struct Claimed {
     pub id: i64,
     pub case_json: String,
     pub attempts: i64,
+    /// The solver's state to resume from (`mpm::Checkpoint` bytes) and the
+    /// step it was taken after; `None` to start from step 1.
+    pub checkpoint: Option<(i64, Vec<u8>)>,
 }
 
 /// A job to queue.
@@ -104,17 +117,75 @@ pub enum CancelOutcome {
     NotFound,
 }
 
+/// What `DELETE /jobs/{id}` did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DeleteOutcome {
+    Deleted,
+    /// It is queued or running: cancel it first.
+    NotEnded(JobStatus),
+    NotFound,
+}
+
+/// Which database a store uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backend {
+    Sqlite,
+    Postgres,
+}
+
+#[derive(Clone)]
+enum Pool {
+    Sqlite(SqlitePool),
+    Postgres(PgPool),
+}
+
+/// Runs `$body` with `$pool` bound to the store's pool, whichever database
+/// it is: the body is compiled once per driver.
+macro_rules! on_pool {
+    ($store:expr, |$pool:ident| $body:expr) => {
+        match &$store.pool {
+            Pool::Sqlite($pool) => $body,
+            Pool::Postgres($pool) => $body,
+        }
+    };
+}
+
 #[derive(Clone)]
 pub struct Store {
-    pool: SqlitePool,
+    pool: Pool,
+}
+
+/// `UPDATE jobs SET {set}` on job `$k+1` if owner `$k+2` still holds it
+/// (it runs under that owner's lease); `set` uses `$1..$k`.
+fn update_held(set: &str, k: usize) -> AssertSqlSafe<String> {
+    AssertSqlSafe(format!(
+        "UPDATE jobs SET {set} WHERE id = ${} AND lease_owner = ${} AND status = '{RUNNING}'",
+        k + 1,
+        k + 2
+    ))
 }
 
 impl Store {
-    /// Opens (creating if needed) the database at `path` in WAL mode with a
-    /// busy timeout, and applies the embedded migrations.
-    pub async fn open(path: &Path) -> Result<Store, sqlx::Error> {
+    /// Opens the database `url` names and applies its migrations:
+    /// `postgres://...` (or `postgresql://`) for PostgreSQL; `sqlite://PATH`,
+    /// `sqlite:PATH` or a bare path for a SQLite file, created if needed, in
+    /// WAL mode with a busy timeout.
+    pub async fn open(url: &str) -> Result<Store, sqlx::Error> {
+        if url.starts_with("postgres://") || url.starts_with("postgresql://") {
+            let pool = PgPoolOptions::new().max_connections(8).connect(url).await?;
+            // Processes starting together take turns: sqlx holds an
+            // advisory lock while it migrates.
+            sqlx::migrate!("./migrations/postgres").run(&pool).await?;
+            return Ok(Store {
+                pool: Pool::Postgres(pool),
+            });
+        }
+        let path = url
+            .strip_prefix("sqlite://")
+            .or_else(|| url.strip_prefix("sqlite:"))
+            .unwrap_or(url);
         let options = SqliteConnectOptions::from_str("sqlite:")?
-            .filename(path)
+            .filename(Path::new(path))
             .create_if_missing(true)
             .journal_mode(SqliteJournalMode::Wal)
             .synchronous(SqliteSynchronous::Normal)
@@ -124,33 +195,44 @@ impl Store {
             .max_connections(8)
             .connect_with(options)
             .await?;
-        sqlx::migrate!("./migrations").run(&pool).await?;
-        Ok(Store { pool })
+        sqlx::migrate!("./migrations/sqlite").run(&pool).await?;
+        Ok(Store {
+            pool: Pool::Sqlite(pool),
+        })
+    }
+
+    pub fn backend(&self) -> Backend {
+        match self.pool {
+            Pool::Sqlite(_) => Backend::Sqlite,
+            Pool::Postgres(_) => Backend::Postgres,
+        }
     }
 
     pub async fn ping(&self) -> Result<(), sqlx::Error> {
-        sqlx::query("SELECT 1")
-            .execute(&self.pool)
+        on_pool!(self, |pool| sqlx::query("SELECT 1")
+            .execute(pool)
             .await
-            .map(|_| ())
+            .map(|_| ()))
     }
 
     /// Queues a job. With an idempotency key already taken, nothing is
     /// inserted and the job that holds the key is returned instead.
     pub async fn insert(&self, job: &NewJob<'_>) -> Result<Inserted, sqlx::Error> {
-        let inserted = sqlx::query_scalar(
+        let inserted: Result<i64, _> = on_pool!(self, |pool| {
+            sqlx::query_scalar(
             "INSERT INTO jobs (status, case_json, title, points, load_steps, created_at, idempotency_key) \
-             VALUES (?, ?, ?, ?, ?, ?, ?) RETURNING id",
+             VALUES ($1, $2, $3, $4, $5, $6, $7) RETURNING id",
         )
-        .bind(JobStatus::Queued)
+        .bind(QUEUED)
         .bind(job.case_json)
         .bind(job.title)
         .bind(job.points)
         .bind(job.load_steps)
         .bind(now())
         .bind(job.idempotency_key)
-        .fetch_one(&self.pool)
-        .await;
+        .fetch_one(pool)
+        .await
+        });
         match (inserted, job.idempotency_key) {
             (Ok(id), _) => Ok(Inserted::New(id)),
             (Err(e), Some(key))
@@ -159,7 +241,7 @@ impl Store {
             {
                 match self.by_idempotency_key(key).await? {
                     Some(earlier) => Ok(Inserted::Earlier(earlier)),
-                    // Jobs are never deleted: the key's holder is there.
+                    // The key's holder was deleted in between.
                     None => Err(e),
                 }
             }
@@ -169,26 +251,29 @@ impl Store {
 
     /// The job that holds an idempotency key.
     pub async fn by_idempotency_key(&self, key: &str) -> Result<Option<Earlier>, sqlx::Error> {
-        sqlx::query_as("SELECT id, case_json FROM jobs WHERE idempotency_key = ?")
-            .bind(key)
-            .fetch_optional(&self.pool)
-            .await
+        on_pool!(self, |pool| sqlx::query_as(
+            "SELECT id, case_json FROM jobs WHERE idempotency_key = $1"
+        )
+        .bind(key)
+        .fetch_optional(pool)
+        .await)
     }
 
     pub async fn get(&self, id: i64) -> Result<Option<JobRow>, sqlx::Error> {
-        sqlx::query_as(AssertSqlSafe(format!(
-            "SELECT {JOB_COLUMNS} FROM jobs WHERE id = ?"
-        )))
-        .bind(id)
-        .fetch_optional(&self.pool)
-        .await
+        let sql = format!("SELECT {JOB_COLUMNS} FROM jobs WHERE id = $1");
+        on_pool!(self, |pool| sqlx::query_as(AssertSqlSafe(sql))
+            .bind(id)
+            .fetch_optional(pool)
+            .await)
     }
 
     pub async fn case_json(&self, id: i64) -> Result<Option<String>, sqlx::Error> {
-        sqlx::query_scalar("SELECT case_json FROM jobs WHERE id = ?")
-            .bind(id)
-            .fetch_optional(&self.pool)
-            .await
+        on_pool!(self, |pool| sqlx::query_scalar(
+            "SELECT case_json FROM jobs WHERE id = $1"
+        )
+        .bind(id)
+        .fetch_optional(pool)
+        .await)
     }
 
     /// Jobs newest first, optionally of one status; and how many there are.
@@ -198,39 +283,68 @@ impl Store {
         limit: i64,
         offset: i64,
     ) -> Result<(Vec<JobRow>, i64), sqlx::Error> {
-        let filter = if status.is_some() {
-            "WHERE status = ?"
-        } else {
-            ""
-        };
-        let mut rows = sqlx::query_as(AssertSqlSafe(format!(
-            "SELECT {JOB_COLUMNS} FROM jobs {filter} ORDER BY id DESC LIMIT ? OFFSET ?"
-        )));
-        let mut count =
-            sqlx::query_scalar(AssertSqlSafe(format!("SELECT COUNT(*) FROM jobs {filter}")));
-        if let Some(s) = status {
-            rows = rows.bind(s);
-            count = count.bind(s);
-        }
-        let rows = rows.bind(limit).bind(offset).fetch_all(&self.pool).await?;
-        let total = count.fetch_one(&self.pool).await?;
-        Ok((rows, total))
+        // With no status, `$1` is NULL and matches every row.
+        let status = status.map(JobStatus::as_str);
+        let filter = "WHERE ($1 IS NULL OR status = $1)";
+        let rows_sql =
+            format!("SELECT {JOB_COLUMNS} FROM jobs {filter} ORDER BY id DESC LIMIT $2 OFFSET $3");
+        let count_sql = format!("SELECT COUNT(*) FROM jobs {filter}");
+        on_pool!(self, |pool| {
+            let rows = sqlx::query_as(AssertSqlSafe(rows_sql))
+                .bind(status)
+                .bind(limit)
+                .bind(offset)
+                .fetch_all(pool)
+                .await?;
+            let total = sqlx::query_scalar(AssertSqlSafe(count_sql))
+                .bind(status)
+                .fetch_one(pool)
+                .await?;
+            Ok((rows, total))
+        })
     }
 
-    /// The database's size in bytes (its pages; the write-ahead log aside).
+    /// The database's size in bytes (SQLite: its pages, the write-ahead log
+    /// aside; PostgreSQL: `pg_database_size`).
     pub async fn size_bytes(&self) -> Result<i64, sqlx::Error> {
-        sqlx::query_scalar(
-            "SELECT page_count * page_size FROM pragma_page_count(), pragma_page_size()",
-        )
-        .fetch_one(&self.pool)
-        .await
+        match &self.pool {
+            Pool::Sqlite(pool) => {
+                sqlx::query_scalar(
+                    "SELECT page_count * page_size FROM pragma_page_count(), pragma_page_size()",
+                )
+                .fetch_one(pool)
+                .await
+            }
+            Pool::Postgres(pool) => {
+                sqlx::query_scalar("SELECT pg_database_size(current_database())")
+                    .fetch_one(pool)
+                    .await
+            }
+        }
     }
 
     /// Jobs waiting in the queue.
     pub async fn queued(&self) -> Result<i64, sqlx::Error> {
-        sqlx::query_scalar("SELECT COUNT(*) FROM jobs WHERE status = 'queued'")
-            .fetch_one(&self.pool)
-            .await
+        let sql = format!("SELECT COUNT(*) FROM jobs WHERE status = '{QUEUED}'");
+        on_pool!(self, |pool| sqlx::query_scalar(AssertSqlSafe(sql))
+            .fetch_one(pool)
+            .await)
+    }
+
+    /// How many jobs have each status (every status, zero included).
+    pub async fn counts(&self) -> Result<Vec<(JobStatus, i64)>, sqlx::Error> {
+        let rows: Vec<(String, i64)> = on_pool!(self, |pool| sqlx::query_as(
+            "SELECT status, COUNT(*) FROM jobs GROUP BY status"
+        )
+        .fetch_all(pool)
+        .await?);
+        Ok(JobStatus::ALL
+            .into_iter()
+            .map(|s| {
+                let n = rows.iter().find(|(name, _)| name == s.as_str());
+                (s, n.map_or(0, |(_, n)| *n))
+            })
+            .collect())
     }
 
     /// Fails running jobs whose lease has expired and that have used all
@@ -243,25 +357,25 @@ impl Store {
             ),
         )
         .json();
-        let t = now();
-        let done = sqlx::query(
-            "UPDATE jobs SET status = ?, error = ?, finished_at = ?, lease_owner = NULL, lease_expires_at = NULL \
-             WHERE status = ? AND lease_expires_at < ? AND attempts >= ?",
-        )
-        .bind(JobStatus::Failed)
-        .bind(error)
-        .bind(t)
-        .bind(JobStatus::Running)
-        .bind(t)
-        .bind(max_attempts)
-        .execute(&self.pool)
-        .await?;
-        Ok(done.rows_affected())
+        let sql = format!(
+            "UPDATE jobs SET status = $1, error = $2, finished_at = $3, lease_owner = NULL, lease_expires_at = NULL \
+             WHERE status = '{RUNNING}' AND lease_expires_at < $3 AND attempts >= $4"
+        );
+        let done = on_pool!(self, |pool| sqlx::query(AssertSqlSafe(sql))
+            .bind(JobStatus::Failed.as_str())
+            .bind(&error)
+            .bind(now())
+            .bind(max_attempts)
+            .execute(pool)
+            .await?
+            .rows_affected());
+        Ok(done)
     }
 
     /// Claims the oldest queued job, or a running one whose lease expired,
-    /// for `owner` until `now + lease`. A reclaimed job restarts from its
-    /// first step, so its old step rows are removed.
+    /// for `owner` until `now + lease`. A job with a checkpoint resumes from
+    /// it: its steps after the checkpoint are removed (all of them when it
+    /// has none) and its progress is the checkpoint's.
     pub async fn claim(
         &self,
         owner: &str,
@@ -270,36 +384,60 @@ impl Store {
         let t = now();
         // A job whose worker died after a cancel request ends as cancelled,
         // keeping its steps, rather than being run again.
-        sqlx::query(AssertSqlSafe(format!(
-            "UPDATE jobs SET status = '{CANCELLED}', finished_at = ? \
-             WHERE status = '{RUNNING}' AND cancel_requested = 1 AND lease_expires_at < ?"
-        )))
-        .bind(t)
-        .bind(t)
-        .execute(&self.pool)
-        .await?;
+        let orphans = format!(
+            "UPDATE jobs SET status = '{CANCELLED}', finished_at = $1 \
+             WHERE status = '{RUNNING}' AND cancel_requested = TRUE AND lease_expires_at < $1"
+        );
+        let lock = match self.backend() {
+            Backend::Sqlite => "",
+            Backend::Postgres => "FOR UPDATE SKIP LOCKED",
+        };
         let claimable =
-            format!("(status = '{QUEUED}' OR (status = '{RUNNING}' AND lease_expires_at < ?))");
-        let claimed: Option<Claimed> = sqlx::query_as(AssertSqlSafe(format!(
-            "UPDATE jobs SET status = '{RUNNING}', attempts = attempts + 1, lease_owner = ?, lease_expires_at = ?, \
-                 started_at = ?, steps_done = 0, newton_iterations = 0 \
-             WHERE id = (SELECT id FROM jobs WHERE {claimable} ORDER BY id LIMIT 1) AND {claimable} \
-             RETURNING id, case_json, attempts"
-        )))
-        .bind(owner)
-        .bind(t + lease.as_secs_f64())
-        .bind(t)
-        .bind(t)
-        .bind(t)
-        .fetch_optional(&self.pool)
-        .await?;
-        if let Some(c) = &claimed {
-            sqlx::query("DELETE FROM steps WHERE job_id = ?")
-                .bind(c.id)
-                .execute(&self.pool)
+            format!("(status = '{QUEUED}' OR (status = '{RUNNING}' AND lease_expires_at < $1))");
+        let checkpoint = "(SELECT c.step FROM checkpoints c WHERE c.job_id = jobs.id)";
+        let claim = format!(
+            "UPDATE jobs SET status = '{RUNNING}', attempts = attempts + 1, lease_owner = $2, lease_expires_at = $3, \
+                 started_at = $1, resumed_from = {checkpoint}, steps_done = COALESCE({checkpoint}, 0), \
+                 newton_iterations = COALESCE((SELECT c.newton_iterations FROM checkpoints c WHERE c.job_id = jobs.id), 0) \
+             WHERE id = (SELECT id FROM jobs WHERE {claimable} ORDER BY id LIMIT 1 {lock}) AND {claimable} \
+             RETURNING id, case_json, attempts, resumed_from"
+        );
+        on_pool!(self, |pool| {
+            sqlx::query(AssertSqlSafe(orphans))
+                .bind(t)
+                .execute(pool)
                 .await?;
-        }
-        Ok(claimed)
+            let claimed: Option<(i64, String, i64, Option<i64>)> =
+                sqlx::query_as(AssertSqlSafe(claim))
+                    .bind(t)
+                    .bind(owner)
+                    .bind(t + lease.as_secs_f64())
+                    .fetch_optional(pool)
+                    .await?;
+            let Some((id, case_json, attempts, resumed_from)) = claimed else {
+                return Ok(None);
+            };
+            sqlx::query("DELETE FROM steps WHERE job_id = $1 AND step > $2")
+                .bind(id)
+                .bind(resumed_from.unwrap_or(0))
+                .execute(pool)
+                .await?;
+            let state: Option<Vec<u8>> = match resumed_from {
+                Some(_) => {
+                    sqlx::query_scalar("SELECT state FROM checkpoints WHERE job_id = $1")
+                        .bind(id)
+                        .fetch_optional(pool)
+                        .await?
+                }
+                None => None,
+            };
+            Ok(Some(Claimed {
+                id,
+                case_json,
+                attempts,
+                checkpoint: resumed_from.zip(state),
+            }))
+        })
     }
 
     /// Extends `owner`'s lease. `None` if the lease was lost (another worker
@@ -310,20 +448,22 @@ impl Store {
         owner: &str,
         lease: Duration,
     ) -> Result<Option<bool>, sqlx::Error> {
-        sqlx::query_scalar(AssertSqlSafe(format!(
-            "UPDATE jobs SET lease_expires_at = ? WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}' \
+        let sql = format!(
+            "UPDATE jobs SET lease_expires_at = $1 WHERE id = $2 AND lease_owner = $3 AND status = '{RUNNING}' \
              RETURNING cancel_requested"
-        )))
-        .bind(now() + lease.as_secs_f64())
-        .bind(id)
-        .bind(owner)
-        .fetch_optional(&self.pool)
-        .await
+        );
+        on_pool!(self, |pool| sqlx::query_scalar(AssertSqlSafe(sql))
+            .bind(now() + lease.as_secs_f64())
+            .bind(id)
+            .bind(owner)
+            .fetch_optional(pool)
+            .await)
     }
 
     /// Stores a finished step (report, points and boundaries as JSON text)
-    /// and advances the job's progress, in one transaction. Returns false if
-    /// `owner` no longer holds the job.
+    /// and advances the job's progress, with the solver's state after it
+    /// when given (replacing the last), in one transaction. Returns false
+    /// if `owner` no longer holds the job.
     pub async fn save_step(
         &self,
         id: i64,
@@ -331,33 +471,56 @@ impl Store {
         step: i64,
         iterations: i64,
         document: &StoredStep,
+        checkpoint: Option<&[u8]>,
     ) -> Result<bool, sqlx::Error> {
-        let mut tx = self.pool.begin().await?;
-        let held = update_held(
-            &mut *tx,
-            "steps_done = ?, newton_iterations = newton_iterations + ?",
-            |q| q.bind(step).bind(iterations),
-            id,
-            owner,
-        )
-        .await?;
-        if held {
-            sqlx::query(
-                "INSERT OR REPLACE INTO steps (job_id, step, report, points, boundaries) VALUES (?, ?, ?, ?, ?)",
-            )
-            .bind(id)
-            .bind(step)
-            .bind(document.report.get())
-            .bind(document.points.get())
-            .bind(document.boundaries.get())
-            .execute(&mut *tx)
-            .await?;
-        }
-        tx.commit().await?;
-        Ok(held)
+        let progress = update_held(
+            "steps_done = $1, newton_iterations = newton_iterations + $2",
+            2,
+        );
+        on_pool!(self, |pool| {
+            let mut tx = pool.begin().await?;
+            let held = sqlx::query(progress)
+                .bind(step)
+                .bind(iterations)
+                .bind(id)
+                .bind(owner)
+                .execute(&mut *tx)
+                .await?
+                .rows_affected()
+                == 1;
+            if held {
+                sqlx::query(
+                    "INSERT INTO steps (job_id, step, report, points, boundaries) VALUES ($1, $2, $3, $4, $5) \
+                     ON CONFLICT (job_id, step) DO UPDATE SET report = excluded.report, \
+                         points = excluded.points, boundaries = excluded.boundaries",
+                )
+                .bind(id)
+                .bind(step)
+                .bind(document.report.get())
+                .bind(document.points.get())
+                .bind(document.boundaries.get())
+                .execute(&mut *tx)
+                .await?;
+                if let Some(state) = checkpoint {
+                    sqlx::query(
+                        "INSERT INTO checkpoints (job_id, step, newton_iterations, state) \
+                         VALUES ($1, $2, (SELECT newton_iterations FROM jobs WHERE id = $1), $3) \
+                         ON CONFLICT (job_id) DO UPDATE SET step = excluded.step, \
+                             newton_iterations = excluded.newton_iterations, state = excluded.state",
+                    )
+                    .bind(id)
+                    .bind(step)
+                    .bind(state)
+                    .execute(&mut *tx)
+                    .await?;
+                }
+            }
+            tx.commit().await?;
+            Ok(held)
+        })
     }
 
-    /// Ends `owner`'s run of a job with a final status.
+    /// Ends `owner`'s run of a job with a final status; its checkpoint goes.
     pub async fn finish(
         &self,
         id: i64,
@@ -366,75 +529,108 @@ impl Store {
         solve_seconds: f64,
         error: Option<&str>,
     ) -> Result<bool, sqlx::Error> {
-        update_held(
-            &self.pool,
-            "status = ?, finished_at = ?, solve_seconds = ?, error = ?, lease_owner = NULL, \
+        let end = update_held(
+            "status = $1, finished_at = $2, solve_seconds = $3, error = $4, lease_owner = NULL, \
              lease_expires_at = NULL",
-            |q| q.bind(status).bind(now()).bind(solve_seconds).bind(error),
-            id,
-            owner,
-        )
-        .await
+            4,
+        );
+        on_pool!(self, |pool| {
+            let mut tx = pool.begin().await?;
+            let held = sqlx::query(end)
+                .bind(status.as_str())
+                .bind(now())
+                .bind(solve_seconds)
+                .bind(error)
+                .bind(id)
+                .bind(owner)
+                .execute(&mut *tx)
+                .await?
+                .rows_affected()
+                == 1;
+            if held {
+                sqlx::query("DELETE FROM checkpoints WHERE job_id = $1")
+                    .bind(id)
+                    .execute(&mut *tx)
+                    .await?;
+            }
+            tx.commit().await?;
+            Ok(held)
+        })
     }
 
     /// Puts a job `owner` was running back in the queue (shutdown): the
-    /// attempt does not count and its partial steps are dropped.
+    /// attempt does not count, and the job keeps its steps up to its
+    /// checkpoint, from which it will resume.
     pub async fn requeue(&self, id: i64, owner: &str) -> Result<(), sqlx::Error> {
-        let mut tx = self.pool.begin().await?;
-        let held = update_held(
-            &mut *tx,
+        let back = update_held(
             &format!(
-                "status = '{QUEUED}', attempts = MAX(attempts - 1, 0), lease_owner = NULL, \
-                 lease_expires_at = NULL, started_at = NULL, steps_done = 0, newton_iterations = 0"
+                "status = '{QUEUED}', attempts = CASE WHEN attempts > 0 THEN attempts - 1 ELSE 0 END, \
+                 lease_owner = NULL, lease_expires_at = NULL, started_at = NULL, \
+                 steps_done = COALESCE((SELECT c.step FROM checkpoints c WHERE c.job_id = jobs.id), 0), \
+                 newton_iterations = COALESCE((SELECT c.newton_iterations FROM checkpoints c WHERE c.job_id = jobs.id), 0)"
             ),
-            |q| q,
-            id,
-            owner,
-        )
-        .await?;
-        if held {
-            sqlx::query("DELETE FROM steps WHERE job_id = ?")
+            0,
+        );
+        on_pool!(self, |pool| {
+            let mut tx = pool.begin().await?;
+            let held = sqlx::query(back)
+                .bind(id)
+                .bind(owner)
+                .execute(&mut *tx)
+                .await?
+                .rows_affected()
+                == 1;
+            if held {
+                sqlx::query(
+                    "DELETE FROM steps WHERE job_id = $1 AND step > (SELECT steps_done FROM jobs WHERE id = $1)",
+                )
                 .bind(id)
                 .execute(&mut *tx)
                 .await?;
-        }
-        tx.commit().await
+            }
+            tx.commit().await
+        })
     }
 
     /// Cancels a queued job at once, or asks a running one to stop.
     pub async fn cancel(&self, id: i64) -> Result<CancelOutcome, sqlx::Error> {
         let t = now();
-        let queued = sqlx::query(AssertSqlSafe(format!(
-            "UPDATE jobs SET status = '{CANCELLED}', finished_at = ? WHERE id = ? AND status = '{QUEUED}'"
-        )))
-            .bind(t)
-            .bind(id)
-            .execute(&self.pool)
-            .await?;
-        if queued.rows_affected() == 1 {
-            return Ok(CancelOutcome::Cancelled);
-        }
+        let queued = format!(
+            "UPDATE jobs SET status = '{CANCELLED}', finished_at = $1 WHERE id = $2 AND status = '{QUEUED}'"
+        );
         // Running, but its worker is gone (the lease expired): no one would
         // stop it, so it ends here, its finished steps kept.
-        let orphaned = sqlx::query(AssertSqlSafe(format!(
-            "UPDATE jobs SET status = '{CANCELLED}', finished_at = ? \
-             WHERE id = ? AND status = '{RUNNING}' AND lease_expires_at < ?"
-        )))
-        .bind(t)
-        .bind(id)
-        .bind(t)
-        .execute(&self.pool)
-        .await?;
-        if orphaned.rows_affected() == 1 {
-            return Ok(CancelOutcome::Cancelled);
-        }
-        let running = sqlx::query(AssertSqlSafe(format!(
-            "UPDATE jobs SET cancel_requested = 1 WHERE id = ? AND status = '{RUNNING}'"
-        )))
-        .bind(id)
-        .execute(&self.pool)
-        .await?;
-        if running.rows_affected() == 1 {
+        let orphaned = format!(
+            "UPDATE jobs SET status = '{CANCELLED}', finished_at = $1 \
+             WHERE id = $2 AND status = '{RUNNING}' AND lease_expires_at < $1"
+        );
+        let running = format!(
+            "UPDATE jobs SET cancel_requested = TRUE WHERE id = $1 AND status = '{RUNNING}'"
+        );
+        let done = on_pool!(self, |pool| {
+            let queued = sqlx::query(AssertSqlSafe(queued))
+                .bind(t)
+                .bind(id)
+                .execute(pool)
+                .await?;
+            if queued.rows_affected() == 1 {
+                return Ok(CancelOutcome::Cancelled);
+            }
+            let orphaned = sqlx::query(AssertSqlSafe(orphaned))
+                .bind(t)
+                .bind(id)
+                .execute(pool)
+                .await?;
+            if orphaned.rows_affected() == 1 {
+                return Ok(CancelOutcome::Cancelled);
+            }
+            sqlx::query(AssertSqlSafe(running))
+                .bind(id)
+                .execute(pool)
+                .await?
+                .rows_affected()
+        });
+        if done == 1 {
             return Ok(CancelOutcome::Requested);
         }
         Ok(match self.get(id).await? {
@@ -443,48 +639,62 @@ impl Store {
         })
     }
 
+    /// Deletes an ended job with its steps and checkpoint.
+    pub async fn delete(&self, id: i64) -> Result<DeleteOutcome, sqlx::Error> {
+        let sql =
+            format!("DELETE FROM jobs WHERE id = $1 AND status NOT IN ('{QUEUED}', '{RUNNING}')");
+        let deleted = on_pool!(self, |pool| sqlx::query(AssertSqlSafe(sql))
+            .bind(id)
+            .execute(pool)
+            .await?
+            .rows_affected());
+        if deleted == 1 {
+            return Ok(DeleteOutcome::Deleted);
+        }
+        Ok(match self.get(id).await? {
+            Some(job) => DeleteOutcome::NotEnded(job.status),
+            None => DeleteOutcome::NotFound,
+        })
+    }
+
+    /// Deletes the jobs that ended before `before` (Unix seconds). Returns
+    /// how many.
+    pub async fn prune(&self, before: f64) -> Result<u64, sqlx::Error> {
+        let sql = format!(
+            "DELETE FROM jobs WHERE status NOT IN ('{QUEUED}', '{RUNNING}') AND finished_at < $1"
+        );
+        on_pool!(self, |pool| Ok(sqlx::query(AssertSqlSafe(sql))
+            .bind(before)
+            .execute(pool)
+            .await?
+            .rows_affected()))
+    }
+
     /// Step reports (JSON text) of a job, in step order.
     pub async fn step_reports(&self, id: i64) -> Result<Vec<String>, sqlx::Error> {
-        sqlx::query_scalar("SELECT report FROM steps WHERE job_id = ? ORDER BY step")
-            .bind(id)
-            .fetch_all(&self.pool)
-            .await
+        on_pool!(self, |pool| sqlx::query_scalar(
+            "SELECT report FROM steps WHERE job_id = $1 ORDER BY step"
+        )
+        .bind(id)
+        .fetch_all(pool)
+        .await)
     }
 
     /// One step's report, points and boundaries.
     pub async fn step(&self, id: i64, step: i64) -> Result<Option<StoredStep>, sqlx::Error> {
-        let row: Option<(String, String, String)> = sqlx::query_as(
-            "SELECT report, points, boundaries FROM steps WHERE job_id = ? AND step = ?",
+        let row: Option<(String, String, String)> = on_pool!(self, |pool| sqlx::query_as(
+            "SELECT report, points, boundaries FROM steps WHERE job_id = $1 AND step = $2",
         )
         .bind(id)
         .bind(step)
-        .fetch_optional(&self.pool)
-        .await?;
+        .fetch_optional(pool)
+        .await?);
         row.map(|(report, points, boundaries)| {
             StoredStep::from_text(report, points, boundaries)
                 .map_err(|e| sqlx::Error::Decode(Box::new(e)))
         })
         .transpose()
     }
-}
-
-type SqliteQuery = Query<'static, Sqlite, SqliteArguments>;
-
-/// `UPDATE jobs SET {set}` on job `id` if `owner` still holds it (it runs
-/// under `owner`'s lease); `bind` binds the values `set` asks for. `set` is
-/// a constant of this module. Returns whether `owner` held the job.
-async fn update_held<'c>(
-    executor: impl SqliteExecutor<'c>,
-    set: &str,
-    bind: impl FnOnce(SqliteQuery) -> SqliteQuery,
-    id: i64,
-    owner: &str,
-) -> Result<bool, sqlx::Error> {
-    let update = sqlx::query(AssertSqlSafe(format!(
-        "UPDATE jobs SET {set} WHERE id = ? AND lease_owner = ? AND status = '{RUNNING}'"
-    )));
-    let done = bind(update).bind(id).bind(owner).execute(executor).await?;
-    Ok(done.rows_affected() == 1)
 }
 
 #[cfg(test)]
@@ -495,7 +705,9 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("mpm-store-{tag}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        Store::open(&dir.join("jobs.sqlite")).await.unwrap()
+        Store::open(dir.join("jobs.sqlite").to_str().unwrap())
+            .await
+            .unwrap()
     }
 
     /// A running job with one finished step, claimed by `owner` with `lease`.
@@ -517,7 +729,7 @@ mod tests {
         let claimed = store.claim(owner, lease).await.unwrap().unwrap();
         assert_eq!(claimed.id, id);
         let step = StoredStep::from_text("{}".into(), "{}".into(), "[]".into()).unwrap();
-        assert!(store.save_step(id, owner, 1, 3, &step).await.unwrap());
+        assert!(store.save_step(id, owner, 1, 3, &step, None).await.unwrap());
         id
     }
 

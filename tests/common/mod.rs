@@ -1,7 +1,11 @@
-//! Test helpers: a real server on 127.0.0.1 port 0 with a fresh SQLite file.
+//! Test helpers: a real server on 127.0.0.1 port 0 with a fresh database,
+//! a SQLite file or a PostgreSQL database ([`postgres`]).
 #![allow(dead_code)]
 
+use std::cell::Cell;
 use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::sync::OnceLock;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
@@ -51,10 +55,193 @@ pub fn spawn_app() -> TestApp {
     spawn_app_with(|_| {})
 }
 
+/// Which database the tests of this thread use ([`on_both_databases`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Database {
+    Sqlite,
+    Postgres,
+}
+
+thread_local! {
+    static DATABASE: Cell<Database> = const { Cell::new(Database::Sqlite) };
+}
+
+/// Runs `test` with the servers it starts on `database`.
+pub fn with_database(database: Database, test: fn()) {
+    DATABASE.with(|d| d.set(database));
+    test();
+}
+
+/// Makes two tests of each function named: `sqlite::name` and
+/// `postgres::name`, each starting its servers on that database.
+#[allow(unused_macros)]
+macro_rules! on_both_databases {
+    ($($name:ident),* $(,)?) => {
+        mod sqlite {
+            $(#[test]
+            fn $name() {
+                crate::common::with_database(crate::common::Database::Sqlite, super::$name);
+            })*
+        }
+        mod postgres {
+            $(#[test]
+            fn $name() {
+                crate::common::with_database(crate::common::Database::Postgres, super::$name);
+            })*
+        }
+    };
+}
+#[allow(unused_imports)]
+pub(crate) use on_both_databases;
+
+/// A fresh database of the kind this thread's tests use: a file in `dir`,
+/// or a new database on the test PostgreSQL server.
+pub fn fresh_database(dir: &TempDir) -> String {
+    match DATABASE.with(Cell::get) {
+        Database::Sqlite => dir.0.join("jobs.sqlite").to_str().unwrap().to_string(),
+        Database::Postgres => postgres_database(),
+    }
+}
+
+/// The PostgreSQL server the tests use: `MPM_TEST_POSTGRES`
+/// (`postgres://user@host:port`, a user that may create databases) if set;
+/// otherwise a throwaway cluster of this test process, started from
+/// PostgreSQL's binaries (`pg_config --bindir`) and stopped, its files
+/// removed, when the process ends.
+pub fn postgres() -> &'static str {
+    static SERVER: OnceLock<String> = OnceLock::new();
+    SERVER.get_or_init(|| std::env::var("MPM_TEST_POSTGRES").unwrap_or_else(|_| start_postgres()))
+}
+
+/// A new, empty database on [`postgres`]; its URL.
+pub fn postgres_database() -> String {
+    static COUNTER: AtomicUsize = AtomicUsize::new(0);
+    let name = format!(
+        "mpm_test_{}_{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::SeqCst)
+    );
+    let server = postgres();
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap();
+    runtime.block_on(async {
+        use sqlx::Connection;
+        let mut admin = sqlx::PgConnection::connect(&format!("{server}/postgres"))
+            .await
+            .unwrap_or_else(|e| panic!("connect to the test PostgreSQL at {server}: {e}"));
+        sqlx::query(sqlx::AssertSqlSafe(format!("CREATE DATABASE {name}")))
+            .execute(&mut admin)
+            .await
+            .unwrap();
+    });
+    format!("{server}/{name}")
+}
+
+/// Starts a PostgreSQL cluster in a temporary folder on a free port, as
+/// the `postgres` user when run as root (the server refuses root). A
+/// watchdog shell stops it and removes its folder once this process exits.
+fn start_postgres() -> String {
+    let bindir = Command::new("pg_config")
+        .arg("--bindir")
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|o| PathBuf::from(String::from_utf8_lossy(&o.stdout).trim()))
+        .filter(|dir| dir.join("initdb").exists())
+        .expect(
+            "the PostgreSQL tests need PostgreSQL's server binaries (Debian: apt-get install \
+             postgresql) or MPM_TEST_POSTGRES=postgres://user@host:port (see .ci/run)",
+        );
+    let dir = std::env::temp_dir().join(format!("mpm-postgres-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let as_root = Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    if as_root {
+        let status = Command::new("chown")
+            .args(["postgres:postgres"])
+            .arg(&dir)
+            .status();
+        assert!(status.unwrap().success(), "chown the cluster folder");
+    }
+    let data = dir.join("data");
+    let run = |program: &str, args: &str| {
+        shell(as_root, &format!("{}/{program} {args}", bindir.display()))
+    };
+    let initdb = run(
+        "initdb",
+        &format!("-D {} -U mpm -A trust -N --no-instructions", data.display()),
+    )
+    .stdout(Stdio::null())
+    .status()
+    .unwrap();
+    assert!(initdb.success(), "initdb failed");
+    let test_pid = std::process::id();
+    // The watchdog looks for this process in /proc (as the postgres user,
+    // `kill -0` on a root process fails as if it were gone), then stops the
+    // server with SIGTERM (a background job of a non-interactive shell
+    // ignores pg_ctl's SIGINT).
+    let watchdog = format!(
+        "{bin}/postgres -D {data} -p {port} -k {dir} -c listen_addresses=127.0.0.1 -c fsync=off \
+             -c synchronous_commit=off -c full_page_writes=off -c max_connections=300 >{dir}/log 2>&1 & \
+         server=$!; while [ -e /proc/{test_pid} ]; do sleep 1; done; \
+         kill -TERM $server; wait $server; rm -rf {dir}",
+        bin = bindir.display(),
+        data = data.display(),
+        dir = dir.display(),
+    );
+    // Not waited for: it outlives this process, to stop the server after it.
+    #[allow(clippy::zombie_processes)]
+    shell(as_root, &watchdog)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    loop {
+        let ready = run(
+            "pg_isready",
+            &format!("-q -h 127.0.0.1 -p {port} -U mpm -d postgres"),
+        )
+        .status()
+        .is_ok_and(|s| s.success());
+        if ready {
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "PostgreSQL did not start: see {}/log",
+            dir.display()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    format!("postgres://mpm@127.0.0.1:{port}")
+}
+
+/// `sh -c line`, as the `postgres` user when `as_root`.
+fn shell(as_root: bool, line: &str) -> Command {
+    let mut command = Command::new(if as_root { "runuser" } else { "sh" });
+    if as_root {
+        command.args(["-u", "postgres", "--", "sh"]);
+    }
+    command.args(["-c", line]);
+    command
+}
+
 /// Starts the service after `adjust` has changed its settings.
 pub fn spawn_app_with(adjust: impl FnOnce(&mut Config)) -> TestApp {
     let dir = TempDir::new("api");
-    let mut config = Config::new(dir.0.join("jobs.sqlite"));
+    let mut config = Config::new(fresh_database(&dir));
     config.poll_interval = Duration::from_millis(100);
     adjust(&mut config);
     let runtime = tokio::runtime::Builder::new_multi_thread()
