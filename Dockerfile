@@ -1,9 +1,11 @@
 # Multi-stage build of the `mpm` binary (solver, CLI and job service).
 # Build:  docker build -t mpm .
-# Run:    docker run -p 8080:8080 -v mpm-data:/data mpm
+# Run:    docker run -p 8080:8080 -v mpm-data:/data mpm          (serves and solves, SQLite)
+# Group:  docker-compose.yml (PostgreSQL, `serve --workers 0`, `worker` x N)
 FROM rust:1.95-slim-bookworm AS build
 WORKDIR /src
-# gcc is in the image; SQLite is compiled in (sqlx's bundled libsqlite3).
+# gcc is in the image; SQLite is compiled in (sqlx's bundled libsqlite3);
+# the PostgreSQL driver is pure Rust.
 COPY Cargo.toml Cargo.lock ./
 COPY crates ./crates
 COPY src ./src

@@ -164,6 +164,33 @@ fn cancel_stops_a_running_job_keeping_its_steps_and_cancels_a_queued_one() {
     assert_eq!(status, 404);
 }
 
+/// An ended job is deleted with its steps; a running one is refused until
+/// cancelled; /health counts the jobs of each status.
+fn delete_removes_an_ended_job_and_refuses_a_running_one() {
+    let app = spawn_app();
+    let running = app.submit(&slow_case(400));
+    app.wait_for(running, LONG, |j| j["progress"]["step"].as_i64() >= Some(1));
+    let health = app.get_json("/health");
+    assert_eq!(health["jobs"]["running"], 1, "{health}");
+    assert_eq!(health["jobs"]["succeeded"], 0, "{health}");
+
+    let (status, body) = app.delete(&format!("/jobs/{running}"));
+    assert_eq!(status, 409, "{body}");
+    assert!(body.contains("cancel it first"), "{body}");
+    let (status, _) = app.post(&format!("/jobs/{running}/cancel"), "");
+    assert_eq!(status, 202);
+    app.wait_for(running, LONG, is_final);
+
+    let (status, body) = app.delete(&format!("/jobs/{running}"));
+    assert_eq!(status, 204, "{body}");
+    assert_eq!(app.get(&format!("/jobs/{running}")).0, 404);
+    assert_eq!(app.get(&format!("/jobs/{running}/steps/1")).0, 404);
+    assert_eq!(app.delete(&format!("/jobs/{running}")).0, 404);
+    assert_eq!(app.total_jobs(), 0);
+    let health = app.get_json("/health");
+    assert_eq!(health["jobs"]["cancelled"], 0, "{health}");
+}
+
 fn a_failed_solve_says_where_and_the_service_keeps_serving() {
     let app = spawn_app();
     let mut case = example("cantilever-grid");
@@ -595,6 +622,7 @@ fn a_submission_whose_check_runs_out_of_time_is_503() {
 }
 
 common::on_both_databases!(
+    delete_removes_an_ended_job_and_refuses_a_running_one,
     a_job_runs_to_success_and_its_steps_match_the_cli,
     invalid_submissions_are_4xx_naming_the_field_and_create_nothing,
     cancel_stops_a_running_job_keeping_its_steps_and_cancels_a_queued_one,

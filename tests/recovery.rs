@@ -1,15 +1,18 @@
-//! A server killed with SIGKILL mid-job loses nothing: restarted on the same
-//! database, it claims the job again once the dead worker's lease expires and
-//! runs it to the end.
+//! A server stopped mid-job (SIGKILL or SIGTERM) loses nothing: restarted on
+//! the same SQLite file, it resumes the job from its last checkpoint and
+//! runs it to the end. (tests/cluster.rs does the same with several
+//! processes on PostgreSQL.)
 
 mod common;
 
-use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command};
 use std::time::{Duration, Instant};
 
-use common::{TempDir, agent, is_final, request, slow_case, wait_for};
+use common::{
+    TempDir, agent, base_url, cli_final_positions, is_final, largest_difference, positions,
+    request, slow_case, spawn_mpm, wait_for,
+};
 use serde_json::{Value, json};
 
 /// Starts `mpm serve` on a free port; returns the child and its base URL.
@@ -19,46 +22,38 @@ fn start_server(database: &Path) -> (Child, String) {
 
 /// Starts `mpm serve` with extra flags.
 fn start_server_with(database: &Path, flags: &[&str]) -> (Child, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mpm"))
-        .args([
-            "serve",
-            "--addr",
-            "127.0.0.1:0",
-            "--lease-seconds",
-            "1",
-            "--database",
-        ])
-        .arg(database)
-        .args(flags)
-        .env("MPM_LOG", "warn")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let addr = line
-        .split("http://")
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next())
-        .unwrap_or_else(|| panic!("unexpected first line: {line:?}"));
-    (child, format!("http://{addr}"))
+    let database = database.to_str().unwrap();
+    let mut args = vec![
+        "serve",
+        "--addr",
+        "127.0.0.1:0",
+        "--lease-seconds",
+        "1",
+        "--database",
+        database,
+    ];
+    args.extend_from_slice(flags);
+    let (child, line) = spawn_mpm(&args, None);
+    (child, base_url(&line))
 }
 
-#[test]
-fn a_job_survives_the_server_being_killed() {
+/// Stops the server running a 40-step job at step 2 or later with `signal`,
+/// reads where the job stood with a server that does not solve, then
+/// restarts with workers: the job resumes after exactly that step (the
+/// worker stored a checkpoint with every step) and ends where the CLI's
+/// uninterrupted run ends.
+fn a_job_resumes_after_its_server_is_stopped_with(signal: &str) {
     let dir = TempDir::new("recovery");
     let database = dir.0.join("jobs.sqlite");
     let http = agent();
 
-    let (mut first, base) = start_server(&database);
+    let (mut first, base) = start_server_with(&database, &["--checkpoint-every", "1"]);
+    let case = slow_case(40);
     let (status, body) = request(
         &http,
         "POST",
         &format!("{base}/jobs"),
-        Some(&slow_case(40).to_string()),
+        Some(&case.to_string()),
     );
     assert_eq!(status, 201, "{body}");
     let id = serde_json::from_str::<Value>(&body).unwrap()["id"]
@@ -68,20 +63,56 @@ fn a_job_survives_the_server_being_killed() {
         j["progress"]["step"].as_i64() >= Some(2)
     });
     assert_eq!(before["status"], "running");
-    first.kill().unwrap(); // SIGKILL: no chance to clean up
+    let killed = Command::new("kill")
+        .args([signal, &first.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
     first.wait().unwrap();
+
+    let (mut reader, base) = start_server_with(&database, &["--workers", "0"]);
+    let stopped = wait_for(&http, &base, id, Duration::from_secs(10), |_| true);
+    let stopped_at = stopped["progress"]["step"].as_i64().unwrap();
+    reader.kill().unwrap();
+    reader.wait().unwrap();
 
     let (mut second, base) = start_server(&database);
     let after = wait_for(&http, &base, id, Duration::from_secs(300), is_final);
+    let (_, last) = request(&http, "GET", &format!("{base}/jobs/{id}/steps/40"), None);
     second.kill().unwrap();
     second.wait().unwrap();
+    let worst = largest_difference(
+        &positions(&serde_json::from_str(&last).unwrap()),
+        &cli_final_positions(&case),
+    );
     eprintln!(
-        "killed at step {} of 40 (attempt 1); after restart: {} in attempt {}, {} steps",
-        before["progress"]["step"], after["status"], after["attempts"], after["progress"]["step"]
+        "{signal} at step {stopped_at} of 40 ({}); after restart: {} in attempt {}, resumed \
+         from step {}; final positions within {worst:.1e} m of the CLI's",
+        stopped["status"], after["status"], after["attempts"], after["resumed_from_step"]
     );
     assert_eq!(after["status"], "succeeded", "{after}");
-    assert_eq!(after["attempts"], 2);
     assert_eq!(after["progress"]["step"], 40);
+    assert_eq!(
+        after["resumed_from_step"].as_i64(),
+        Some(stopped_at),
+        "{after}"
+    );
+    assert!(worst <= 1e-9, "{worst:e}");
+}
+
+/// SIGKILL: no chance to clean up; the job is claimed again once the dead
+/// worker's lease expires, as its second attempt.
+#[test]
+fn a_job_resumes_after_its_server_is_killed() {
+    a_job_resumes_after_its_server_is_stopped_with("-KILL");
+}
+
+/// SIGTERM (`docker stop`): the running job goes back to the queue at its
+/// next Newton iteration, keeping its steps up to its checkpoint; it once
+/// ran again from step 1.
+#[test]
+fn a_job_resumes_after_its_server_is_stopped() {
+    a_job_resumes_after_its_server_is_stopped_with("-TERM");
 }
 
 #[test]

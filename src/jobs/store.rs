@@ -769,6 +769,26 @@ mod tests {
         }
     }
 
+    /// Retention deletes only jobs that ended before the cut-off, with their
+    /// steps; running and queued jobs stay whatever their age.
+    #[tokio::test]
+    async fn pruning_deletes_only_jobs_that_ended_before_the_cut_off() {
+        let store = store("prune").await;
+        let ended = running_job(&store, "w", Duration::from_secs(30)).await;
+        assert!(
+            store
+                .finish(ended, "w", JobStatus::Succeeded, 1.0, None)
+                .await
+                .unwrap()
+        );
+        let still_running = running_job(&store, "v", Duration::from_secs(30)).await;
+        assert_eq!(store.prune(now() - 3600.0).await.unwrap(), 0);
+        assert_eq!(store.prune(now() + 1.0).await.unwrap(), 1);
+        assert!(store.get(ended).await.unwrap().is_none());
+        assert!(store.step_reports(ended).await.unwrap().is_empty());
+        assert!(store.get(still_running).await.unwrap().is_some());
+    }
+
     /// The second insert with a key gets the first's job, not an error:
     /// what a request that lost a race with its own retry sees.
     #[tokio::test]

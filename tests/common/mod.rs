@@ -278,6 +278,7 @@ pub fn request(agent: &ureq::Agent, method: &str, url: &str, body: Option<&str>)
             .header("content-type", "application/json")
             .send(b),
         ("POST", None) => agent.post(url).send_empty(),
+        ("DELETE", _) => agent.delete(url).call(),
         _ => panic!("unsupported {method}"),
     };
     let mut response = response.unwrap_or_else(|e| panic!("{method} {url}: {e}"));
@@ -309,6 +310,10 @@ impl TestApp {
             &format!("{}{path}", self.base),
             Some(body),
         )
+    }
+
+    pub fn delete(&self, path: &str) -> (u16, String) {
+        request(&self.agent, "DELETE", &format!("{}{path}", self.base), None)
     }
 
     /// Submits a case; returns the job id.
@@ -389,4 +394,84 @@ pub fn filled_at_1mm(geometry: Value) -> Value {
     case["supports"] = serde_json::json!([]);
     case["probes"] = serde_json::json!([]);
     case
+}
+
+/// Starts the `mpm` binary with `args` and waits for its first line on
+/// stdout (`mpm serve` prints its address there, `mpm worker` its start);
+/// its stderr goes to `log` when given. Returns the child and the line.
+pub fn spawn_mpm(args: &[&str], log: Option<&std::path::Path>) -> (std::process::Child, String) {
+    use std::io::{BufRead, BufReader};
+    // Logs to a file in full; to the terminal, only what went wrong.
+    let (stderr, level) = match log {
+        Some(path) => (Stdio::from(std::fs::File::create(path).unwrap()), "info"),
+        None => (Stdio::inherit(), "warn"),
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mpm"))
+        .args(args)
+        .env("MPM_LOG", level)
+        .stdout(Stdio::piped())
+        .stderr(stderr)
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    assert!(!line.is_empty(), "mpm {args:?} exited before starting");
+    (child, line)
+}
+
+/// The base URL in `mpm serve`'s first line.
+pub fn base_url(first_line: &str) -> String {
+    let addr = first_line
+        .split("http://")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .unwrap_or_else(|| panic!("unexpected first line: {first_line:?}"));
+    format!("http://{addr}")
+}
+
+/// GET `url` as JSON, or `None` if the server does not answer 200 (it may
+/// have been killed).
+pub fn try_get_json(agent: &ureq::Agent, url: &str) -> Option<Value> {
+    let mut response = agent.get(url).call().ok()?;
+    if response.status().as_u16() != 200 {
+        return None;
+    }
+    response.body_mut().read_json().ok()
+}
+
+/// Final point positions of the CLI's run of `case` (`mpm run`).
+pub fn cli_final_positions(case: &Value) -> Vec<[f64; 2]> {
+    let dir = TempDir::new("cli-reference");
+    let path = dir.0.join("case.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let out = dir.0.join("out");
+    let status = Command::new(env!("CARGO_BIN_EXE_mpm"))
+        .arg("run")
+        .arg(&path)
+        .arg("--out")
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .unwrap();
+    assert!(status.success(), "mpm run failed");
+    let steps = case["analysis"]["load_steps"].as_u64().unwrap();
+    let text = std::fs::read_to_string(out.join(format!("steps/step_{steps:04}.json"))).unwrap();
+    positions(&serde_json::from_str::<Value>(&text).unwrap())
+}
+
+/// `points.position` of a step document.
+pub fn positions(step: &Value) -> Vec<[f64; 2]> {
+    serde_json::from_value(step["points"]["position"].clone()).unwrap()
+}
+
+/// The largest coordinate difference between two point sets.
+pub fn largest_difference(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    assert_eq!(a.len(), b.len(), "point counts differ");
+    a.iter()
+        .zip(b)
+        .flat_map(|(p, q)| [(p[0] - q[0]).abs(), (p[1] - q[1]).abs()])
+        .fold(0.0, f64::max)
 }
