@@ -2,6 +2,7 @@
 //! and the boundary curves. `mpm run` writes it as `steps/step_NNNN.json`,
 //! the service stores its parts and serves it at `GET /jobs/{id}/steps/{k}`.
 
+use mpm::case::OutputSpec;
 use mpm::report::PointColumns;
 use mpm::{StepReport, StepState};
 use serde::Serialize;
@@ -23,13 +24,37 @@ pub struct StepDocument<R, P, B> {
 pub type StoredStep = StepDocument<Box<RawValue>, Box<RawValue>, Box<RawValue>>;
 
 impl StoredStep {
-    /// The stored form of a step the solver has just finished.
-    pub fn new(report: &StepReport, state: &StepState<'_>) -> Self {
+    /// The stored form of a step the solver has just finished (or step 0):
+    /// with its points (the columns `output` asks for) and boundary curves
+    /// if `output` stores them at this step of `load_steps`, else with
+    /// `null` for both.
+    pub fn new(
+        report: &StepReport,
+        state: &StepState<'_>,
+        output: &OutputSpec,
+        load_steps: usize,
+    ) -> Self {
+        let stores_points = output.stores_points(report.step, load_steps);
+        let report = to_raw_value(report).expect("reports serialise");
+        if !stores_points {
+            let null = || RawValue::from_string("null".into()).expect("null is JSON");
+            return Self {
+                report,
+                points: null(),
+                boundaries: null(),
+            };
+        }
+        let columns = PointColumns::selected(state.points, output.fields.as_deref());
         Self {
-            report: to_raw_value(report).expect("reports serialise"),
-            points: to_raw_value(&PointColumns::new(state.points)).expect("points serialise"),
+            report,
+            points: to_raw_value(&columns).expect("points serialise"),
             boundaries: to_raw_value(&state.boundaries()).expect("boundaries serialise"),
         }
+    }
+
+    /// Whether the points were stored with this step.
+    pub fn has_points(&self) -> bool {
+        self.points.get() != "null"
     }
 
     /// Reads back the stored parts.

@@ -13,6 +13,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use mpm::case::OutputSpec;
 use mpm::{Case, Checkpoint, Observer, Simulation, StepReport, StepState};
 use tokio::runtime::Handle;
 use tokio::sync::Notify;
@@ -171,6 +172,7 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
         flags: &flags,
         deadline: started + shared.config.limits.job_time_limit,
         checkpoint_every: 1,
+        output: OutputSpec::default(),
         timed_out: false,
         store_error: None,
     };
@@ -183,8 +185,14 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
             .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
         observer.checkpoint_every =
             crate::config::checkpoint_interval(shared.config.checkpoint_every, sim.points.len());
+        observer.output = case.output.clone();
         if let Some((step, state)) = &job.checkpoint {
             resume(&mut sim, job.id, *step, state);
+        }
+        if sim.steps_done() == 0 {
+            // Step 0, the undeformed state, so a viewer shows the start.
+            let (report, state) = sim.initial_step();
+            observer.step_finished(&report, &state);
         }
         sim.run(&mut observer).map_err(Failure::from)
     }));
@@ -313,16 +321,16 @@ struct JobObserver<'a> {
     deadline: Instant,
     /// Store the solver's state with every this many steps.
     checkpoint_every: usize,
+    /// Which steps store their points, and which columns.
+    output: OutputSpec,
     timed_out: bool,
     store_error: Option<String>,
 }
 
 impl Observer for JobObserver<'_> {
     fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
-        let document = StoredStep::new(report, state);
-        let checkpoint = report
-            .step
-            .is_multiple_of(self.checkpoint_every)
+        let document = StoredStep::new(report, state, &self.output, state.load_steps());
+        let checkpoint = (report.step > 0 && report.step.is_multiple_of(self.checkpoint_every))
             .then(|| state.checkpoint().to_bytes());
         let saved = self.shared.runtime.block_on(self.shared.store.save_step(
             self.job,

@@ -23,8 +23,13 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
     assert_eq!(job["progress"], json!({"step": 5, "of": 5}));
     assert!(job["solve_seconds"].as_f64().unwrap() > 0.0);
 
+    // Step 0, the undeformed state, then the five load steps.
     let steps = app.get_json(&format!("/jobs/{id}/steps"));
-    assert_eq!(steps["steps"].as_array().unwrap().len(), 5);
+    assert_eq!(steps["steps"].as_array().unwrap().len(), 6);
+    assert_eq!(steps["steps"][0]["step"], 0);
+    let start = app.get_json(&format!("/jobs/{id}/steps/0"));
+    assert_eq!(start["report"]["load_factor"], 0.0);
+    assert_eq!(start["points"]["displacement"][0], json!([0.0, 0.0]));
 
     // The CLI on the same case writes the same step file.
     let out = common::TempDir::new("cli");
@@ -53,9 +58,10 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
 
     let result = app.get_json(&format!("/jobs/{id}/result"));
     let tip = result["probes"]["tip"].as_array().unwrap();
-    assert_eq!(tip.len(), 5);
+    assert_eq!(tip.len(), 6);
+    assert_eq!(tip[0]["displacement"], json!([0.0, 0.0]));
     assert_eq!(
-        tip[4]["displacement"],
+        tip[5]["displacement"],
         cli["report"]["probes"][0]["displacement"]
     );
 
@@ -156,7 +162,7 @@ fn cancel_stops_a_running_job_keeping_its_steps_and_cancels_a_queued_one() {
     let done = job["progress"]["step"].as_i64().unwrap();
     assert!((1..400).contains(&done), "{job}");
     let steps = app.get_json(&format!("/jobs/{running}/steps"));
-    assert_eq!(steps["steps"].as_array().unwrap().len() as i64, done);
+    assert_eq!(steps["steps"].as_array().unwrap().len() as i64, done + 1);
 
     let (status, _) = app.post(&format!("/jobs/{running}/cancel"), "");
     assert_eq!(status, 409);
@@ -189,6 +195,43 @@ fn delete_removes_an_ended_job_and_refuses_a_running_one() {
     assert_eq!(app.total_jobs(), 0);
     let health = app.get_json("/health");
     assert_eq!(health["jobs"]["cancelled"], 0, "{health}");
+}
+
+/// `output.every` thins the stored points (reports stay every step), and
+/// `output.fields` the columns; step 0 and the last step keep their points.
+fn output_every_and_fields_thin_what_a_job_stores() {
+    let app = spawn_app();
+    let mut case = example("cantilever-grid");
+    case["output"] = json!({"every": 2, "fields": ["stress"]});
+    let id = app.submit(&case);
+    assert_eq!(app.wait_for(id, LONG, is_final)["status"], "succeeded");
+    let steps = app.get_json(&format!("/jobs/{id}/steps"));
+    assert_eq!(steps["steps"].as_array().unwrap().len(), 6);
+    for k in 0..=5 {
+        let step = app.get_json(&format!("/jobs/{id}/steps/{k}"));
+        assert_eq!(step["report"]["step"], k);
+        let vtu = app.get(&format!("/jobs/{id}/steps/{k}?format=vtu")).0;
+        if [0, 2, 4, 5].contains(&k) {
+            let columns: BTreeSet<&str> = step["points"]
+                .as_object()
+                .unwrap()
+                .keys()
+                .map(String::as_str)
+                .collect();
+            assert_eq!(columns, BTreeSet::from(["position", "stress"]), "step {k}");
+            assert_eq!(step["boundaries"].as_array().unwrap().len(), 1);
+            assert_eq!(vtu, 200);
+        } else {
+            assert!(step["points"].is_null(), "step {k}: {}", step["points"]);
+            assert_eq!(vtu, 404, "step {k}");
+        }
+    }
+    let (status, body) = app.post("/jobs", &{
+        case["output"]["every"] = 0.into();
+        case.to_string()
+    });
+    assert_eq!(status, 422, "{body}");
+    assert!(body.contains("output.every"), "{body}");
 }
 
 fn a_failed_solve_says_where_and_the_service_keeps_serving() {
@@ -622,6 +665,7 @@ fn a_submission_whose_check_runs_out_of_time_is_503() {
 }
 
 common::on_both_databases!(
+    output_every_and_fields_thin_what_a_job_stores,
     delete_removes_an_ended_job_and_refuses_a_running_one,
     a_job_runs_to_success_and_its_steps_match_the_cli,
     invalid_submissions_are_4xx_naming_the_field_and_create_nothing,

@@ -51,10 +51,12 @@ fn run_writes_summary_step_files_and_a_series() {
         assert!(out.join(format!("steps/step_{k:04}_boundary.vtp")).exists());
         assert_eq!(step["boundaries"].as_array().unwrap().len(), 1);
     }
+    // Step 0, the undeformed state, starts the series.
+    assert!(out.join("steps/step_0000.vtu").exists());
     let pvd = std::fs::read_to_string(out.join("points.pvd")).unwrap();
-    assert_eq!(pvd.matches("<DataSet").count(), 5);
+    assert_eq!(pvd.matches("<DataSet").count(), 6);
     let pvd = std::fs::read_to_string(out.join("boundary.pvd")).unwrap();
-    assert_eq!(pvd.matches("<DataSet").count(), 5);
+    assert_eq!(pvd.matches("<DataSet").count(), 6);
 }
 
 /// Writes `case` to a fresh directory and runs it there.
@@ -175,4 +177,126 @@ fn serve_refuses_an_empty_token() {
     std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
     assert_eq!(status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("MPM_TOKEN"), "{stderr}");
+}
+
+/// A non-empty output directory is refused; `--force` removes the files of
+/// the earlier run (a 600-file leftover once stayed beside a 5-step series)
+/// and nothing else. Step 0 is written, and `output.every` thins the point
+/// files while the summary keeps every step.
+#[test]
+fn force_replaces_an_earlier_run_and_output_every_thins_the_files() {
+    let out = temp_dir("force");
+    std::fs::create_dir_all(out.join("steps")).unwrap();
+    std::fs::write(out.join("steps/step_0099.vtu"), "stale").unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let refused = mpm()
+        .args(["run", "--example", "cantilever-grid", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--force"));
+
+    let mut case = example("cantilever-grid");
+    case["output"] = serde_json::json!({"every": 2});
+    let path = out.join("notes-case.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let status = mpm()
+        .arg("run")
+        .arg(&path)
+        .arg("--force")
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    assert!(!out.join("steps/step_0099.vtu").exists(), "stale file kept");
+    assert!(
+        out.join("notes.txt").exists(),
+        "a file the run does not own was removed"
+    );
+    let written: Vec<usize> = (0..=5)
+        .filter(|k| out.join(format!("steps/step_{k:04}.vtu")).exists())
+        .collect();
+    assert_eq!(written, [0, 2, 4, 5]);
+    let pvd = std::fs::read_to_string(out.join("points.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 4);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["steps"].as_array().unwrap().len(), 5);
+}
+
+/// A run killed mid-way goes on from its last checkpoint with `--resume`
+/// and ends where an uninterrupted run ends, with every step's report.
+#[test]
+fn resume_goes_on_from_the_last_checkpoint() {
+    // The self-weight column widened to 8000 points over 30 steps: tens of
+    // milliseconds a step, time to kill it part-way.
+    let mut case = example("column");
+    case["grid"]["cell_size"] = 0.5.into();
+    case["grid"]["extent"] = serde_json::json!({"min": [0.0, 0.0], "max": [10.0, 50.0]});
+    case["bodies"][0]["geometry"]["rectangle"]["max"] = serde_json::json!([10.0, 50.0]);
+    case["supports"][1]["on"]["x"] = 10.0.into();
+    case["analysis"]["load_steps"] = 30.into();
+    let dir = temp_dir("resume");
+    let path = dir.join("case.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+
+    let straight = dir.join("straight");
+    run_ok(&["run", path.to_str().unwrap(), "--out"], &straight);
+
+    let stopped = dir.join("stopped");
+    let mut child = mpm()
+        .arg("run")
+        .arg(&path)
+        .arg("--out")
+        .arg(&stopped)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while !stopped.join("steps/step_0004.json").exists() {
+        assert!(start.elapsed().as_secs() < 120, "no step 4");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(
+        !stopped.join("summary.json").exists(),
+        "killed after it finished"
+    );
+
+    let resumed = mpm()
+        .arg("run")
+        .arg("--resume")
+        .arg(&stopped)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&resumed.stderr);
+    assert!(resumed.status.success(), "{stderr}");
+    assert!(stderr.contains("resuming after step"), "{stderr}");
+    let read = |dir: &std::path::Path, file: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join(file)).unwrap()).unwrap()
+    };
+    let summary = read(&stopped, "summary.json");
+    assert_eq!(summary["steps"].as_array().unwrap().len(), 30);
+    // Step 4's files were written; its checkpoint, written after them, may
+    // not have been.
+    assert!(
+        summary["resumed_from"].as_u64().unwrap() >= 3,
+        "{}",
+        summary["resumed_from"]
+    );
+    let a = read(&stopped, "steps/step_0030.json");
+    let b = read(&straight, "steps/step_0030.json");
+    assert_eq!(a["points"]["position"], b["points"]["position"]);
+    assert_eq!(a["report"]["probes"], b["report"]["probes"]);
+    let pvd = std::fs::read_to_string(stopped.join("points.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 31, "steps 0 to 30");
+    assert!(!stopped.join("checkpoint.bin").exists());
 }

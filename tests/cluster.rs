@@ -11,7 +11,7 @@ use std::process::Child;
 use std::time::{Duration, Instant};
 
 use common::{
-    TempDir, agent, base_url, cli_final_positions, example, largest_difference, positions,
+    Process, TempDir, agent, base_url, cli_final_positions, example, largest_difference, positions,
     postgres_database, request, slow_case, spawn_mpm, try_get_json,
 };
 use serde_json::Value;
@@ -23,7 +23,7 @@ const LEASE_SECONDS: &str = "2";
 /// (rayon may group sums differently); the bodies are metres in size.
 const SAME_POSITIONS: f64 = 1e-9;
 
-fn start_api(database: &str) -> (Child, String) {
+fn start_api(database: &str) -> (Process, String) {
     let (child, line) = spawn_mpm(
         &[
             "serve",
@@ -43,7 +43,7 @@ fn start_api(database: &str) -> (Child, String) {
 
 /// A worker with one solver thread (three share two cores here), JSON
 /// logs in `log`, a checkpoint every step and room for many crashes.
-fn start_worker(database: &str, log: &Path) -> Child {
+fn start_worker(database: &str, log: &Path) -> Process {
     spawn_mpm(
         &[
             "worker",
@@ -168,7 +168,7 @@ fn three_workers_share_fifty_jobs_and_a_killed_ones_job_resumes_elsewhere() {
     let logs: Vec<PathBuf> = (0..3)
         .map(|i| dir.0.join(format!("worker{i}.log")))
         .collect();
-    let mut workers: Vec<Child> = logs.iter().map(|l| start_worker(&database, l)).collect();
+    let mut workers: Vec<Process> = logs.iter().map(|l| start_worker(&database, l)).collect();
 
     let (tiny, medium, long) = (example("cantilever-grid"), slow_case(4), slow_case(30));
     let mut cases = BTreeMap::new();
@@ -260,7 +260,7 @@ fn a_crash_loop_loses_no_job_and_never_goes_back_past_a_checkpoint() {
     let mut logs: Vec<PathBuf> = (0..3)
         .map(|i| dir.0.join(format!("worker{i}-0.log")))
         .collect();
-    let mut workers: Vec<Child> = logs.iter().map(|l| start_worker(&database, l)).collect();
+    let mut workers: Vec<Process> = logs.iter().map(|l| start_worker(&database, l)).collect();
     let mut cases = BTreeMap::new();
     for i in 0..20 {
         let case = slow_case(if i % 2 == 0 { 12 } else { 20 });

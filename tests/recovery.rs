@@ -6,22 +6,22 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Child, Command};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use common::{
-    TempDir, agent, base_url, cli_final_positions, is_final, largest_difference, positions,
-    request, slow_case, spawn_mpm, wait_for,
+    Process, TempDir, agent, base_url, cli_final_positions, is_final, largest_difference,
+    positions, request, slow_case, spawn_mpm, wait_for,
 };
 use serde_json::{Value, json};
 
 /// Starts `mpm serve` on a free port; returns the child and its base URL.
-fn start_server(database: &Path) -> (Child, String) {
+fn start_server(database: &Path) -> (Process, String) {
     start_server_with(database, &[])
 }
 
 /// Starts `mpm serve` with extra flags.
-fn start_server_with(database: &Path, flags: &[&str]) -> (Child, String) {
+fn start_server_with(database: &Path, flags: &[&str]) -> (Process, String) {
     let database = database.to_str().unwrap();
     let mut args = vec![
         "serve",
@@ -140,7 +140,8 @@ fn finished_jobs_and_their_steps_survive_a_restart() {
             .as_array()
             .unwrap()
             .len(),
-        5
+        6,
+        "step 0 and five load steps"
     );
     second.kill().unwrap();
     second.wait().unwrap();

@@ -40,12 +40,21 @@ enum Command {
         /// Run this built-in example instead of a file.
         #[arg(long, conflicts_with = "case")]
         example: Option<String>,
-        /// Output directory: summary.json, steps/step_NNNN.{json,vtu}, points.pvd.
+        /// Output directory (empty, or --force): summary.json,
+        /// steps/step_NNNN.{json,vtu}, points.pvd; case.json, reports.jsonl
+        /// and checkpoint.bin for --resume.
         #[arg(long, default_value = "out")]
         out: PathBuf,
         /// Write only summary.json (no per-step point files).
         #[arg(long)]
         summary_only: bool,
+        /// Replace an earlier run's files in a non-empty output directory.
+        #[arg(long)]
+        force: bool,
+        /// Go on with the run in this directory (an earlier --out) from its
+        /// last checkpoint.
+        #[arg(long, conflicts_with_all = ["case", "example", "force"], value_name = "DIR")]
+        resume: Option<PathBuf>,
     },
     /// Print a built-in example case (list them when no name is given).
     Example { name: Option<String> },
@@ -95,11 +104,18 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run {
+            resume: Some(dir),
+            summary_only,
+            ..
+        } => run::resume(&dir, !summary_only),
+        Command::Run {
             case,
             example,
             out,
             summary_only,
-        } => run::run(case, example, &out, !summary_only),
+            force,
+            resume: None,
+        } => run::run(case, example, &out, !summary_only, force),
         Command::Example { name } => example(name),
         Command::Bench {
             max_points,

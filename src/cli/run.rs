@@ -1,23 +1,46 @@
 //! `mpm run`: solve one case, show progress on stderr, print a line per step
-//! and write the results.
+//! and write the results; with a checkpoint every few steps, so that
+//! `mpm run --resume DIR` goes on with a run that stopped.
 
 use std::fs::{self, File};
 use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
+use mpm::case::OutputSpec;
 use mpm::report::PointColumns;
 use mpm::vtk::{write_pvd, write_vtp, write_vtu};
-use mpm::{Case, Observer, RunReport, Simulation, StepReport, StepState};
+use mpm::{Case, Checkpoint, Observer, RunReport, Simulation, StepReport, StepState};
 use mpm_service::step::StepDocument;
 use serde::Serialize;
 
 use crate::{CliError, DEFAULT_EXAMPLE};
 
+/// The files `mpm run` writes in its output directory (and `--force`
+/// removes): these, and `steps/step_*`.
+const OWNED_FILES: [&str; 6] = [
+    "summary.json",
+    "points.pvd",
+    "boundary.pvd",
+    CASE_FILE,
+    CHECKPOINT_FILE,
+    REPORTS_FILE,
+];
+/// The case as run, for `--resume`.
+const CASE_FILE: &str = "case.json";
+/// The solver's state after the last checkpointed step (`mpm::Checkpoint`).
+const CHECKPOINT_FILE: &str = "checkpoint.bin";
+/// One step report (JSON) a line, appended as steps finish.
+const REPORTS_FILE: &str = "reports.jsonl";
+
+/// `mpm run`: solves a case (a file, or a built-in example) into `out`,
+/// which must be empty unless `force` (then the files of an earlier run
+/// there are removed first).
 pub fn run(
     case_path: Option<PathBuf>,
     example: Option<String>,
     out: &Path,
     point_files: bool,
+    force: bool,
 ) -> Result<(), CliError> {
     let (source, text) = match case_path {
         Some(path) => {
@@ -33,10 +56,119 @@ pub fn run(
         }
     };
     let case = Case::from_json(&text).map_err(|e| CliError::input(format!("{source}: {e}")))?;
+    let sim = Simulation::new(&case).map_err(|e| CliError::input(format!("{source}: {e}")))?;
+    prepare_output(out, force)?;
+    fs::write(out.join(CASE_FILE), &text)?;
+    solve(case, sim, &source, out, point_files, Vec::new(), None)
+}
+
+/// `mpm run --resume DIR`: goes on with the run in `dir` from its last
+/// checkpoint, dropping what was written after it.
+pub fn resume(dir: &Path, point_files: bool) -> Result<(), CliError> {
+    let source = dir.join(CASE_FILE);
+    let text = fs::read_to_string(&source).map_err(|e| {
+        CliError::input(format!(
+            "{}: {e} (is {} the output of an mpm run?)",
+            source.display(),
+            dir.display()
+        ))
+    })?;
+    let source = source.display().to_string();
+    let case = Case::from_json(&text).map_err(|e| CliError::input(format!("{source}: {e}")))?;
     let mut sim = Simulation::new(&case).map_err(|e| CliError::input(format!("{source}: {e}")))?;
+    let bytes = fs::read(dir.join(CHECKPOINT_FILE)).map_err(|e| {
+        CliError::input(format!(
+            "{}: {e} (the run stopped before its first checkpoint: run it again)",
+            dir.join(CHECKPOINT_FILE).display()
+        ))
+    })?;
+    let checkpoint = Checkpoint::from_bytes(&bytes)
+        .and_then(|c| sim.restore(&c).map(|()| c))
+        .map_err(|e| CliError::input(format!("{}: {e}", dir.join(CHECKPOINT_FILE).display())))?;
+    let done = checkpoint.steps_done();
+    // Reports and step files past the checkpoint belong to the stopped try.
+    let earlier: Vec<StepReport> = fs::read_to_string(dir.join(REPORTS_FILE))
+        .unwrap_or_default()
+        .lines()
+        .map(serde_json::from_str)
+        .collect::<Result<Vec<StepReport>, _>>()
+        .map_err(|e| CliError::input(format!("{}: {e}", dir.join(REPORTS_FILE).display())))?
+        .into_iter()
+        .filter(|r| r.step <= done)
+        .collect();
+    remove_step_files(dir, |step| step > done)?;
+    let mut lines = String::new();
+    for r in &earlier {
+        lines.push_str(&serde_json::to_string(r).map_err(|e| CliError::failed(e.to_string()))?);
+        lines.push('\n');
+    }
+    fs::write(dir.join(REPORTS_FILE), lines)?;
+    eprintln!("resuming after step {done} of {}", sim.load_steps);
+    solve(case, sim, &source, dir, point_files, earlier, Some(done))
+}
+
+/// Refuses a non-empty output directory, unless `force`: then removes the
+/// files an earlier run wrote there (and nothing else).
+fn prepare_output(out: &Path, force: bool) -> Result<(), CliError> {
+    let occupied = fs::read_dir(out).is_ok_and(|mut entries| entries.next().is_some());
+    if occupied && !force {
+        return Err(CliError::input(format!(
+            "{} is not empty: give --force to replace an earlier run's files there, or \
+             --resume {} to go on with a run that stopped",
+            out.display(),
+            out.display()
+        )));
+    }
+    if occupied {
+        for name in OWNED_FILES {
+            match fs::remove_file(out.join(name)) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e.into()),
+                _ => {}
+            }
+        }
+        remove_step_files(out, |_| true)?;
+        // Gone if it held only step files.
+        let _ = fs::remove_dir(out.join("steps"));
+    }
+    fs::create_dir_all(out.join("steps"))?;
+    Ok(())
+}
+
+/// Removes `steps/step_NNNN*` files whose step `NNNN` satisfies `remove`.
+fn remove_step_files(out: &Path, remove: impl Fn(usize) -> bool) -> Result<(), CliError> {
+    let Ok(entries) = fs::read_dir(out.join("steps")) else {
+        return Ok(());
+    };
+    for entry in entries {
+        let entry = entry?;
+        let name = entry.file_name();
+        let step = name
+            .to_str()
+            .and_then(|n| n.strip_prefix("step_"))
+            .and_then(|n| n.get(..4))
+            .and_then(|n| n.parse::<usize>().ok());
+        if step.is_some_and(&remove) {
+            fs::remove_file(entry.path())?;
+        }
+    }
+    Ok(())
+}
+
+/// Solves the steps `sim` has not done, writing into `out`; `earlier` are
+/// the reports of the steps done before a run resumed after step
+/// `resumed_from`.
+fn solve(
+    case: Case,
+    mut sim: Simulation,
+    source: &str,
+    out: &Path,
+    point_files: bool,
+    earlier: Vec<StepReport>,
+    resumed_from: Option<usize>,
+) -> Result<(), CliError> {
     eprintln!(
         "{}: {} material points, {} load steps, {:?} basis, cells of {} m",
-        case.title.as_deref().unwrap_or(&source),
+        case.title.as_deref().unwrap_or(source),
         sim.points.len(),
         sim.load_steps,
         sim.basis,
@@ -44,20 +176,47 @@ pub fn run(
     );
     let steps_dir = out.join("steps");
     fs::create_dir_all(&steps_dir)?;
+    let n = sim.load_steps;
     let mut writer = ResultWriter {
+        out: out.to_path_buf(),
         steps_dir,
         point_files,
+        output: case.output.clone(),
+        checkpoint_every: mpm_service::config::checkpoint_interval(0, sim.points.len()),
         step_files: Vec::new(),
         boundary_files: Vec::new(),
+        reports: BufWriter::new(
+            fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(out.join(REPORTS_FILE))?,
+        ),
         progress: Progress::new(),
         io_error: None,
     };
+    // The step files kept from before a resumed run's checkpoint.
+    for step in 0..=sim.steps_done() {
+        let stem = format!("step_{step:04}");
+        if writer.steps_dir.join(format!("{stem}.vtu")).exists() {
+            writer.list_step_files(step as f64 / n as f64, &stem);
+        }
+    }
+    if sim.steps_done() == 0 && point_files {
+        let (report, state) = sim.initial_step();
+        writer.write_step(&report, &state)?;
+    }
     let result = sim.run(&mut writer);
     writer.progress.finish();
     if let Some(e) = writer.io_error {
         return Err(e.into());
     }
-    let report = result.map_err(|e| CliError::failed(format!("solve failed: {e}")))?;
+    let mut report = result.map_err(|e| {
+        CliError::failed(format!(
+            "solve failed: {e} (mpm run --resume {} goes on from the last checkpoint)",
+            out.display()
+        ))
+    })?;
+    writer.reports.flush()?;
     if point_files {
         write_pvd(
             BufWriter::new(File::create(out.join("points.pvd"))?),
@@ -68,10 +227,14 @@ pub fn run(
             &writer.boundary_files,
         )?;
     }
-    let summary = Summary::new(&case, &source, &report);
+    report.wall_seconds += earlier.iter().map(|s| s.timings.total).sum::<f64>();
+    report.steps.splice(0..0, earlier);
+    let summary = Summary::new(&case, source, &report, resumed_from);
     let mut f = BufWriter::new(File::create(out.join("summary.json"))?);
     serde_json::to_writer_pretty(&mut f, &summary).map_err(|e| CliError::failed(e.to_string()))?;
     f.flush()?;
+    // The run is complete: nothing to resume.
+    let _ = fs::remove_file(out.join(CHECKPOINT_FILE));
     eprintln!(
         "done in {:.3} s; results in {}",
         report.wall_seconds,
@@ -85,6 +248,9 @@ pub fn run(
 #[derive(Serialize)]
 struct Summary<'a> {
     case: &'a str,
+    /// The step a resumed run went on after (`mpm run --resume`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    resumed_from: Option<usize>,
     title: Option<&'a str>,
     points: usize,
     load_steps: usize,
@@ -114,9 +280,15 @@ struct ProbeSummary {
 }
 
 impl<'a> Summary<'a> {
-    fn new(case: &'a Case, source: &'a str, report: &'a RunReport) -> Self {
+    fn new(
+        case: &'a Case,
+        source: &'a str,
+        report: &'a RunReport,
+        resumed_from: Option<usize>,
+    ) -> Self {
         Self {
             case: source,
+            resumed_from,
             title: case.title.as_deref(),
             points: report.points,
             load_steps: report.load_steps,
@@ -155,8 +327,14 @@ impl<'a> Summary<'a> {
 }
 
 struct ResultWriter {
+    out: PathBuf,
     steps_dir: PathBuf,
     point_files: bool,
+    /// Which steps write their points, and which columns.
+    output: OutputSpec,
+    /// Write the solver's state every this many steps.
+    checkpoint_every: usize,
+    reports: BufWriter<File>,
     /// `(load factor, file name relative to the output directory)`.
     step_files: Vec<(f64, String)>,
     boundary_files: Vec<(f64, String)>,
@@ -166,9 +344,12 @@ struct ResultWriter {
 
 impl ResultWriter {
     fn write_step(&mut self, report: &StepReport, state: &StepState<'_>) -> std::io::Result<()> {
+        if !self.output.stores_points(report.step, state.load_steps()) {
+            return Ok(());
+        }
         let stem = format!("step_{:04}", report.step);
         let json = File::create(self.steps_dir.join(format!("{stem}.json")))?;
-        let columns = PointColumns::new(state.points);
+        let columns = PointColumns::selected(state.points, self.output.fields.as_deref());
         let boundaries = state.boundaries();
         let document = StepDocument {
             report,
@@ -186,10 +367,30 @@ impl ResultWriter {
         )?);
         write_vtp(&mut vtp, &boundaries)?;
         vtp.flush()?;
+        self.list_step_files(report.load_factor, &stem);
+        Ok(())
+    }
+
+    /// Adds a step's VTK files to the `.pvd` series.
+    fn list_step_files(&mut self, load_factor: f64, stem: &str) {
         self.step_files
-            .push((report.load_factor, format!("steps/{stem}.vtu")));
+            .push((load_factor, format!("steps/{stem}.vtu")));
         self.boundary_files
-            .push((report.load_factor, format!("steps/{stem}_boundary.vtp")));
+            .push((load_factor, format!("steps/{stem}_boundary.vtp")));
+    }
+
+    /// The step's report as a line of `reports.jsonl`, then, when one is
+    /// due, the checkpoint (written aside and renamed, so a kill leaves the
+    /// previous one whole).
+    fn record_step(&mut self, report: &StepReport, state: &StepState<'_>) -> std::io::Result<()> {
+        serde_json::to_writer(&mut self.reports, report)?;
+        self.reports.write_all(b"\n")?;
+        self.reports.flush()?;
+        if report.step.is_multiple_of(self.checkpoint_every) {
+            let aside = self.out.join(format!("{CHECKPOINT_FILE}.new"));
+            fs::write(&aside, state.checkpoint().to_bytes())?;
+            fs::rename(aside, self.out.join(CHECKPOINT_FILE))?;
+        }
         Ok(())
     }
 }
@@ -228,6 +429,11 @@ impl Observer for ResultWriter {
         if self.point_files
             && self.io_error.is_none()
             && let Err(e) = self.write_step(report, state)
+        {
+            self.io_error = Some(e);
+        }
+        if self.io_error.is_none()
+            && let Err(e) = self.record_step(report, state)
         {
             self.io_error = Some(e);
         }

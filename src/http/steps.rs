@@ -52,6 +52,9 @@ pub async fn step(
         .ok_or_else(|| ApiError::NotFound(format!("step {k} of job {id}")))?;
     match q.format.as_deref() {
         None | Some("json") => Ok(Json(step).into_response()),
+        Some("vtu") if !step.has_points() => Err(ApiError::NotFound(format!(
+            "points of step {k} of job {id}: its case stores them every output.every steps"
+        ))),
         Some("vtu") => {
             let columns: PointColumns = serde_json::from_str(step.points.get())
                 .map_err(|e| ApiError::Internal(format!("stored points: {e}")))?;

@@ -163,8 +163,8 @@ pub struct Footprint {
     pub loops: usize,
 }
 
-/// What a job will store: every load step's points and boundary curves (at
-/// most), and its report, whose size grows with the probes, the supports
+/// What a job will store: the points and boundary curves (at most) of the
+/// steps its case's `output` keeps (step 0 included), and every step's report, whose size grows with the probes, the supports
 /// and the Newton history (one solve's worth: a step cut into pieces adds
 /// about 50 bytes an iteration of each).
 pub fn stored_bytes(case: &Case, seeded: Footprint) -> f64 {
@@ -177,11 +177,13 @@ pub fn stored_bytes(case: &Case, seeded: Footprint) -> f64 {
         + probes
         + 60.0 * case.supports.len() as f64
         + 50.0 * f64::from(case.analysis.newton.max_iterations + 1);
-    let step = seeded.points as f64 * STORED_BYTES_PER_POINT
+    let points = seeded.points as f64 * STORED_BYTES_PER_POINT
         + seeded.boundary_points as f64 * STORED_BYTES_PER_BOUNDARY_POINT
-        + seeded.loops as f64 * STORED_BYTES_PER_LOOP
-        + report;
-    step * f64::from(case.analysis.load_steps)
+        + seeded.loops as f64 * STORED_BYTES_PER_LOOP;
+    let load_steps = case.analysis.load_steps as usize;
+    // Reports of steps 0..=n; points of step 0, every `output.every`-th
+    // and the last.
+    points * case.output.point_steps(load_steps) as f64 + report * (load_steps + 1) as f64
 }
 
 /// Refuses a job whose stored steps would pass the limit, naming the field

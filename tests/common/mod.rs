@@ -396,10 +396,35 @@ pub fn filled_at_1mm(geometry: Value) -> Value {
     case
 }
 
+/// A child process killed when dropped, so a test that fails part-way
+/// leaves no server running (one that holds the test's stderr open keeps
+/// cargo waiting for ever).
+pub struct Process(pub std::process::Child);
+
+impl std::ops::Deref for Process {
+    type Target = std::process::Child;
+    fn deref(&self) -> &Self::Target {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Process {
+    fn deref_mut(&mut self) -> &mut Self::Target {
+        &mut self.0
+    }
+}
+
+impl Drop for Process {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// Starts the `mpm` binary with `args` and waits for its first line on
 /// stdout (`mpm serve` prints its address there, `mpm worker` its start);
 /// its stderr goes to `log` when given. Returns the child and the line.
-pub fn spawn_mpm(args: &[&str], log: Option<&std::path::Path>) -> (std::process::Child, String) {
+pub fn spawn_mpm(args: &[&str], log: Option<&std::path::Path>) -> (Process, String) {
     use std::io::{BufRead, BufReader};
     // Logs to a file in full; to the terminal, only what went wrong.
     let (stderr, level) = match log {
@@ -418,7 +443,7 @@ pub fn spawn_mpm(args: &[&str], log: Option<&std::path::Path>) -> (std::process:
         .read_line(&mut line)
         .unwrap();
     assert!(!line.is_empty(), "mpm {args:?} exited before starting");
-    (child, line)
+    (Process(child), line)
 }
 
 /// The base URL in `mpm serve`'s first line.

@@ -23,6 +23,11 @@ impl<'a> StepState<'a> {
         }
     }
 
+    /// Load steps in the run.
+    pub fn load_steps(&self) -> usize {
+        self.simulation.load_steps
+    }
+
     /// The run's state after this step, to resume from
     /// ([`Simulation::restore`]).
     pub fn checkpoint(&self) -> Checkpoint {

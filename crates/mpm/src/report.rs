@@ -114,44 +114,87 @@ pub struct RunReport {
     pub steps: Vec<StepReport>,
 }
 
-/// The material-point state as columns, for JSON.
-#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
+/// A column of [`PointColumns`], as a case's `output.fields` names it.
+#[derive(Debug, Clone, Copy, Serialize, serde::Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum PointField {
+    Position,
+    Displacement,
+    Stress,
+    Volume,
+    Jacobian,
+    Body,
+    PlasticStrain,
+    Yielding,
+}
+
+/// The material-point state as columns, for JSON. A column left out by the
+/// case's `output.fields` is empty and not written.
+#[derive(Debug, Clone, Default, Serialize, serde::Deserialize, PartialEq)]
 pub struct PointColumns {
     pub position: Vec<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub displacement: Vec<[f64; 2]>,
     /// Cauchy stress `[xx, yy, xy, zz]`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub stress: Vec<[f64; 4]>,
     /// Current volume `J V0`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub volume: Vec<f64>,
     /// Volume ratio `J = det F`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub jacobian: Vec<f64>,
     /// Index of the body the point belongs to.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub body: Vec<u32>,
     /// Accumulated plastic strain (zero for the elastic models).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub plastic_strain: Vec<f64>,
     /// Whether the point flowed plastically in the step.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub yielding: Vec<bool>,
 }
 
 impl PointColumns {
+    /// Every column.
     pub fn new(mp: &MaterialPoints) -> Self {
+        Self::selected(mp, None)
+    }
+
+    /// `position` and the columns in `fields` (all when `None`).
+    pub fn selected(mp: &MaterialPoints, fields: Option<&[PointField]>) -> Self {
         let n = mp.len();
-        Self {
+        let wanted = |f: PointField| fields.is_none_or(|fs| fs.contains(&f));
+        let mut columns = Self {
             position: mp.position.clone(),
-            displacement: (0..n).map(|p| mp.displacement(p)).collect(),
-            stress: mp
+            ..Self::default()
+        };
+        if wanted(PointField::Displacement) {
+            columns.displacement = (0..n).map(|p| mp.displacement(p)).collect();
+        }
+        if wanted(PointField::Stress) {
+            columns.stress = mp
                 .stress
                 .iter()
                 .map(|s| [s.plane[0], s.plane[1], s.plane[2], s.zz])
-                .collect(),
-            volume: (0..n).map(|p| mp.volume(p)).collect(),
-            jacobian: (0..n).map(|p| mp.jacobian(p)).collect(),
-            body: mp.material.clone(),
-            plastic_strain: mp.history.iter().map(|h| h.plastic_strain).collect(),
-            yielding: mp.yielding.clone(),
+                .collect();
         }
+        if wanted(PointField::Volume) {
+            columns.volume = (0..n).map(|p| mp.volume(p)).collect();
+        }
+        if wanted(PointField::Jacobian) {
+            columns.jacobian = (0..n).map(|p| mp.jacobian(p)).collect();
+        }
+        if wanted(PointField::Body) {
+            columns.body = mp.material.clone();
+        }
+        if wanted(PointField::PlasticStrain) {
+            columns.plastic_strain = mp.history.iter().map(|h| h.plastic_strain).collect();
+        }
+        if wanted(PointField::Yielding) {
+            columns.yielding = mp.yielding.clone();
+        }
+        columns
     }
 }
 

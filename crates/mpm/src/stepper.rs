@@ -155,6 +155,26 @@ pub struct Simulation {
 }
 
 impl Simulation {
+    /// Step 0: the state before any load, as a report (no Newton solve, no
+    /// reactions) and the points, for writers that show the start.
+    pub fn initial_step(&self) -> (StepReport, StepState<'_>) {
+        let report = StepReport {
+            step: 0,
+            load_factor: 0.0,
+            newton: Default::default(),
+            substeps: 0,
+            cutbacks: 0,
+            failed_iterations: 0,
+            timings: StepTimings::default(),
+            active_nodes: 0,
+            active_dofs: 0,
+            probes: self.probes.reports(),
+            reactions: vec![[0.0; 2]; self.n_supports],
+            applied_load: [0.0; 2],
+        };
+        (report, StepState::new(self))
+    }
+
     /// Runs the load steps not yet done (all of them, unless the run was
     /// restored from a [`crate::Checkpoint`]), reporting each to `observer`.
     pub fn run(&mut self, observer: &mut dyn Observer) -> Result<RunReport, SolveError> {

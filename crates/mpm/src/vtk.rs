@@ -39,7 +39,11 @@ pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
     let mut blocks: Vec<Vec<u8>> = Vec::new();
     let mut xml = String::new();
     let mut offset = 0usize;
+    // A column the case left out (empty) is not written.
     let mut array = |xml: &mut String, name: &str, ty: &str, comps: usize, bytes: Vec<u8>| {
+        if bytes.is_empty() && n > 0 {
+            return;
+        }
         xml.push_str(&format!(
             "        <DataArray type=\"{ty}\" Name=\"{name}\" NumberOfComponents=\"{comps}\" format=\"appended\" offset=\"{offset}\"/>\n"
         ));
@@ -55,7 +59,17 @@ pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
     xml.push_str(&format!(
         "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{n}\">\n"
     ));
-    xml.push_str("      <PointData Vectors=\"displacement\" Tensors=\"stress\">\n");
+    let vectors = if cols.displacement.is_empty() {
+        ""
+    } else {
+        " Vectors=\"displacement\""
+    };
+    let tensors = if cols.stress.is_empty() {
+        ""
+    } else {
+        " Tensors=\"stress\""
+    };
+    xml.push_str(&format!("      <PointData{vectors}{tensors}>\n"));
     array(&mut xml, "displacement", "Float64", 3, f64s(&displacement));
     array(&mut xml, "stress", "Float64", 6, f64s(&stress));
     array(&mut xml, "volume", "Float64", 1, f64s(&cols.volume));

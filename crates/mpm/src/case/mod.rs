@@ -52,6 +52,52 @@ pub struct Case {
     /// Where the boundary curve runs.
     #[serde(default)]
     pub boundary: BoundarySpec,
+    /// Which steps' material points are stored, and which of their columns.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// What a run stores of its steps (the CLI's files, the service's rows).
+/// Step reports (Newton, probes, reactions) are kept for every step; the
+/// material points and boundary curves for step 0 (the undeformed state),
+/// every `every`-th step and the last.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Store the points every this many load steps (default 1: every step).
+    #[serde(default = "default_every")]
+    pub every: u32,
+    /// The point columns to store (default: all); `position` is always
+    /// stored.
+    #[serde(default)]
+    pub fields: Option<Vec<crate::report::PointField>>,
+}
+
+fn default_every() -> u32 {
+    1
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        Self {
+            every: default_every(),
+            fields: None,
+        }
+    }
+}
+
+impl OutputSpec {
+    /// Whether step `step` of `load_steps` stores its points.
+    pub fn stores_points(&self, step: usize, load_steps: usize) -> bool {
+        step == 0 || step == load_steps || step.is_multiple_of(self.every.max(1) as usize)
+    }
+
+    /// How many of the steps 0..=load_steps store their points.
+    pub fn point_steps(&self, load_steps: usize) -> usize {
+        let every = self.every.max(1) as usize;
+        // Step 0, the multiples of `every`, and the last if it is not one.
+        1 + load_steps / every + usize::from(!load_steps.is_multiple_of(every))
+    }
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]

@@ -101,6 +101,9 @@ impl Case {
         if a.load_steps == 0 {
             return Err(CaseError::new("analysis.load_steps", "must be at least 1"));
         }
+        if self.output.every == 0 {
+            return Err(CaseError::new("output.every", "must be at least 1"));
+        }
         positive("analysis.newton.tolerance", a.newton.tolerance)?;
         if a.newton.max_iterations == 0 {
             return Err(CaseError::new(
