@@ -196,3 +196,32 @@ fn sigterm_does_not_wait_for_a_submission_being_checked() {
     assert_eq!(status, 503, "{body}");
     assert!(body.contains("\"unavailable\""), "{body}");
 }
+
+/// Logs written to a file (a container's stderr) carry no colour codes;
+/// they once did, and container logs showed the escape sequences.
+#[test]
+fn logs_off_a_terminal_have_no_colour_codes() {
+    let dir = TempDir::new("logs");
+    let log = dir.0.join("serve.log");
+    let database = dir.0.join("jobs.sqlite");
+    let (server, _) = spawn_mpm(
+        &[
+            "serve",
+            "--addr",
+            "127.0.0.1:0",
+            "--database",
+            database.to_str().unwrap(),
+        ],
+        Some(&log),
+    );
+    let term = Command::new("kill")
+        .args(["-TERM", &server.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(term.success());
+    let mut server = server;
+    server.wait().unwrap();
+    let text = std::fs::read_to_string(&log).unwrap();
+    assert!(text.contains("shutting down"), "{text}");
+    assert!(!text.contains('\u{1b}'), "escape codes in: {text:?}");
+}

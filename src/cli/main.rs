@@ -3,10 +3,12 @@
 //! - `mpm run [CASE.json] [--out DIR]` solves a case (the built-in default
 //!   example when no file is given) and writes per-step JSON and VTU files.
 //! - `mpm example [NAME]` prints a built-in case (lists them without a name).
-//! - `mpm bench` measures cost against problem size and writes a report.
+//! - `mpm bench` measures cost against problem size and writes a report;
+//!   `mpm bench-queue` adds the job queue's section.
 //! - `mpm serve` runs the HTTP job service (see the README and openapi.yaml).
 //! - `mpm worker` solves the service's jobs on another machine.
 
+mod bench_queue;
 mod run;
 mod serve;
 
@@ -70,6 +72,9 @@ enum Command {
         #[arg(long, default_value_t = 21)]
         repeats: usize,
     },
+    /// Measure the job queue (per-job overhead, throughput, checkpoints)
+    /// and write its section of the benchmark report.
+    BenchQueue(bench_queue::QueueBenchArgs),
     /// Convergence studies written as tables (CSV, markdown) and SVG plots.
     Study {
         /// Which study: `cantilever` (the paper's Figure 3, both support
@@ -122,6 +127,7 @@ fn main() -> ExitCode {
             out,
             repeats,
         } => bench::bench(max_points, &out, repeats).map_err(CliError::from),
+        Command::BenchQueue(args) => bench_queue::bench_queue(args),
         Command::BenchRow { scene, points } => {
             bench::bench_row(scene, points).map_err(CliError::from)
         }

@@ -46,7 +46,9 @@ fn example(name: &str) -> Value {
     mpm::case::builtin::json(name).expect("built-in example")
 }
 
-fn wide_column(points: usize) -> Value {
+/// The self-weight column made 10 m wide with about `points` points (the
+/// first scene of the size table).
+pub fn wide_column(points: usize) -> Value {
     let h = 10.0 / cells_across(points) as f64;
     let mut case = example("column");
     case["grid"]["cell_size"] = h.into();
@@ -136,6 +138,14 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabErr
         }
     }
     report.push_str(&return_map_cost()?);
+    // `mpm bench-queue` writes its own section: keep it.
+    let earlier = fs::read_to_string(out).unwrap_or_default();
+    if let Some(start) = earlier.find("\n## Job queue") {
+        let rest = &earlier[start + 1..];
+        let end = rest[3..].find("\n## ").map_or(rest.len(), |i| i + 4);
+        report.push('\n');
+        report.push_str(&rest[..end]);
+    }
     fs::write(out, &report)?;
     println!("{report}");
     Ok(())
