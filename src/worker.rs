@@ -186,8 +186,15 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
         observer.checkpoint_every =
             crate::config::checkpoint_interval(shared.config.checkpoint_every, sim.points.len());
         observer.output = case.output.clone();
-        if let Some((step, state)) = &job.checkpoint {
-            resume(&mut sim, job.id, *step, state);
+        if let Some((step, state)) = &job.checkpoint
+            && !resume(&mut sim, job.id, *step, state)
+        {
+            let reset = shared
+                .runtime
+                .block_on(shared.store.start_over(job.id, owner));
+            if let Err(e) = reset {
+                observer.store_error = Some(e.to_string());
+            }
         }
         if sim.steps_done() == 0 {
             // Step 0, the undeformed state, so a viewer shows the start.
@@ -236,14 +243,18 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
     tracing::info!(job = job.id, seconds, "job ended");
 }
 
-/// Restores a claimed job's checkpoint. One that does not fit (a solver of
-/// another version wrote it) is logged and the job starts over from step
-/// 1, its stored steps overwritten as it goes.
-fn resume(sim: &mut Simulation, job: i64, step: i64, state: &[u8]) {
+/// Restores a claimed job's checkpoint; whether it could. One that does not
+/// fit (a solver of another version wrote it) is logged, and the job starts
+/// over from step 1.
+fn resume(sim: &mut Simulation, job: i64, step: i64, state: &[u8]) -> bool {
     match Checkpoint::from_bytes(state).and_then(|c| sim.restore(&c)) {
-        Ok(()) => tracing::info!(job, step, "resuming from the checkpoint"),
+        Ok(()) => {
+            tracing::info!(job, step, "resuming from the checkpoint");
+            true
+        }
         Err(e) => {
-            tracing::warn!(job, step, error = %e, "the checkpoint cannot be resumed; starting over")
+            tracing::warn!(job, step, error = %e, "the checkpoint cannot be resumed; starting over");
+            false
         }
     }
 }

@@ -17,18 +17,21 @@ use crate::{CliError, DEFAULT_EXAMPLE};
 
 /// The files `mpm run` writes in its output directory (and `--force`
 /// removes): these, and `steps/step_*`.
-const OWNED_FILES: [&str; 6] = [
+const OWNED_FILES: [&str; 7] = [
     "summary.json",
     "points.pvd",
     "boundary.pvd",
     CASE_FILE,
     CHECKPOINT_FILE,
+    NEW_CHECKPOINT_FILE,
     REPORTS_FILE,
 ];
 /// The case as run, for `--resume`.
 const CASE_FILE: &str = "case.json";
 /// The solver's state after the last checkpointed step (`mpm::Checkpoint`).
 const CHECKPOINT_FILE: &str = "checkpoint.bin";
+/// A checkpoint being written, renamed to [`CHECKPOINT_FILE`] when whole.
+const NEW_CHECKPOINT_FILE: &str = "checkpoint.bin.new";
 /// One step report (JSON) a line, appended as steps finish.
 const REPORTS_FILE: &str = "reports.jsonl";
 
@@ -86,23 +89,41 @@ pub fn resume(dir: &Path, point_files: bool) -> Result<(), CliError> {
         .and_then(|c| sim.restore(&c).map(|()| c))
         .map_err(|e| CliError::input(format!("{}: {e}", dir.join(CHECKPOINT_FILE).display())))?;
     let done = checkpoint.steps_done();
-    // Reports and step files past the checkpoint belong to the stopped try.
-    let earlier: Vec<StepReport> = fs::read_to_string(dir.join(REPORTS_FILE))
-        .unwrap_or_default()
-        .lines()
-        .map(serde_json::from_str)
-        .collect::<Result<Vec<StepReport>, _>>()
-        .map_err(|e| CliError::input(format!("{}: {e}", dir.join(REPORTS_FILE).display())))?
-        .into_iter()
-        .filter(|r| r.step <= done)
-        .collect();
-    remove_step_files(dir, |step| step > done)?;
-    let mut lines = String::new();
-    for r in &earlier {
-        lines.push_str(&serde_json::to_string(r).map_err(|e| CliError::failed(e.to_string()))?);
-        lines.push('\n');
+    // Reports and step files past the checkpoint belong to the stopped try;
+    // a kill may have cut its last report line short.
+    let reports_path = dir.join(REPORTS_FILE);
+    let text = fs::read_to_string(&reports_path).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut earlier = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        match serde_json::from_str::<StepReport>(line) {
+            Ok(r) if r.step <= done => earlier.push(r),
+            Ok(_) => {}
+            Err(_) if i + 1 == lines.len() => {}
+            Err(e) => {
+                return Err(CliError::input(format!(
+                    "{} line {}: {e}",
+                    reports_path.display(),
+                    i + 1
+                )));
+            }
+        }
     }
-    fs::write(dir.join(REPORTS_FILE), lines)?;
+    if !earlier.iter().map(|r| r.step).eq(1..=done) {
+        return Err(CliError::input(format!(
+            "{} does not hold the reports of steps 1 to {done}, the checkpoint's",
+            reports_path.display()
+        )));
+    }
+    remove_step_files(dir, |step| step > done)?;
+    let mut kept = String::new();
+    for r in &earlier {
+        kept.push_str(&serde_json::to_string(r).map_err(|e| CliError::failed(e.to_string()))?);
+        kept.push('\n');
+    }
+    let aside = dir.join(format!("{REPORTS_FILE}.new"));
+    fs::write(&aside, kept)?;
+    fs::rename(aside, &reports_path)?;
     eprintln!("resuming after step {done} of {}", sim.load_steps);
     solve(case, sim, &source, dir, point_files, earlier, Some(done))
 }
@@ -134,7 +155,8 @@ fn prepare_output(out: &Path, force: bool) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Removes `steps/step_NNNN*` files whose step `NNNN` satisfies `remove`.
+/// Removes the step files (`steps/step_N.json`, `.vtu`,
+/// `_boundary.vtp`) whose step `N` satisfies `remove`.
 fn remove_step_files(out: &Path, remove: impl Fn(usize) -> bool) -> Result<(), CliError> {
     let Ok(entries) = fs::read_dir(out.join("steps")) else {
         return Ok(());
@@ -142,11 +164,14 @@ fn remove_step_files(out: &Path, remove: impl Fn(usize) -> bool) -> Result<(), C
     for entry in entries {
         let entry = entry?;
         let name = entry.file_name();
-        let step = name
-            .to_str()
-            .and_then(|n| n.strip_prefix("step_"))
-            .and_then(|n| n.get(..4))
-            .and_then(|n| n.parse::<usize>().ok());
+        let step = name.to_str().and_then(|n| {
+            let n = n.strip_prefix("step_")?;
+            let digits = n.find(|c: char| !c.is_ascii_digit()).unwrap_or(n.len());
+            let suffix = &n[digits..];
+            [".json", ".vtu", "_boundary.vtp"]
+                .contains(&suffix)
+                .then(|| n[..digits].parse::<usize>().ok())?
+        });
         if step.is_some_and(&remove) {
             fs::remove_file(entry.path())?;
         }
@@ -185,12 +210,10 @@ fn solve(
         checkpoint_every: mpm_service::config::checkpoint_interval(0, sim.points.len()),
         step_files: Vec::new(),
         boundary_files: Vec::new(),
-        reports: BufWriter::new(
-            fs::OpenOptions::new()
-                .create(true)
-                .append(true)
-                .open(out.join(REPORTS_FILE))?,
-        ),
+        reports: fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(out.join(REPORTS_FILE))?,
         progress: Progress::new(),
         io_error: None,
     };
@@ -216,7 +239,6 @@ fn solve(
             out.display()
         ))
     })?;
-    writer.reports.flush()?;
     if point_files {
         write_pvd(
             BufWriter::new(File::create(out.join("points.pvd"))?),
@@ -334,7 +356,8 @@ struct ResultWriter {
     output: OutputSpec,
     /// Write the solver's state every this many steps.
     checkpoint_every: usize,
-    reports: BufWriter<File>,
+    /// `reports.jsonl`, unbuffered: a line goes out in one write.
+    reports: File,
     /// `(load factor, file name relative to the output directory)`.
     step_files: Vec<(f64, String)>,
     boundary_files: Vec<(f64, String)>,
@@ -383,11 +406,12 @@ impl ResultWriter {
     /// due, the checkpoint (written aside and renamed, so a kill leaves the
     /// previous one whole).
     fn record_step(&mut self, report: &StepReport, state: &StepState<'_>) -> std::io::Result<()> {
-        serde_json::to_writer(&mut self.reports, report)?;
-        self.reports.write_all(b"\n")?;
-        self.reports.flush()?;
+        // One write a line: a kill cuts at most the last one.
+        let mut line = serde_json::to_string(report)?;
+        line.push('\n');
+        self.reports.write_all(line.as_bytes())?;
         if report.step.is_multiple_of(self.checkpoint_every) {
-            let aside = self.out.join(format!("{CHECKPOINT_FILE}.new"));
+            let aside = self.out.join(NEW_CHECKPOINT_FILE);
             fs::write(&aside, state.checkpoint().to_bytes())?;
             fs::rename(aside, self.out.join(CHECKPOINT_FILE))?;
         }

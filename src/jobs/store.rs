@@ -68,6 +68,12 @@ const CANCELLED: &str = JobStatus::Cancelled.as_str();
 const JOB_COLUMNS: &str = "id, status, title, points, load_steps, steps_done, newton_iterations, attempts, \
      cancel_requested, created_at, started_at, finished_at, solve_seconds, error, resumed_from";
 
+/// Removes the checkpoints of jobs that have ended: `finish` removes its
+/// own; the other ends (cancelled while queued or orphaned, failed for its
+/// attempts) run this.
+const ENDED_CHECKPOINTS: &str = "DELETE FROM checkpoints WHERE job_id IN \
+     (SELECT id FROM jobs WHERE status IN ('succeeded', 'failed', 'cancelled'))";
+
 /// A job a worker has just claimed.
 #[derive(Debug, Clone)]
 pub struct Claimed {
@@ -361,15 +367,20 @@ impl Store {
             "UPDATE jobs SET status = $1, error = $2, finished_at = $3, lease_owner = NULL, lease_expires_at = NULL \
              WHERE status = '{RUNNING}' AND lease_expires_at < $3 AND attempts >= $4"
         );
-        let done = on_pool!(self, |pool| sqlx::query(AssertSqlSafe(sql))
-            .bind(JobStatus::Failed.as_str())
-            .bind(&error)
-            .bind(now())
-            .bind(max_attempts)
-            .execute(pool)
-            .await?
-            .rows_affected());
-        Ok(done)
+        on_pool!(self, |pool| {
+            let done = sqlx::query(AssertSqlSafe(sql))
+                .bind(JobStatus::Failed.as_str())
+                .bind(&error)
+                .bind(now())
+                .bind(max_attempts)
+                .execute(pool)
+                .await?
+                .rows_affected();
+            if done > 0 {
+                sqlx::query(ENDED_CHECKPOINTS).execute(pool).await?;
+            }
+            Ok(done)
+        })
     }
 
     /// Claims the oldest queued job, or a running one whose lease expired,
@@ -402,35 +413,45 @@ impl Store {
              WHERE id = (SELECT id FROM jobs WHERE {claimable} ORDER BY id LIMIT 1 {lock}) AND {claimable} \
              RETURNING id, case_json, attempts, resumed_from"
         );
+        // One transaction, so no one sees the claimed job with the steps of
+        // its last run past the checkpoint. It starts with a write, which
+        // SQLite's busy timeout waits for (a read first would not be).
         on_pool!(self, |pool| {
-            sqlx::query(AssertSqlSafe(orphans))
+            let mut tx = pool.begin().await?;
+            let orphaned = sqlx::query(AssertSqlSafe(orphans))
                 .bind(t)
-                .execute(pool)
-                .await?;
+                .execute(&mut *tx)
+                .await?
+                .rows_affected();
+            if orphaned > 0 {
+                sqlx::query(ENDED_CHECKPOINTS).execute(&mut *tx).await?;
+            }
             let claimed: Option<(i64, String, i64, Option<i64>)> =
                 sqlx::query_as(AssertSqlSafe(claim))
                     .bind(t)
                     .bind(owner)
                     .bind(t + lease.as_secs_f64())
-                    .fetch_optional(pool)
+                    .fetch_optional(&mut *tx)
                     .await?;
             let Some((id, case_json, attempts, resumed_from)) = claimed else {
+                tx.commit().await?;
                 return Ok(None);
             };
             sqlx::query("DELETE FROM steps WHERE job_id = $1 AND step > $2")
                 .bind(id)
                 .bind(resumed_from.unwrap_or(0))
-                .execute(pool)
+                .execute(&mut *tx)
                 .await?;
             let state: Option<Vec<u8>> = match resumed_from {
                 Some(_) => {
                     sqlx::query_scalar("SELECT state FROM checkpoints WHERE job_id = $1")
                         .bind(id)
-                        .fetch_optional(pool)
+                        .fetch_optional(&mut *tx)
                         .await?
                 }
                 None => None,
             };
+            tx.commit().await?;
             Ok(Some(Claimed {
                 id,
                 case_json,
@@ -592,6 +613,38 @@ impl Store {
         })
     }
 
+    /// Makes `owner`'s claimed job start over from step 1: its checkpoint
+    /// could not be restored (a solver of another version wrote it). Its
+    /// progress, steps past step 0 and checkpoint go.
+    pub async fn start_over(&self, id: i64, owner: &str) -> Result<bool, sqlx::Error> {
+        let reset = update_held(
+            "steps_done = 0, newton_iterations = 0, resumed_from = NULL",
+            0,
+        );
+        on_pool!(self, |pool| {
+            let mut tx = pool.begin().await?;
+            let held = sqlx::query(reset)
+                .bind(id)
+                .bind(owner)
+                .execute(&mut *tx)
+                .await?
+                .rows_affected()
+                == 1;
+            if held {
+                sqlx::query("DELETE FROM steps WHERE job_id = $1 AND step > 0")
+                    .bind(id)
+                    .execute(&mut *tx)
+                    .await?;
+                sqlx::query("DELETE FROM checkpoints WHERE job_id = $1")
+                    .bind(id)
+                    .execute(&mut *tx)
+                    .await?;
+            }
+            tx.commit().await?;
+            Ok(held)
+        })
+    }
+
     /// Cancels a queued job at once, or asks a running one to stop.
     pub async fn cancel(&self, id: i64) -> Result<CancelOutcome, sqlx::Error> {
         let t = now();
@@ -614,6 +667,8 @@ impl Store {
                 .execute(pool)
                 .await?;
             if queued.rows_affected() == 1 {
+                // A job SIGTERM put back in the queue has a checkpoint.
+                sqlx::query(ENDED_CHECKPOINTS).execute(pool).await?;
                 return Ok(CancelOutcome::Cancelled);
             }
             let orphaned = sqlx::query(AssertSqlSafe(orphaned))
@@ -622,6 +677,7 @@ impl Store {
                 .execute(pool)
                 .await?;
             if orphaned.rows_affected() == 1 {
+                sqlx::query(ENDED_CHECKPOINTS).execute(pool).await?;
                 return Ok(CancelOutcome::Cancelled);
             }
             sqlx::query(AssertSqlSafe(running))
@@ -787,6 +843,52 @@ mod tests {
         assert!(store.get(ended).await.unwrap().is_none());
         assert!(store.step_reports(ended).await.unwrap().is_empty());
         assert!(store.get(still_running).await.unwrap().is_some());
+    }
+
+    async fn checkpoints(store: &Store) -> i64 {
+        on_pool!(store, |pool| sqlx::query_scalar(
+            "SELECT COUNT(*) FROM checkpoints"
+        )
+        .fetch_one(pool)
+        .await
+        .unwrap())
+    }
+
+    /// A job with a checkpoint, put back in the queue by a shutdown, resumes
+    /// from it when claimed; cancelled while queued, it leaves no checkpoint
+    /// behind (they are 130 bytes a point).
+    #[tokio::test]
+    async fn a_requeued_job_resumes_and_a_cancelled_one_leaves_no_checkpoint() {
+        let store = store("requeue").await;
+        let id = running_job(&store, "w", Duration::from_secs(30)).await;
+        let step = StoredStep::from_text("{}".into(), "{}".into(), "[]".into()).unwrap();
+        let saved = store.save_step(id, "w", 2, 4, &step, Some(b"state")).await;
+        assert!(saved.unwrap());
+        store.save_step(id, "w", 3, 5, &step, None).await.unwrap();
+        store.requeue(id, "w").await.unwrap();
+        let queued = store.get(id).await.unwrap().unwrap();
+        assert_eq!((queued.status, queued.steps_done), (JobStatus::Queued, 2));
+        assert_eq!(
+            queued.newton_iterations,
+            3 + 4,
+            "iterations up to the checkpoint"
+        );
+        assert_eq!(
+            store.step_reports(id).await.unwrap().len(),
+            2,
+            "steps 1 and 2"
+        );
+
+        let claimed = store
+            .claim("v", Duration::from_secs(30))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(claimed.checkpoint, Some((2, b"state".to_vec())));
+        assert_eq!(store.get(id).await.unwrap().unwrap().resumed_from, Some(2));
+        store.requeue(id, "v").await.unwrap();
+        assert_eq!(store.cancel(id).await.unwrap(), CancelOutcome::Cancelled);
+        assert_eq!(checkpoints(&store).await, 0);
     }
 
     /// The second insert with a key gets the first's job, not an error:

@@ -187,14 +187,15 @@ fn start_postgres() -> String {
     assert!(initdb.success(), "initdb failed");
     let test_pid = std::process::id();
     // The watchdog looks for this process in /proc (as the postgres user,
-    // `kill -0` on a root process fails as if it were gone), then stops the
-    // server with SIGTERM (a background job of a non-interactive shell
-    // ignores pg_ctl's SIGINT).
+    // `kill -0` on a root process fails as if it were gone; Linux only),
+    // then stops the server with SIGINT, a fast shutdown that does not wait
+    // for clients (a server that has not installed its handlers yet ignores
+    // it, as a background job of a non-interactive shell: by then it has).
     let watchdog = format!(
         "{bin}/postgres -D {data} -p {port} -k {dir} -c listen_addresses=127.0.0.1 -c fsync=off \
              -c synchronous_commit=off -c full_page_writes=off -c max_connections=300 >{dir}/log 2>&1 & \
          server=$!; while [ -e /proc/{test_pid} ]; do sleep 1; done; \
-         kill -TERM $server; wait $server; rm -rf {dir}",
+         kill -INT $server; wait $server; rm -rf {dir}",
         bin = bindir.display(),
         data = data.display(),
         dir = dir.display(),

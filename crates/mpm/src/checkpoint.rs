@@ -4,8 +4,9 @@
 //! checkpoint holds only what load steps change: the material points'
 //! positions, deformation gradients (their volumes follow as `det F V0`),
 //! constitutive history, yield flags and stress; the probes' positions;
-//! the IBM anchors' displacements; the boundary loops; and the step-size
-//! control carried between steps. Restoring it into a simulation built
+//! the IBM anchors' displacements; and the step-size control carried
+//! between steps. The boundary loops, found once before any step, are kept
+//! to check against: a solver that finds them differently refuses it. Restoring it into a simulation built
 //! from the same case and running on gives the run that was never stopped.
 //!
 //! The encoding is postcard (little-endian, variable-length integers):
@@ -54,6 +55,17 @@ struct LoopState {
     points: Vec<usize>,
     hole: bool,
     offset: Vec<[f64; 2]>,
+}
+
+impl LoopState {
+    fn of(l: &BoundaryLoop) -> Self {
+        Self {
+            body: l.body,
+            points: l.points.clone(),
+            hole: l.hole,
+            offset: l.offset.clone(),
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -131,16 +143,7 @@ impl Simulation {
                 .collect(),
             probes: self.probes.position.clone(),
             anchors_moved: self.anchors.iter().map(|a| a.moved()).collect(),
-            loops: self
-                .loops
-                .iter()
-                .map(|l| LoopState {
-                    body: l.body,
-                    points: l.points.clone(),
-                    hole: l.hole,
-                    offset: l.offset.clone(),
-                })
-                .collect(),
+            loops: self.loops.iter().map(LoopState::of).collect(),
             step_size: StepSizeState {
                 size: self.step_size.size,
                 easy_in_a_row: self.step_size.easy_in_a_row,
@@ -175,14 +178,16 @@ impl Simulation {
         {
             return Err(CheckpointError::OtherCase("the probe or anchor counts"));
         }
-        if c.steps_done > self.load_steps
-            || c.loops
-                .iter()
-                .any(|l| l.points.iter().any(|&i| i >= n) || l.offset.len() != l.points.len())
-        {
+        if c.steps_done > self.load_steps {
             return Err(CheckpointError::Unreadable(
-                "its steps or boundary loops are out of range".into(),
+                "it is past the case's last load step".into(),
             ));
+        }
+        // The loops are found once, before any step; anchors and boundary
+        // loads refer to them by loop and segment. A checkpoint whose loops
+        // differ was written by a solver that finds them differently.
+        if c.loops != self.loops.iter().map(LoopState::of).collect::<Vec<_>>() {
+            return Err(CheckpointError::OtherCase("the boundary loops"));
         }
         let p = &mut self.points;
         p.position.clone_from(&c.position);
@@ -207,16 +212,6 @@ impl Simulation {
         for (a, moved) in self.anchors.iter_mut().zip(&c.anchors_moved) {
             a.set_moved(*moved);
         }
-        self.loops = c
-            .loops
-            .iter()
-            .map(|l| BoundaryLoop {
-                body: l.body,
-                points: l.points.clone(),
-                hole: l.hole,
-                offset: l.offset.clone(),
-            })
-            .collect();
         let s = &c.step_size;
         self.step_size = StepSize {
             size: s.size,
@@ -389,6 +384,12 @@ mod tests {
             Checkpoint::from_bytes(b"not a checkpoint"),
             Err(CheckpointError::Unreadable(_))
         ));
+        let mut other_loops = footing_state.clone();
+        other_loops.loops[0].points.reverse();
+        assert_eq!(
+            Simulation::new(&footing()).unwrap().restore(&other_loops),
+            Err(CheckpointError::OtherCase("the boundary loops"))
+        );
         let mut later_format = footing_state.clone();
         later_format.format = FORMAT + 1;
         assert!(matches!(
