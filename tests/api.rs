@@ -68,6 +68,19 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
     let (status, vtu) = app.get(&format!("/jobs/{id}/steps/5?format=vtu"));
     assert_eq!(status, 200);
     assert!(vtu.starts_with("<?xml") && vtu.contains("NumberOfPoints=\"320\""));
+    // The boundary as the CLI writes it: one polyline of the loop's samples
+    // (the values read back from the stored JSON may differ in the last
+    // digit: serde_json's float parsing is not exact).
+    let (status, vtp) = app.get(&format!("/jobs/{id}/steps/5?format=vtp"));
+    assert_eq!(status, 200);
+    let cli_vtp = std::fs::read_to_string(out.0.join("steps/step_0005_boundary.vtp")).unwrap();
+    let piece = |text: &str| {
+        text.lines()
+            .find(|l| l.contains("<Piece"))
+            .map(str::to_owned)
+    };
+    assert_eq!(piece(&vtp), piece(&cli_vtp));
+    assert!(piece(&vtp).unwrap().contains("NumberOfLines=\"1\""));
 
     let (status, _) = app.get(&format!("/jobs/{id}/steps/6"));
     assert_eq!(status, 404);

@@ -300,3 +300,22 @@ fn resume_goes_on_from_the_last_checkpoint() {
     assert_eq!(pvd.matches("<DataSet").count(), 31, "steps 0 to 30");
     assert!(!stopped.join("checkpoint.bin").exists());
 }
+
+/// `--summary-only` writes the summary and no step folder (it once left an
+/// empty `steps/`).
+#[test]
+fn summary_only_writes_no_step_folder() {
+    let out = temp_dir("summary-only");
+    run_ok(
+        &[
+            "run",
+            "--example",
+            "cantilever-grid",
+            "--summary-only",
+            "--out",
+        ],
+        &out,
+    );
+    assert!(out.join("summary.json").exists());
+    assert!(!out.join("steps").exists());
+}

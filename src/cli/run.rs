@@ -151,7 +151,7 @@ fn prepare_output(out: &Path, force: bool) -> Result<(), CliError> {
         // Gone if it held only step files.
         let _ = fs::remove_dir(out.join("steps"));
     }
-    fs::create_dir_all(out.join("steps"))?;
+    fs::create_dir_all(out)?;
     Ok(())
 }
 
@@ -200,7 +200,9 @@ fn solve(
         sim.grid.h
     );
     let steps_dir = out.join("steps");
-    fs::create_dir_all(&steps_dir)?;
+    if point_files {
+        fs::create_dir_all(&steps_dir)?;
+    }
     let n = sim.load_steps;
     let mut writer = ResultWriter {
         out: out.to_path_buf(),

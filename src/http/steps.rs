@@ -1,5 +1,5 @@
 //! The step endpoints: every finished step's report, and one step's
-//! document or its points as VTU.
+//! document, its points as VTU or its boundary curves as VTP.
 
 use axum::Json;
 use axum::extract::State;
@@ -7,8 +7,9 @@ use axum::extract::State;
 use super::extract::{IdPath, Params};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
+use mpm::boundary::BoundaryOutput;
 use mpm::report::PointColumns;
-use mpm::vtk::write_vtu;
+use mpm::vtk::{write_vtp, write_vtu};
 use serde::Deserialize;
 use serde_json::value::RawValue;
 
@@ -52,7 +53,7 @@ pub async fn step(
         .ok_or_else(|| ApiError::NotFound(format!("step {k} of job {id}")))?;
     match q.format.as_deref() {
         None | Some("json") => Ok(Json(step).into_response()),
-        Some("vtu") if !step.has_points() => Err(ApiError::NotFound(format!(
+        Some("vtu" | "vtp") if !step.has_points() => Err(ApiError::NotFound(format!(
             "points of step {k} of job {id}: its case stores them every output.every steps"
         ))),
         Some("vtu") => {
@@ -60,19 +61,31 @@ pub async fn step(
                 .map_err(|e| ApiError::Internal(format!("stored points: {e}")))?;
             let mut vtu = Vec::new();
             write_vtu(&mut vtu, &columns).map_err(|e| ApiError::Internal(e.to_string()))?;
-            let disposition = format!("attachment; filename=\"job-{id}-step-{k:04}.vtu\"");
-            Ok((
-                [
-                    (header::CONTENT_TYPE, "application/xml".to_string()),
-                    (header::CONTENT_DISPOSITION, disposition),
-                ],
-                vtu,
-            )
-                .into_response())
+            Ok(vtk_file(vtu, &format!("job-{id}-step-{k:04}.vtu")))
+        }
+        Some("vtp") => {
+            let boundaries: Vec<BoundaryOutput> = serde_json::from_str(step.boundaries.get())
+                .map_err(|e| ApiError::Internal(format!("stored boundaries: {e}")))?;
+            let mut vtp = Vec::new();
+            write_vtp(&mut vtp, &boundaries).map_err(|e| ApiError::Internal(e.to_string()))?;
+            Ok(vtk_file(vtp, &format!("job-{id}-step-{k:04}_boundary.vtp")))
         }
         Some(other) => Err(ApiError::BadQuery {
             name: "format",
-            message: format!("{other:?} is not json or vtu"),
+            message: format!("{other:?} is not json, vtu or vtp"),
         }),
     }
+}
+
+/// A VTK XML file as a download named `name`.
+fn vtk_file(bytes: Vec<u8>, name: &str) -> Response {
+    let disposition = format!("attachment; filename=\"{name}\"");
+    (
+        [
+            (header::CONTENT_TYPE, "application/xml".to_string()),
+            (header::CONTENT_DISPOSITION, disposition),
+        ],
+        bytes,
+    )
+        .into_response()
 }

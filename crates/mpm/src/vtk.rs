@@ -47,14 +47,14 @@ pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
         xml.push_str(&format!(
             "        <DataArray type=\"{ty}\" Name=\"{name}\" NumberOfComponents=\"{comps}\" format=\"appended\" offset=\"{offset}\"/>\n"
         ));
-        offset += 8 + bytes.len();
+        offset += 4 + bytes.len();
         blocks.push(bytes);
     };
     let f64s = |v: &[f64]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
     let i64s = |v: &[i64]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
 
     xml.push_str("<?xml version=\"1.0\"?>\n");
-    xml.push_str("<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n");
+    xml.push_str("<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt32\">\n");
     xml.push_str("  <UnstructuredGrid>\n");
     xml.push_str(&format!(
         "    <Piece NumberOfPoints=\"{n}\" NumberOfCells=\"{n}\">\n"
@@ -92,7 +92,11 @@ pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
     xml.push_str("      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding=\"raw\">\n   _");
     out.write_all(xml.as_bytes())?;
     for b in &blocks {
-        out.write_all(&(b.len() as u64).to_le_bytes())?;
+        // UInt32 block headers: meshio (5.3) misreads UInt64 ones; 4 GiB an
+        // array is some 170 million points.
+        let len = u32::try_from(b.len())
+            .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "a VTU array over 4 GiB"))?;
+        out.write_all(&len.to_le_bytes())?;
         out.write_all(b)?;
     }
     out.write_all(b"\n  </AppendedData>\n</VTKFile>\n")
@@ -208,9 +212,9 @@ mod tests {
             .parse()
             .unwrap();
         let at = start + off;
-        let len = u64::from_le_bytes(buf[at..at + 8].try_into().unwrap()) as usize;
+        let len = u32::from_le_bytes(buf[at..at + 4].try_into().unwrap()) as usize;
         assert_eq!(len, 3 * mp.len() * 8);
-        let x0 = f64::from_le_bytes(buf[at + 8..at + 16].try_into().unwrap());
+        let x0 = f64::from_le_bytes(buf[at + 4..at + 12].try_into().unwrap());
         assert_eq!(x0, mp.position[0][0]);
     }
 }
