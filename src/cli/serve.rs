@@ -169,12 +169,13 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
         let server = Server::start(config, args.addr)
             .await
             .map_err(|e| CliError::failed(e.to_string()))?;
+        let stop = shutdown_signal();
         // Scripts (and the tests) read the bound address from this line.
         println!(
             "listening on http://{} (database {database}, {workers} workers)",
             server.addr
         );
-        shutdown_signal().await;
+        stop.await;
         tracing::info!("shutting down: running jobs go back to the queue");
         server.shutdown().await;
         Ok(())
@@ -197,9 +198,10 @@ pub fn worker(args: WorkerArgs) -> Result<(), CliError> {
         let pool = Workers::start(config)
             .await
             .map_err(|e| CliError::failed(e.to_string()))?;
+        let stop = shutdown_signal();
         // Scripts (and the tests) wait for this line.
         println!("solving jobs from {database} with {workers} workers");
-        shutdown_signal().await;
+        stop.await;
         tracing::info!("shutting down: running jobs go back to the queue");
         pool.shutdown().await;
         Ok(())
@@ -211,18 +213,21 @@ fn seconds(s: f64) -> Option<Duration> {
     Duration::try_from_secs_f64(s).ok().filter(|d| !d.is_zero())
 }
 
-/// Ctrl-C or SIGTERM (what `docker stop` sends).
-async fn shutdown_signal() {
-    let ctrl_c = tokio::signal::ctrl_c();
+/// Ctrl-C or SIGTERM (what `docker stop` sends), listened for from this
+/// call on: call it before announcing the start, or a signal sent as soon as
+/// the announcement is read kills the process without a clean shutdown.
+fn shutdown_signal() -> impl std::future::Future<Output = ()> {
     #[cfg(unix)]
-    {
-        let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
-            .expect("install the SIGTERM handler");
+    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
+        .expect("install the SIGTERM handler");
+    let ctrl_c = tokio::signal::ctrl_c();
+    async move {
+        #[cfg(unix)]
         tokio::select! {
             _ = ctrl_c => {}
             _ = term.recv() => {}
         }
+        #[cfg(not(unix))]
+        let _ = ctrl_c.await;
     }
-    #[cfg(not(unix))]
-    let _ = ctrl_c.await;
 }
