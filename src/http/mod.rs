@@ -6,6 +6,7 @@ mod error;
 mod extract;
 mod jobs;
 mod steps;
+mod viewer;
 mod views;
 
 use std::sync::Arc;
@@ -58,6 +59,7 @@ pub fn router(state: AppState) -> Router {
         ));
     Router::new()
         .route("/health", get(health))
+        .merge(viewer::routes())
         .merge(protected)
         .fallback(unknown_route)
         .method_not_allowed_fallback(method_not_allowed)

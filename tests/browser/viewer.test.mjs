@@ -1,0 +1,187 @@
+// End-to-end tests of the viewer in headless Chromium: starts `mpm serve`
+// with a token on a throwaway database, solves the paper's cantilever and a
+// case that fails, and drives the page as a user would.
+//
+//   node viewer.test.mjs                     # target/debug/mpm, /usr/bin/chromium
+//   MPM_BIN=... CHROMIUM=... SCREENSHOT=docs/viewer.png node viewer.test.mjs
+
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { spawn, execFileSync } from 'node:child_process';
+import { mkdtempSync, rmSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, dirname, resolve } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { createInterface } from 'node:readline';
+import { chromium } from 'playwright-core';
+
+const root = resolve(dirname(fileURLToPath(import.meta.url)), '../..');
+const mpm = process.env.MPM_BIN || join(root, 'target/debug/mpm');
+const TOKEN = 'viewer-test-token';
+
+let server;
+let base;
+let dir;
+let browser;
+const jobs = {};
+
+async function call(method, path, body) {
+  const response = await fetch(base + path, {
+    method,
+    headers: { Authorization: `Bearer ${TOKEN}`, 'Content-Type': 'application/json' },
+    body: body && JSON.stringify(body),
+  });
+  assert.ok(response.ok, `${method} ${path}: HTTP ${response.status} ${await response.clone().text()}`);
+  return response.json();
+}
+
+async function until(what, check, seconds = 120) {
+  const end = Date.now() + seconds * 1000;
+  for (;;) {
+    const value = await check();
+    if (value) return value;
+    if (Date.now() > end) throw new Error(`timed out waiting for ${what}`);
+    await new Promise((r) => setTimeout(r, 200));
+  }
+}
+
+before(async () => {
+  assert.ok(existsSync(mpm), `${mpm} is missing: build it first (cargo build)`);
+  dir = mkdtempSync(join(tmpdir(), 'mpm-viewer-'));
+  server = spawn(mpm, ['serve', '--addr', '127.0.0.1:0', '--token', TOKEN,
+    '--database', join(dir, 'jobs.sqlite'), '--workers', '2'], { stdio: ['ignore', 'pipe', 'inherit'] });
+  const firstLine = await new Promise((ok, fail) => {
+    createInterface({ input: server.stdout }).once('line', ok);
+    server.once('exit', (code) => fail(new Error(`mpm serve exited with ${code}`)));
+  });
+  base = firstLine.match(/http:\/\/\S+/)[0];
+
+  const cantilever = JSON.parse(execFileSync(mpm, ['example', 'cantilever']));
+  const failing = structuredClone(cantilever);
+  failing.title = 'cantilever allowed two Newton iterations a step';
+  failing.analysis.newton = { max_iterations: 2 };
+  jobs.cantilever = (await call('POST', '/jobs', cantilever)).id;
+  jobs.failing = (await call('POST', '/jobs', failing)).id;
+  for (const id of Object.values(jobs)) {
+    await until(`job ${id} to end`, async () => {
+      const job = await call('GET', `/jobs/${id}`);
+      return job.status !== 'queued' && job.status !== 'running';
+    });
+  }
+  browser = await chromium.launch({
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    args: ['--no-sandbox'],
+  });
+});
+
+after(async () => {
+  await browser?.close();
+  server?.kill('SIGTERM');
+  if (dir) rmSync(dir, { recursive: true, force: true });
+});
+
+// Pixel statistics of the points canvas: drawn (not blank) pixels and
+// boundary-red ones.
+async function canvasStatistics(page) {
+  return page.$eval('#points', (canvas) => {
+    const { data } = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height);
+    let drawn = 0;
+    let red = 0;
+    for (let i = 0; i < data.length; i += 4) {
+      if (data[i + 3] === 0) continue;
+      drawn++;
+      if (data[i] > 180 && data[i + 1] < 60 && data[i + 2] < 60) red++;
+    }
+    return { drawn, red, pixels: canvas.width * canvas.height, image: canvas.toDataURL() };
+  });
+}
+
+async function signedIn(page) {
+  await page.goto(base + '/');
+  await page.waitForSelector('#token-form:not([hidden])');
+  await page.fill('#token-input', TOKEN);
+  await page.click('#token-form button[type=submit]');
+}
+
+test('the page asks for the token, refuses a wrong one and lists the jobs with the right one', async () => {
+  const page = await browser.newPage();
+  await page.goto(base + '/');
+  await page.waitForSelector('#token-form:not([hidden])');
+  await page.fill('#token-input', 'wrong');
+  await page.click('#token-form button[type=submit]');
+  await page.waitForSelector('#token-error:not([hidden])');
+  await page.fill('#token-input', TOKEN);
+  await page.click('#token-form button[type=submit]');
+  await page.waitForSelector(`tr[data-job="${jobs.failing}"]`);
+  const rows = await page.$$eval('tr[data-job]', (trs) => trs.map((tr) => [tr.dataset.job, tr.querySelector('.status').textContent]));
+  assert.deepEqual(Object.fromEntries(rows), {
+    [jobs.cantilever]: 'succeeded',
+    [jobs.failing]: 'failed',
+  });
+  // The token is kept for the tab: a reload goes straight to the list.
+  await page.reload();
+  await page.waitForSelector(`tr[data-job="${jobs.cantilever}"]`);
+  await page.close();
+});
+
+test('a finished job shows its body, boundary, slider, fields and plots', async () => {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 1100 } });
+  await signedIn(page);
+  await page.click(`a[href="#/jobs/${jobs.cantilever}"]`);
+  await page.waitForSelector('#points[data-points="896"]');
+  assert.equal(await page.$eval('#step-slider', (s) => s.max), '5');
+  assert.equal(await page.$eval('#step-slider', (s) => s.value), '5');
+  assert.equal(await page.$eval('#points', (c) => c.dataset.curves), '1');
+
+  const last = await canvasStatistics(page);
+  // 896 points of a 10 m x 2 m beam fill a good part of the frame.
+  assert.ok(last.drawn > 0.1 * last.pixels, `only ${last.drawn} of ${last.pixels} pixels drawn`);
+  assert.ok(last.red > 500, `the boundary curve drew only ${last.red} red pixels`);
+  assert.match(await page.textContent('#step-label'), /step 5 of 5, load factor 1/);
+  assert.match(await page.textContent('.summary'), /cell size h = 1\.5 m/);
+
+  // Step 0: the undeformed beam, drawn differently.
+  await page.$eval('#step-slider', (s) => { s.value = 0; s.dispatchEvent(new Event('input')); });
+  await page.waitForFunction(() => document.querySelector('#step-label').textContent.startsWith('step 0 of 5, load factor 0'));
+  await page.waitForSelector('#points[data-points="896"]');
+  const first = await canvasStatistics(page);
+  assert.notEqual(first.image, last.image, 'steps 0 and 5 draw the same picture');
+  assert.ok(first.red > 500);
+
+  // Colour by a stress component: the colour bar names it with its unit.
+  await page.$eval('#step-slider', (s) => { s.value = 3; s.dispatchEvent(new Event('input')); });
+  await page.waitForFunction(() => document.querySelector('#step-label').textContent.startsWith('step 3 of 5'));
+  await page.selectOption('#field', 'sxx');
+  await page.waitForFunction(() => document.querySelector('.legend').textContent.includes('stress σ_xx (Pa)'));
+  const options = await page.$$eval('#field option', (os) => os.map((o) => o.value));
+  for (const f of ['u', 'ux', 'uy', 'sxx', 'syy', 'sxy', 'szz', 'J', 'ep']) assert.ok(options.includes(f), `no field ${f}`);
+
+  // Plots: the tip probe and two supports' reactions at steps 0 to 5, and
+  // a bar per load step of Newton iterations.
+  const plots = await page.$$eval('figure.plot', (fs) => fs.map((f) => [f.dataset.title, f.querySelectorAll('circle').length, f.querySelectorAll('rect').length - 1]));
+  const byTitle = Object.fromEntries(plots.map(([t, circles, bars]) => [t, { circles, bars }]));
+  assert.equal(byTitle['probe tip'].circles, 2 * 6);
+  assert.equal(byTitle.reactions.circles, 2 * 2 * 6);
+  assert.equal(byTitle['Newton iterations per step'].bars, 5);
+
+  if (process.env.SCREENSHOT) {
+    await page.selectOption('#field', 'u');
+    await page.$eval('#step-slider', (s) => { s.value = 5; s.dispatchEvent(new Event('input')); });
+    await page.waitForFunction(() => document.querySelector('#step-label').textContent.startsWith('step 5 of 5'));
+    await page.screenshot({ path: process.env.SCREENSHOT, fullPage: false });
+  }
+  await page.close();
+});
+
+test('a failed job shows its error with step, iteration and residual', async () => {
+  const page = await browser.newPage();
+  await signedIn(page);
+  await page.click(`a[href="#/jobs/${jobs.failing}"]`);
+  await page.waitForSelector('.job-error:not([hidden])');
+  const text = await page.textContent('.job-error');
+  assert.match(text, /^failed: /);
+  assert.match(text, /\(step \d, iteration 2, residual \d\.\d+e-\d+\)$/);
+  // Step 0 was stored before the solve failed: the body is still shown.
+  await page.waitForSelector('#points[data-points="896"]');
+  await page.close();
+});
