@@ -10,6 +10,7 @@
 pub mod config;
 pub mod http;
 pub mod jobs;
+pub mod results;
 pub mod step;
 pub mod worker;
 

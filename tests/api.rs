@@ -84,6 +84,74 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
 
     let (status, _) = app.get(&format!("/jobs/{id}/steps/6"));
     assert_eq!(status, 404);
+
+    // The job's archive: the files `mpm run` wrote, by the same names (the
+    // run's own bookkeeping aside), with the same step documents' points.
+    let mut response = app
+        .agent
+        .get(format!("{}/jobs/{id}/archive", app.base))
+        .call()
+        .unwrap();
+    assert_eq!(response.status().as_u16(), 200);
+    let bytes = response.body_mut().read_to_vec().unwrap();
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).unwrap();
+    let archived: BTreeSet<String> = zip.file_names().map(|n| n.unwrap().into_owned()).collect();
+    let mut written = BTreeSet::new();
+    for entry in walkdir(&out.0) {
+        let name = entry
+            .strip_prefix(&out.0)
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .to_owned();
+        if name != "reports.jsonl" {
+            written.insert(name);
+        }
+    }
+    assert_eq!(archived, written);
+    assert_eq!(archived.len(), 4 + 3 * 6, "{archived:?}");
+    let mut read = |name: &str| {
+        let mut text = String::new();
+        std::io::Read::read_to_string(&mut zip.by_name(name).unwrap(), &mut text).unwrap();
+        text
+    };
+    let archived_step: Value = serde_json::from_str(&read("steps/step_0005.json")).unwrap();
+    assert_eq!(
+        archived_step["points"].to_string(),
+        api["points"].to_string()
+    );
+    assert_eq!(
+        archived_step["points"]["position"].to_string(),
+        cli["points"]["position"].to_string()
+    );
+    let summary: Value = serde_json::from_str(&read("summary.json")).unwrap();
+    let cli_summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.0.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["steps"].as_array().unwrap().len(), 5);
+    for k in 0..5 {
+        let probes = |s: &Value| s["steps"][k]["probes"].clone();
+        assert_eq!(probes(&summary), probes(&cli_summary), "step {}", k + 1);
+    }
+    assert_eq!(
+        read("points.pvd").lines().count(),
+        read("boundary.pvd").lines().count()
+    );
+    assert!(read("points.pvd").contains("file=\"steps/step_0005.vtu\""));
+}
+
+/// Every file under `dir`, recursively.
+fn walkdir(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_dir() {
+            files.extend(walkdir(&path));
+        } else {
+            files.push(path);
+        }
+    }
+    files
 }
 
 /// `(status, error.code, error.details.path)` of a rejected submission.
@@ -316,16 +384,23 @@ fn a_token_guards_every_endpoint_but_health() {
 }
 
 /// The contract and the server agree: the spec documents exactly the
-/// routes the router declares, its example case is accepted, and every
-/// documented GET answers.
+/// routes the router declares, its example case is accepted, every
+/// documented GET answers, and every field of every JSON answer is in the
+/// contract (a field added to a response type and not to `openapi.yaml`
+/// fails here).
 fn openapi_matches_the_routes_and_its_example_is_accepted() {
-    let spec: serde_yaml::Value = serde_yaml::from_str(mpm_service::http::OPENAPI).unwrap();
+    let spec: serde_yaml::Value = serde_yaml::from_str(&mpm_service::http::OPENAPI).unwrap();
+    let json_spec: Value = serde_json::to_value(&spec).unwrap();
     let paths = spec["paths"].as_mapping().unwrap();
     let documented: BTreeSet<String> = paths
         .keys()
         .map(|k| k.as_str().unwrap().to_string())
         .collect();
-    let router_source = include_str!("../src/http/mod.rs");
+    let router_source = [
+        include_str!("../src/http/mod.rs"),
+        include_str!("../src/http/viewer.rs"),
+    ]
+    .concat();
     let declared: BTreeSet<String> = router_source
         .split(".route(\"")
         .skip(1)
@@ -344,13 +419,77 @@ fn openapi_matches_the_routes_and_its_example_is_accepted() {
         if item.get("get").is_none() {
             continue;
         }
-        let url = path.replace("{id}", &id.to_string()).replace("{step}", "1");
+        let url = path
+            .replace("{id}", &id.to_string())
+            .replace("{step}", "1")
+            .replace("{file}", "viewer.js");
         let (status, body) = app.get(&url);
         assert_eq!(status, 200, "GET {url}: {body}");
+        let schema = &json_spec["paths"][path]["get"]["responses"]["200"]["content"]["application/json"]
+            ["schema"];
+        if !schema.is_null() {
+            let answer: Value = serde_json::from_str(&body).unwrap();
+            let mut missing = Vec::new();
+            undeclared(&json_spec, schema, &answer, "", &mut missing);
+            assert!(
+                missing.is_empty(),
+                "GET {url}: not in the contract: {missing:?}"
+            );
+        }
     }
     let (status, body) = app.get("/no/such/route");
     assert_eq!(status, 404);
     assert!(body.contains("not_found"));
+}
+
+/// Collects in `out` the paths of the fields of `value` that `schema` (of
+/// the OpenAPI document `spec`) does not declare: keys of an object whose
+/// schema lists `properties` but not that key and takes no
+/// `additionalProperties`; recursing through `$ref`, `allOf`, `oneOf`,
+/// `anyOf`, properties, maps and items.
+fn undeclared(spec: &Value, schema: &Value, value: &Value, at: &str, out: &mut Vec<String>) {
+    let schema = match schema["$ref"].as_str() {
+        Some(pointer) => spec.pointer(pointer.trim_start_matches('#')).unwrap(),
+        None => schema,
+    };
+    for part in schema["allOf"].as_array().into_iter().flatten() {
+        undeclared(spec, part, value, at, out);
+    }
+    for key in ["oneOf", "anyOf"] {
+        if let Some(branches) = schema[key].as_array() {
+            let fewest = branches
+                .iter()
+                .map(|branch| {
+                    let mut found = Vec::new();
+                    undeclared(spec, branch, value, at, &mut found);
+                    found
+                })
+                .min_by_key(Vec::len)
+                .unwrap_or_default();
+            out.extend(fewest);
+        }
+    }
+    match value {
+        Value::Object(map) => {
+            let properties = schema["properties"].as_object();
+            let extra = &schema["additionalProperties"];
+            for (key, field) in map {
+                let path = format!("{at}.{key}");
+                match properties.and_then(|p| p.get(key)) {
+                    Some(declared) => undeclared(spec, declared, field, &path, out),
+                    None if extra.is_object() => undeclared(spec, extra, field, &path, out),
+                    None if properties.is_some() && extra != &Value::Bool(true) => out.push(path),
+                    None => {}
+                }
+            }
+        }
+        Value::Array(items) if schema["items"].is_object() => {
+            for (k, item) in items.iter().enumerate() {
+                undeclared(spec, &schema["items"], item, &format!("{at}[{k}]"), out);
+            }
+        }
+        _ => {}
+    }
 }
 
 /// Peak resident memory of this process so far (Linux), in bytes.

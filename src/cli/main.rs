@@ -60,6 +60,10 @@ enum Command {
     },
     /// Print a built-in example case (list them when no name is given).
     Example { name: Option<String> },
+    /// Print the case format's JSON Schema (served at /schema/case.json).
+    Schema,
+    /// Print the HTTP contract (OpenAPI 3.0, served at /openapi.yaml).
+    Openapi,
     /// Measure wall time, its split and memory against the number of points.
     Bench {
         /// Largest point count to run (sizes go 1e3, 1e4, ... up to it).
@@ -122,6 +126,15 @@ fn main() -> ExitCode {
             resume: None,
         } => run::run(case, example, &out, !summary_only, force),
         Command::Example { name } => example(name),
+        Command::Schema => {
+            let schema = mpm::case::json_schema();
+            println!("{}", serde_json::to_string_pretty(&schema).expect("JSON"));
+            Ok(())
+        }
+        Command::Openapi => {
+            print!("{}", *mpm_service::http::OPENAPI);
+            Ok(())
+        }
         Command::Bench {
             max_points,
             out,

@@ -8,26 +8,26 @@ use std::path::{Path, PathBuf};
 
 use mpm::case::OutputSpec;
 use mpm::report::PointColumns;
-use mpm::vtk::{write_pvd, write_vtp, write_vtu};
-use mpm::{Case, Checkpoint, Observer, RunReport, Simulation, StepReport, StepState};
+use mpm::vtk::{write_vtp, write_vtu};
+use mpm::{Case, Checkpoint, Observer, Simulation, StepReport, StepState};
+use mpm_service::results::{
+    BOUNDARY_SERIES, CASE_FILE, POINTS_SERIES, STEPS_DIR, SUMMARY_FILE, Series, StepFiles, Summary,
+};
 use mpm_service::step::StepDocument;
-use serde::Serialize;
 
 use crate::{CliError, DEFAULT_EXAMPLE};
 
 /// The files `mpm run` writes in its output directory (and `--force`
 /// removes): these, and `steps/step_*`.
 const OWNED_FILES: [&str; 7] = [
-    "summary.json",
-    "points.pvd",
-    "boundary.pvd",
+    SUMMARY_FILE,
+    POINTS_SERIES,
+    BOUNDARY_SERIES,
     CASE_FILE,
     CHECKPOINT_FILE,
     NEW_CHECKPOINT_FILE,
     REPORTS_FILE,
 ];
-/// The case as run, for `--resume`.
-const CASE_FILE: &str = "case.json";
 /// The solver's state after the last checkpointed step (`mpm::Checkpoint`).
 const CHECKPOINT_FILE: &str = "checkpoint.bin";
 /// A checkpoint being written, renamed to [`CHECKPOINT_FILE`] when whole.
@@ -149,7 +149,7 @@ fn prepare_output(out: &Path, force: bool) -> Result<(), CliError> {
         }
         remove_step_files(out, |_| true)?;
         // Gone if it held only step files.
-        let _ = fs::remove_dir(out.join("steps"));
+        let _ = fs::remove_dir(out.join(STEPS_DIR));
     }
     fs::create_dir_all(out)?;
     Ok(())
@@ -158,7 +158,7 @@ fn prepare_output(out: &Path, force: bool) -> Result<(), CliError> {
 /// Removes the step files (`steps/step_N.json`, `.vtu`,
 /// `_boundary.vtp`) whose step `N` satisfies `remove`.
 fn remove_step_files(out: &Path, remove: impl Fn(usize) -> bool) -> Result<(), CliError> {
-    let Ok(entries) = fs::read_dir(out.join("steps")) else {
+    let Ok(entries) = fs::read_dir(out.join(STEPS_DIR)) else {
         return Ok(());
     };
     for entry in entries {
@@ -199,19 +199,16 @@ fn solve(
         sim.basis,
         sim.grid.h
     );
-    let steps_dir = out.join("steps");
     if point_files {
-        fs::create_dir_all(&steps_dir)?;
+        fs::create_dir_all(out.join(STEPS_DIR))?;
     }
     let n = sim.load_steps;
     let mut writer = ResultWriter {
         out: out.to_path_buf(),
-        steps_dir,
         point_files,
         output: case.output.clone(),
         checkpoint_every: mpm_service::config::checkpoint_interval(0, sim.points.len()),
-        step_files: Vec::new(),
-        boundary_files: Vec::new(),
+        series: Series::default(),
         reports: fs::OpenOptions::new()
             .create(true)
             .append(true)
@@ -221,9 +218,9 @@ fn solve(
     };
     // The step files kept from before a resumed run's checkpoint.
     for step in 0..=sim.steps_done() {
-        let stem = format!("step_{step:04}");
-        if writer.steps_dir.join(format!("{stem}.vtu")).exists() {
-            writer.list_step_files(step as f64 / n as f64, &stem);
+        let files = StepFiles::new(step);
+        if out.join(&files.points).exists() {
+            writer.series.add(step as f64 / n as f64, files);
         }
     }
     if sim.steps_done() == 0 && point_files {
@@ -242,19 +239,24 @@ fn solve(
         ))
     })?;
     if point_files {
-        write_pvd(
-            BufWriter::new(File::create(out.join("points.pvd"))?),
-            &writer.step_files,
-        )?;
-        write_pvd(
-            BufWriter::new(File::create(out.join("boundary.pvd"))?),
-            &writer.boundary_files,
-        )?;
+        let series = &writer.series;
+        series.write_points(BufWriter::new(File::create(out.join(POINTS_SERIES))?))?;
+        series.write_boundary(BufWriter::new(File::create(out.join(BOUNDARY_SERIES))?))?;
     }
     report.wall_seconds += earlier.iter().map(|s| s.timings.total).sum::<f64>();
     report.steps.splice(0..0, earlier);
-    let summary = Summary::new(&case, source, &report, resumed_from);
-    let mut f = BufWriter::new(File::create(out.join("summary.json"))?);
+    let summary = Summary {
+        resumed_from,
+        ..Summary::new(
+            source,
+            case.title.as_deref(),
+            report.points,
+            report.load_steps,
+            report.wall_seconds,
+            &report.steps,
+        )
+    };
+    let mut f = BufWriter::new(File::create(out.join(SUMMARY_FILE))?);
     serde_json::to_writer_pretty(&mut f, &summary).map_err(|e| CliError::failed(e.to_string()))?;
     f.flush()?;
     // The run is complete: nothing to resume.
@@ -267,92 +269,8 @@ fn solve(
     Ok(())
 }
 
-/// `summary.json`: the run's cost and per-step convergence, probes keyed by
-/// name.
-#[derive(Serialize)]
-struct Summary<'a> {
-    case: &'a str,
-    /// The step a resumed run went on after (`mpm run --resume`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    resumed_from: Option<usize>,
-    title: Option<&'a str>,
-    points: usize,
-    load_steps: usize,
-    wall_seconds: f64,
-    newton_iterations: usize,
-    steps: Vec<StepSummary<'a>>,
-}
-
-#[derive(Serialize)]
-struct StepSummary<'a> {
-    step: usize,
-    load_factor: f64,
-    newton_iterations: usize,
-    residuals: &'a [f64],
-    wall_seconds: f64,
-    active_dofs: usize,
-    timings: &'a mpm::report::StepTimings,
-    probes: std::collections::BTreeMap<&'a str, ProbeSummary>,
-    reactions: &'a [[f64; 2]],
-    applied_load: [f64; 2],
-}
-
-#[derive(Serialize)]
-struct ProbeSummary {
-    position: [f64; 2],
-    displacement: [f64; 2],
-}
-
-impl<'a> Summary<'a> {
-    fn new(
-        case: &'a Case,
-        source: &'a str,
-        report: &'a RunReport,
-        resumed_from: Option<usize>,
-    ) -> Self {
-        Self {
-            case: source,
-            resumed_from,
-            title: case.title.as_deref(),
-            points: report.points,
-            load_steps: report.load_steps,
-            wall_seconds: report.wall_seconds,
-            newton_iterations: report.steps.iter().map(|s| s.newton.iterations).sum(),
-            steps: report
-                .steps
-                .iter()
-                .map(|s| StepSummary {
-                    step: s.step,
-                    load_factor: s.load_factor,
-                    newton_iterations: s.newton.iterations,
-                    residuals: &s.newton.residuals,
-                    wall_seconds: s.timings.total,
-                    active_dofs: s.active_dofs,
-                    timings: &s.timings,
-                    probes: s
-                        .probes
-                        .iter()
-                        .map(|p| {
-                            (
-                                p.name.as_str(),
-                                ProbeSummary {
-                                    position: p.position,
-                                    displacement: p.displacement,
-                                },
-                            )
-                        })
-                        .collect(),
-                    reactions: &s.reactions,
-                    applied_load: s.applied_load,
-                })
-                .collect(),
-        }
-    }
-}
-
 struct ResultWriter {
     out: PathBuf,
-    steps_dir: PathBuf,
     point_files: bool,
     /// Which steps write their points, and which columns.
     output: OutputSpec,
@@ -360,9 +278,7 @@ struct ResultWriter {
     checkpoint_every: usize,
     /// `reports.jsonl`, unbuffered: a line goes out in one write.
     reports: File,
-    /// `(load factor, file name relative to the output directory)`.
-    step_files: Vec<(f64, String)>,
-    boundary_files: Vec<(f64, String)>,
+    series: Series,
     progress: Progress,
     io_error: Option<std::io::Error>,
 }
@@ -372,8 +288,7 @@ impl ResultWriter {
         if !self.output.stores_points(report.step, state.load_steps()) {
             return Ok(());
         }
-        let stem = format!("step_{:04}", report.step);
-        let json = File::create(self.steps_dir.join(format!("{stem}.json")))?;
+        let files = StepFiles::new(report.step);
         let columns = PointColumns::selected(state.points, self.output.fields.as_deref());
         let boundaries = state.boundaries();
         let document = StepDocument {
@@ -381,27 +296,17 @@ impl ResultWriter {
             points: &columns,
             boundaries: &boundaries,
         };
-        let mut w = BufWriter::new(json);
+        let mut w = BufWriter::new(File::create(self.out.join(&files.document))?);
         serde_json::to_writer(&mut w, &document)?;
         w.flush()?;
-        let mut vtu = BufWriter::new(File::create(self.steps_dir.join(format!("{stem}.vtu")))?);
+        let mut vtu = BufWriter::new(File::create(self.out.join(&files.points))?);
         write_vtu(&mut vtu, &columns)?;
         vtu.flush()?;
-        let mut vtp = BufWriter::new(File::create(
-            self.steps_dir.join(format!("{stem}_boundary.vtp")),
-        )?);
+        let mut vtp = BufWriter::new(File::create(self.out.join(&files.boundary))?);
         write_vtp(&mut vtp, &boundaries)?;
         vtp.flush()?;
-        self.list_step_files(report.load_factor, &stem);
+        self.series.add(report.load_factor, files);
         Ok(())
-    }
-
-    /// Adds a step's VTK files to the `.pvd` series.
-    fn list_step_files(&mut self, load_factor: f64, stem: &str) {
-        self.step_files
-            .push((load_factor, format!("steps/{stem}.vtu")));
-        self.boundary_files
-            .push((load_factor, format!("steps/{stem}_boundary.vtp")));
     }
 
     /// The step's report as a line of `reports.jsonl`, then, when one is

@@ -307,15 +307,19 @@ pub async fn result(
     IdPath(id): IdPath<i64>,
 ) -> Result<Json<ResultView>, ApiError> {
     let job = find(&state.store, id).await?;
-    let reports = state
-        .store
+    let reports = reports(&state.store, id).await?;
+    Ok(Json(ResultView::new(&job, &reports)))
+}
+
+/// The reports of job `id`'s stored steps, in step order.
+pub(super) async fn reports(store: &Store, id: i64) -> Result<Vec<mpm::StepReport>, ApiError> {
+    store
         .step_reports(id)
         .await?
         .iter()
         .map(|r| serde_json::from_str(r))
-        .collect::<Result<Vec<mpm::StepReport>, _>>()
-        .map_err(|e| ApiError::Internal(format!("stored report: {e}")))?;
-    Ok(Json(ResultView::new(&job, &reports)))
+        .collect::<Result<_, _>>()
+        .map_err(|e| ApiError::Internal(format!("stored report: {e}")))
 }
 
 /// Job `id`, or 404.

@@ -1,6 +1,7 @@
 //! The HTTP API: the router and the state its handlers share. The contract
 //! is `openapi.yaml` at the repository root.
 
+mod archive;
 mod auth;
 mod error;
 mod extract;
@@ -9,7 +10,7 @@ mod steps;
 mod viewer;
 mod views;
 
-use std::sync::Arc;
+use std::sync::{Arc, LazyLock};
 
 use axum::extract::{DefaultBodyLimit, State};
 use axum::http::{HeaderMap, StatusCode, header};
@@ -26,8 +27,20 @@ use crate::config::Config;
 use crate::jobs::{Backend, Store};
 use crate::worker::RunningJobs;
 
-/// The contract, served at `/openapi.yaml`.
-pub const OPENAPI: &str = include_str!("../../openapi.yaml");
+/// The contract, served at `/openapi.yaml`: `openapi.yaml` at the
+/// repository root, with the case format's schemas generated from the
+/// solver's types appended to its `components.schemas` (which end it).
+pub static OPENAPI: LazyLock<String> = LazyLock::new(|| {
+    let mut document = include_str!("../../openapi.yaml").to_string();
+    for (name, schema) in mpm::case::openapi_schemas() {
+        // JSON is YAML: each schema on one line, in flow style.
+        document.push_str(&format!("    {name}: {schema}\n"));
+    }
+    document
+});
+
+/// The case format's JSON Schema, served at `/schema/case.json`.
+static CASE_SCHEMA: LazyLock<String> = LazyLock::new(|| mpm::case::json_schema().to_string());
 
 #[derive(Clone)]
 pub struct AppState {
@@ -52,6 +65,7 @@ pub fn router(state: AppState) -> Router {
         .route("/jobs/{id}/steps", get(steps::steps))
         .route("/jobs/{id}/steps/{step}", get(steps::step))
         .route("/jobs/{id}/result", get(jobs::result))
+        .route("/jobs/{id}/archive", get(archive::archive))
         .route("/openapi.yaml", get(openapi))
         .route_layer(middleware::from_fn_with_state(
             state.clone(),
@@ -59,6 +73,7 @@ pub fn router(state: AppState) -> Router {
         ));
     Router::new()
         .route("/health", get(health))
+        .route("/schema/case.json", get(case_schema))
         .merge(viewer::routes())
         .merge(protected)
         .fallback(unknown_route)
@@ -124,11 +139,48 @@ async fn health(State(state): State<AppState>) -> Response {
 }
 
 async fn openapi() -> impl IntoResponse {
-    ([(header::CONTENT_TYPE, "application/yaml")], OPENAPI)
+    (
+        [(header::CONTENT_TYPE, "application/yaml")],
+        OPENAPI.as_str(),
+    )
+}
+
+async fn case_schema() -> impl IntoResponse {
+    (
+        [(header::CONTENT_TYPE, "application/schema+json")],
+        CASE_SCHEMA.as_str(),
+    )
 }
 
 #[cfg(test)]
 mod tests {
+    /// The Python client validates cases locally against its copy of the
+    /// schema: it must be this build's.
+    #[test]
+    fn the_python_clients_schema_is_the_generated_one() {
+        let bundled: serde_json::Value =
+            serde_json::from_str(include_str!("../../python/src/mpm_client/case.schema.json"))
+                .expect("JSON");
+        assert!(
+            bundled == mpm::case::json_schema(),
+            "python/src/mpm_client/case.schema.json is stale: \
+             `mpm schema > python/src/mpm_client/case.schema.json`"
+        );
+    }
+
+    /// The generated case schemas take no name of a hand-written one.
+    #[test]
+    fn generated_schemas_add_to_the_contract_and_replace_nothing() {
+        let written: serde_yaml::Value =
+            serde_yaml::from_str(include_str!("../../openapi.yaml")).expect("YAML");
+        let served: serde_yaml::Value = serde_yaml::from_str(&super::OPENAPI).expect("YAML");
+        let generated = mpm::case::openapi_schemas();
+        let names =
+            |doc: &serde_yaml::Value| doc["components"]["schemas"].as_mapping().unwrap().len();
+        assert_eq!(names(&served), names(&written) + generated.len());
+        assert!(generated.contains_key("Case"));
+    }
+
     /// YAML 1.1 parsers (PyYAML, and tools built on it) read the keys `on`,
     /// `off`, `yes`, `no`, `y` and `n` as booleans: a selector's `on` became
     /// `true`, and the spec's own example failed with

@@ -56,25 +56,34 @@ pub async fn step(
         Some("vtu" | "vtp") if !step.has_points() => Err(ApiError::NotFound(format!(
             "points of step {k} of job {id}: its case stores them every output.every steps"
         ))),
-        Some("vtu") => {
-            let columns: PointColumns = serde_json::from_str(step.points.get())
-                .map_err(|e| ApiError::Internal(format!("stored points: {e}")))?;
-            let mut vtu = Vec::new();
-            write_vtu(&mut vtu, &columns).map_err(|e| ApiError::Internal(e.to_string()))?;
-            Ok(vtk_file(vtu, &format!("job-{id}-step-{k:04}.vtu")))
-        }
-        Some("vtp") => {
-            let boundaries: Vec<BoundaryOutput> = serde_json::from_str(step.boundaries.get())
-                .map_err(|e| ApiError::Internal(format!("stored boundaries: {e}")))?;
-            let mut vtp = Vec::new();
-            write_vtp(&mut vtp, &boundaries).map_err(|e| ApiError::Internal(e.to_string()))?;
-            Ok(vtk_file(vtp, &format!("job-{id}-step-{k:04}_boundary.vtp")))
-        }
+        Some("vtu") => Ok(vtk_file(vtu(&step)?, &format!("job-{id}-step-{k:04}.vtu"))),
+        Some("vtp") => Ok(vtk_file(
+            vtp(&step)?,
+            &format!("job-{id}-step-{k:04}_boundary.vtp"),
+        )),
         Some(other) => Err(ApiError::BadQuery {
             name: "format",
             message: format!("{other:?} is not json, vtu or vtp"),
         }),
     }
+}
+
+/// A stored step's points as VTU.
+pub(super) fn vtu(step: &StoredStep) -> Result<Vec<u8>, ApiError> {
+    let columns: PointColumns = serde_json::from_str(step.points.get())
+        .map_err(|e| ApiError::Internal(format!("stored points: {e}")))?;
+    let mut vtu = Vec::new();
+    write_vtu(&mut vtu, &columns).map_err(|e| ApiError::Internal(e.to_string()))?;
+    Ok(vtu)
+}
+
+/// A stored step's boundary curves as VTP.
+pub(super) fn vtp(step: &StoredStep) -> Result<Vec<u8>, ApiError> {
+    let boundaries: Vec<BoundaryOutput> = serde_json::from_str(step.boundaries.get())
+        .map_err(|e| ApiError::Internal(format!("stored boundaries: {e}")))?;
+    let mut vtp = Vec::new();
+    write_vtp(&mut vtp, &boundaries).map_err(|e| ApiError::Internal(e.to_string()))?;
+    Ok(vtp)
 }
 
 /// A VTK XML file as a download named `name`.

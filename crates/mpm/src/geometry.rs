@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 /// The region a body fills, in the reference configuration.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum Geometry {
     /// The box `min`..`max`, turned by `angle` (degrees, counter-clockwise)
@@ -61,7 +61,7 @@ pub enum Geometry {
 }
 
 /// The nodes and elements of a mesh body.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Mesh {
     pub nodes: Vec<[f64; 2]>,
@@ -263,7 +263,7 @@ fn vertex_box(vertices: &[[f64; 2]]) -> ([f64; 2], [f64; 2]) {
 /// condition must hold. `{"x": 0}` is the line x = 0; add
 /// `"y_between": [0, 2]` for a segment of it; `x_between` with `y_between`
 /// is a box.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Selector {
     #[serde(default)]

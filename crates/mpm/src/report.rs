@@ -115,7 +115,9 @@ pub struct RunReport {
 }
 
 /// A column of [`PointColumns`], as a case's `output.fields` names it.
-#[derive(Debug, Clone, Copy, Serialize, serde::Deserialize, PartialEq, Eq)]
+#[derive(
+    Debug, Clone, Copy, Serialize, serde::Deserialize, PartialEq, Eq, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum PointField {
     Position,

@@ -10,7 +10,7 @@ use crate::geometry::Selector;
 use crate::grid::{Connectivity, Grid};
 
 /// Which displacement components a support holds.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Fix {
     /// Horizontal displacement held (a roller on a wall normal to x).
@@ -33,7 +33,7 @@ impl Fix {
 }
 
 /// A rigid rotation of the boundary it applies to.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Rotation {
     /// Counter-clockwise angle in degrees at the last load step.

@@ -20,7 +20,9 @@ use crate::particles::MaterialPoints;
 use crate::reference_edge::{EdgeIndex, PointIndex, distance};
 
 /// Where the boundary curve's data points are.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[derive(
+    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Representation {
     /// On the material's edge: each outer point pushed out to the edge of

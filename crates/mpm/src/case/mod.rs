@@ -26,7 +26,7 @@ pub use crate::supports::{Fix, Rotation};
 pub const CASE_VERSION: u32 = 1;
 
 /// A complete analysis: geometry, material, grid, loads, supports.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Case {
     /// Case-format version; must be 1.
@@ -57,11 +57,39 @@ pub struct Case {
     pub output: OutputSpec,
 }
 
+/// The case format's JSON Schema (draft 2020-12), derived from the types
+/// below: what `GET /schema/case.json` serves and clients validate against.
+/// It checks shapes and names; [`Case::validate`] checks the values.
+pub fn json_schema() -> serde_json::Value {
+    schemars::schema_for!(Case).to_value()
+}
+
+/// The case format as OpenAPI 3.0 schemas: `Case` and every type it uses,
+/// by name, referring to each other as `#/components/schemas/NAME`.
+pub fn openapi_schemas() -> serde_json::Map<String, serde_json::Value> {
+    let root = schemars::generate::SchemaSettings::openapi3()
+        .into_generator()
+        .into_root_schema_for::<Case>();
+    let serde_json::Value::Object(mut case) = root.to_value() else {
+        unreachable!("a struct's schema is an object")
+    };
+    case.remove("$schema");
+    let mut schemas = match case.remove("components") {
+        Some(serde_json::Value::Object(mut components)) => match components.remove("schemas") {
+            Some(serde_json::Value::Object(schemas)) => schemas,
+            _ => serde_json::Map::new(),
+        },
+        _ => serde_json::Map::new(),
+    };
+    schemas.insert("Case".into(), serde_json::Value::Object(case));
+    schemas
+}
+
 /// What a run stores of its steps (the CLI's files, the service's rows).
 /// Step reports (Newton, probes, reactions) are kept for every step; the
 /// material points and boundary curves for step 0 (the undeformed state),
 /// every `every`-th step and the last.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSpec {
     /// Store the points every this many load steps (default 1: every step).
@@ -100,7 +128,7 @@ impl OutputSpec {
     }
 }
 
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BoundarySpec {
     #[serde(default)]
@@ -112,14 +140,16 @@ pub struct BoundarySpec {
     pub band_width: Option<f64>,
 }
 
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[derive(
+    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum AnalysisKind {
     #[default]
     PlaneStrain,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Analysis {
     /// Only `plane_strain` for now.
@@ -137,7 +167,9 @@ pub struct Analysis {
     pub volumetric: Volumetric,
 }
 
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[derive(
+    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Volumetric {
     #[default]
@@ -148,7 +180,7 @@ pub enum Volumetric {
 /// Cutting a load step's increment when Newton fails on it: the failed
 /// increment is retried in halves from the last converged state. The load
 /// steps stay the output steps.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SubsteppingSpec {
     /// The smallest sub-increment, as a fraction of the step's increment
@@ -177,7 +209,7 @@ impl Default for SubsteppingSpec {
 }
 
 /// Newton-Raphson controls.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NewtonSpec {
     /// Converged when the out-of-balance force norm over the free degrees of
@@ -238,7 +270,7 @@ impl Default for NewtonSpec {
 /// `origin`. The lattice is unbounded unless `extent` is given; either way
 /// only the nodes that the material touches enter the system, so a large
 /// extent costs nothing.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct GridSpec {
     pub cell_size: f64,
@@ -251,14 +283,16 @@ pub struct GridSpec {
     pub extent: Option<BoxSpec>,
 }
 
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BoxSpec {
     pub min: [f64; 2],
     pub max: [f64; 2],
 }
 
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[derive(
+    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum BasisKind {
     /// Bilinear finite-element hat functions (the paper's choice).
@@ -276,7 +310,7 @@ pub enum BasisKind {
     Bspline3,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Body {
     #[serde(default)]
@@ -289,7 +323,7 @@ pub struct Body {
 /// How densely a body is filled with material points: exactly one of
 /// `per_cell` (points per cell per direction), `spacing` (metres) or `count`
 /// (`[nx, ny]`, rectangles and quadrilaterals only); and on which lattice.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PointFill {
     #[serde(default)]
@@ -305,7 +339,7 @@ pub struct PointFill {
 }
 
 /// Constitutive model of a body.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
 pub enum MaterialSpec {
     /// Finite-strain elasticity: Hencky strain of the elastic left
@@ -403,7 +437,7 @@ impl MaterialSpec {
     }
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Loads {
     /// Gravitational acceleration (m/s^2), e.g. `[0, -9.81]`.
@@ -420,7 +454,7 @@ pub struct Loads {
 /// configuration: exactly one of a dead `traction` `[tx, ty]` (Pa) or a
 /// follower `pressure` (Pa, positive pushes into the material, normal to
 /// the current boundary).
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BoundaryLoad {
     pub on: Selector,
@@ -432,7 +466,7 @@ pub struct BoundaryLoad {
 
 /// A dead force (N per metre thickness) carried by the material point
 /// nearest to `at` in the reference configuration.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PointLoad {
     pub at: [f64; 2],
@@ -441,7 +475,7 @@ pub struct PointLoad {
 
 /// Displacement held on what `on` selects (zero, or prescribed by the
 /// implicit boundary method): grid nodes or the boundary curve, by `method`.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Support {
     pub on: Selector,
@@ -462,7 +496,9 @@ pub struct Support {
 }
 
 /// Where a support acts.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[derive(
+    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum SupportMethod {
     /// On the grid nodes that the selector contains (AMPLE's way): exact
@@ -474,7 +510,7 @@ pub enum SupportMethod {
     Ibm,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Probe {
     pub name: String,

@@ -97,7 +97,17 @@ impl Domain {
 }
 
 /// Which lattice a body's points sit on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Lattice {
     /// The body's own: rectangles and quadrilaterals mapped, sectors,

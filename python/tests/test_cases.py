@@ -1,0 +1,55 @@
+"""Case builders and the bundled schema; no server needed but the binary for `mpm example`."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from mpm_client import CaseError, cases
+
+
+def test_cantilever_defaults_are_the_built_in_example(binary: Path) -> None:
+    printed = subprocess.run(
+        [str(binary), "example", "cantilever"], check=True, capture_output=True, text=True
+    ).stdout
+    built_in = json.loads(printed)
+    assert cases.cantilever() == built_in
+    # Equal as JSON text too, so ints and floats are of the same kinds.
+    assert json.dumps(cases.cantilever(), sort_keys=True) == json.dumps(built_in, sort_keys=True)
+
+
+def test_cantilever_takes_cells_points_and_steps() -> None:
+    case = cases.cantilever(cell_size=0.75, points=(112, 32), load_steps=10)
+    assert case["grid"]["cell_size"] == 0.75
+    assert case["bodies"][0]["points"] == {"count": [112, 32]}
+    assert case["analysis"]["load_steps"] == 10
+    assert "3584 points" in case["title"] and "in 10 steps" in case["title"]
+    cases.validate(case)
+
+
+def test_validate_names_the_path_of_the_error() -> None:
+    case = cases.cantilever()
+    case["bodies"] = "beam"
+    with pytest.raises(CaseError) as raised:
+        cases.validate(case)
+    assert raised.value.path == "bodies"
+    assert isinstance(raised.value, ValueError)
+
+    case = cases.cantilever()
+    del case["version"]
+    with pytest.raises(CaseError, match=r"^\$: 'version' is a required property"):
+        cases.validate(case)
+
+
+def test_json_path_is_written_as_the_service_writes_it() -> None:
+    assert cases.json_path(["bodies", 0, "material", "poisson_ratio"]) == "bodies[0].material.poisson_ratio"
+    assert cases.json_path([]) == "$"
+
+
+def test_schema_is_package_data() -> None:
+    schema = cases.schema()
+    assert schema["type"] == "object"
+    assert {"version", "bodies"} <= set(schema["required"])

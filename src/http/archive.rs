@@ -1,0 +1,111 @@
+//! `GET /jobs/{id}/archive`: a job's results as one zip, in the layout
+//! `mpm run` writes its output directory in (`crate::results`).
+
+use std::io::{Cursor, Write};
+
+use axum::extract::State;
+use axum::http::header;
+use axum::response::{IntoResponse, Response};
+use mpm::StepReport;
+use tokio::runtime::Handle;
+use zip::ZipWriter;
+use zip::write::SimpleFileOptions;
+
+use super::extract::IdPath;
+use super::{ApiError, AppState, jobs, steps};
+use crate::jobs::{JobRow, Store};
+use crate::results::{
+    BOUNDARY_SERIES, CASE_FILE, POINTS_SERIES, SUMMARY_FILE, Series, StepFiles, Summary,
+};
+
+pub async fn archive(
+    State(state): State<AppState>,
+    IdPath(id): IdPath<i64>,
+) -> Result<Response, ApiError> {
+    let job = jobs::find(&state.store, id).await?;
+    let case = state
+        .store
+        .case_json(id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("job {id}")))?;
+    let reports = jobs::reports(&state.store, id).await?;
+    let store = state.store.clone();
+    let runtime = Handle::current();
+    // Compressing a large job takes a while: off the async threads.
+    let zip =
+        tokio::task::spawn_blocking(move || write_archive(&runtime, &store, &job, &case, &reports))
+            .await
+            .map_err(|e| ApiError::Internal(format!("archive task: {e}")))??;
+    let disposition = format!("attachment; filename=\"job-{id}.zip\"");
+    Ok((
+        [
+            (header::CONTENT_TYPE, "application/zip".to_string()),
+            (header::CONTENT_DISPOSITION, disposition),
+        ],
+        zip,
+    )
+        .into_response())
+}
+
+/// The zip: the case, the summary, and the files of each step with stored
+/// points, read from the store one step at a time.
+fn write_archive(
+    runtime: &Handle,
+    store: &Store,
+    job: &JobRow,
+    case: &str,
+    reports: &[StepReport],
+) -> Result<Vec<u8>, ApiError> {
+    let zip_error = |e: zip::result::ZipError| ApiError::Internal(format!("archive: {e}"));
+    let io_error = |e: std::io::Error| ApiError::Internal(format!("archive: {e}"));
+    let options = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    let mut zip = ZipWriter::new(Cursor::new(Vec::new()));
+    let add = |zip: &mut ZipWriter<_>, name: &str, bytes: &[u8]| -> Result<(), ApiError> {
+        zip.start_file(name, options).map_err(zip_error)?;
+        zip.write_all(bytes).map_err(io_error)
+    };
+    add(&mut zip, CASE_FILE, case.as_bytes())?;
+
+    let mut series = Series::default();
+    for report in reports {
+        let Some(step) = runtime.block_on(store.step(job.id, report.step as i64))? else {
+            continue;
+        };
+        if !step.has_points() {
+            continue;
+        }
+        let files = StepFiles::new(report.step);
+        let document = serde_json::to_vec(&step).map_err(|e| ApiError::Internal(e.to_string()))?;
+        add(&mut zip, &files.document, &document)?;
+        add(&mut zip, &files.points, &steps::vtu(&step)?)?;
+        add(&mut zip, &files.boundary, &steps::vtp(&step)?)?;
+        series.add(report.load_factor, files);
+    }
+    let mut pvd = Vec::new();
+    series.write_points(&mut pvd).map_err(io_error)?;
+    add(&mut zip, POINTS_SERIES, &pvd)?;
+    pvd.clear();
+    series.write_boundary(&mut pvd).map_err(io_error)?;
+    add(&mut zip, BOUNDARY_SERIES, &pvd)?;
+
+    let source = format!("job {}", job.id);
+    let summary = Summary {
+        error: job
+            .error
+            .as_deref()
+            .and_then(|e| serde_json::from_str(e).ok()),
+        ..Summary::new(
+            &source,
+            job.title.as_deref(),
+            job.points as usize,
+            job.load_steps as usize,
+            job.solve_seconds
+                .unwrap_or_else(|| reports.iter().map(|r| r.timings.total).sum()),
+            reports,
+        )
+    };
+    let summary =
+        serde_json::to_vec_pretty(&summary).map_err(|e| ApiError::Internal(e.to_string()))?;
+    add(&mut zip, SUMMARY_FILE, &summary)?;
+    Ok(zip.finish().map_err(zip_error)?.into_inner())
+}
