@@ -319,3 +319,47 @@ fn summary_only_writes_no_step_folder() {
     assert!(out.join("summary.json").exists());
     assert!(!out.join("steps").exists());
 }
+
+/// The case-format example in the README is a case that runs, with its
+/// point load and probe inside its body (the load once sat outside it).
+#[test]
+fn the_readmes_case_example_runs_and_its_points_lie_in_its_body() {
+    let readme = include_str!("../README.md");
+    let section = readme
+        .split("## Case format (JSON, version 1)")
+        .nth(1)
+        .expect("the README has a case-format section");
+    let text = section
+        .split("```json\n")
+        .nth(1)
+        .and_then(|s| s.split("```").next())
+        .expect("the section opens with a JSON example");
+    let case: serde_json::Value = serde_json::from_str(text).expect("the example is JSON");
+    let rectangle = &case["bodies"][0]["geometry"]["rectangle"];
+    let inside = |p: &serde_json::Value| {
+        (0..2).all(|k| {
+            let v = p[k].as_f64().unwrap();
+            rectangle["min"][k].as_f64().unwrap() <= v && v <= rectangle["max"][k].as_f64().unwrap()
+        })
+    };
+    for load in case["loads"]["point_loads"].as_array().unwrap() {
+        assert!(
+            inside(&load["at"]),
+            "point load at {} outside the body",
+            load["at"]
+        );
+    }
+    for probe in case["probes"].as_array().unwrap() {
+        assert!(
+            inside(&probe["at"]),
+            "probe at {} outside the body",
+            probe["at"]
+        );
+    }
+    let output = run_case("readme-example", &case);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+}

@@ -168,7 +168,7 @@ test('a finished job shows its body, boundary, slider, fields and plots', async 
     await page.selectOption('#field', 'u');
     await page.$eval('#step-slider', (s) => { s.value = 5; s.dispatchEvent(new Event('input')); });
     await page.waitForFunction(() => document.querySelector('#step-label').textContent.startsWith('step 5 of 5'));
-    await page.screenshot({ path: process.env.SCREENSHOT, fullPage: false });
+    await page.screenshot({ path: process.env.SCREENSHOT, fullPage: true });
   }
   await page.close();
 });

@@ -546,7 +546,7 @@ fn csv(r: &Results) -> String {
 /// A pressure-settlement plot of `curves` up to `x_max` (settlement / B)
 /// with the exact collapse pressure dashed.
 fn curves_svg(title: &str, curves: &[(String, &Curve)], exact: (&str, f64), x_max: f64) -> String {
-    let mut series: Vec<Series> = curves
+    let series: Vec<Series> = curves
         .iter()
         .enumerate()
         .map(|(k, (label, c))| Series {
@@ -556,18 +556,13 @@ fn curves_svg(title: &str, curves: &[(String, &Curve)], exact: (&str, f64), x_ma
             dashed: false,
         })
         .collect();
-    series.push(Series {
-        label: exact.0.into(),
-        points: vec![(0.0, exact.1), (x_max, exact.1)],
-        colour: "#444444",
-        dashed: true,
-    });
     Plot {
         title: title.into(),
         x_label: "settlement / B".into(),
         y_label: "q / c".into(),
         log_x: false,
         log_y: false,
+        reference: Some((exact.0.into(), exact.1)),
     }
     .svg(&series)
 }
@@ -623,6 +618,7 @@ fn large_svg(c: &Curve) -> String {
         y_label: "q / c".into(),
         log_x: false,
         log_y: false,
+        reference: None,
     }
     .svg(&[
         Series {

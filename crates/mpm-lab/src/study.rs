@@ -26,6 +26,7 @@ use mpm::{Case, NoObserver, RunReport, Simulation};
 use serde_json::{Value, json};
 
 use crate::LabError;
+use crate::basis_study::{FINEST_FE_TIP_UY, REFERENCE_RELATIVE};
 use crate::plot::{COLOURS, Plot, Series};
 
 /// Cell sizes of the sweep (m): the paper's three and one finer.
@@ -389,8 +390,12 @@ fn markdown(
     }
     s.push_str(
         "\nPlots: `cantilever-tip.svg` (tip deflection against points, the paper's \
-         Figure 3), `cantilever-relative.svg` (relative deflection against points), \
-         `cantilever-error.svg` (error of the relative deflection against wall time).\n",
+         Figure 3, with the tip u_y of the finest Q9 finite-element mesh, which the \
+         pin keeps from converging), `cantilever-relative.svg` (relative deflection \
+         against points, with the Q9 finite-element reference -2.7597 m of \
+         `scripts/papers_cantilever_reference.py`), `cantilever-error.svg` (error of \
+         the relative deflection against wall time). A cross on the bottom axis marks \
+         a run that failed; lines do not cross it.\n",
     );
     s
 }
@@ -432,14 +437,19 @@ fn row(s: &mut String, r: &Run, reference: Option<&Measured>) {
 type PlotValue<'a> = dyn Fn(&Run, &Measured) -> Option<(f64, f64)> + 'a;
 
 fn write_plots(out: &Path, runs: &[Run], cells: &[f64]) -> Result<(), LabError> {
-    let series = |value: &PlotValue<'_>| {
+    // Against points, a failed run is marked where it would be (a NaN
+    // value); against wall time, it has no place.
+    let series = |value: &PlotValue<'_>, by_points: bool| {
         let mut all = Vec::new();
         for method in [Method::Ibm, Method::Grid] {
             for (k, &h) in cells.iter().enumerate() {
                 let mut points: Vec<(f64, f64)> = runs
                     .iter()
                     .filter(|r| r.method == method && r.h == h)
-                    .filter_map(|r| r.outcome.as_ref().ok().and_then(|m| value(r, m)))
+                    .filter_map(|r| match &r.outcome {
+                        Ok(m) => value(r, m),
+                        Err(_) => by_points.then_some((r.points as f64, f64::NAN)),
+                    })
                     .collect();
                 points.sort_by(|a, b| a.0.total_cmp(&b.0));
                 if !points.is_empty() {
@@ -454,45 +464,50 @@ fn write_plots(out: &Path, runs: &[Run], cells: &[f64]) -> Result<(), LabError> 
         }
         all
     };
-    let by_points = |log_y: bool, title: &str, y_label: &str| Plot {
+    let by_points = |title: &str, y_label: &str, reference: (&str, f64)| Plot {
         title: title.into(),
         x_label: "material points".into(),
         y_label: y_label.into(),
         log_x: true,
-        log_y,
+        log_y: false,
+        reference: Some((reference.0.into(), reference.1)),
     };
-    let tip = series(&|r, m| Some((r.points as f64, m.tip[1])));
+    let tip = series(&|r, m| Some((r.points as f64, m.tip[1])), true);
     fs::write(
         out.join("cantilever-tip.svg"),
         by_points(
-            false,
             "Mid-tip deflection (paper's Figure 3)",
             "tip u_y (m)",
+            ("Q9 FE 320x64, unconverged", FINEST_FE_TIP_UY),
         )
         .svg(&tip),
     )?;
-    let relative = series(&|r, m| Some((r.points as f64, m.relative)));
+    let relative = series(&|r, m| Some((r.points as f64, m.relative)), true);
     fs::write(
         out.join("cantilever-relative.svg"),
         by_points(
-            false,
             "Tip deflection relative to the left edge",
             "relative deflection (m)",
+            ("Q9 FE reference", REFERENCE_RELATIVE),
         )
         .svg(&relative),
     )?;
     let refs = [Method::Ibm, Method::Grid].map(|m| reference(runs, m));
-    let error = series(&|r, m| {
-        let f = refs[(r.method == Method::Grid) as usize]?;
-        let (e, _) = errors(m, &f);
-        (e > 0.0).then_some((m.seconds, e))
-    });
+    let error = series(
+        &|r, m| {
+            let f = refs[(r.method == Method::Grid) as usize]?;
+            let (e, _) = errors(m, &f);
+            (e > 0.0).then_some((m.seconds, e))
+        },
+        false,
+    );
     let plot = Plot {
         title: "Error against cost".into(),
         x_label: "wall time (s)".into(),
         y_label: "relative deflection error (vs finest run)".into(),
         log_x: true,
         log_y: true,
+        reference: None,
     };
     fs::write(out.join("cantilever-error.svg"), plot.svg(&error))?;
     Ok(())

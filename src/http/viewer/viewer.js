@@ -391,7 +391,10 @@ function linePlot(title, xLabel, yLabel, series, { bars = false } = {}) {
     figure.append(el('p', { class: 'note' }, 'no finished steps yet'));
     return figure;
   }
-  let [xa, xb] = [Math.min(0, ...all.map((p) => p[0])), Math.max(...all.map((p) => p[0]))];
+  // Bars stand on whole numbers with half a unit either side.
+  let [xa, xb] = bars
+    ? [Math.min(...all.map((p) => p[0])) - 0.5, Math.max(...all.map((p) => p[0])) + 0.5]
+    : [Math.min(0, ...all.map((p) => p[0])), Math.max(...all.map((p) => p[0]))];
   let [ya, yb] = [Math.min(0, ...all.map((p) => p[1])), Math.max(0, ...all.map((p) => p[1]))];
   if (xb <= xa) xb = xa + 1;
   if (yb <= ya) yb = ya + 1;
