@@ -82,7 +82,34 @@ pub fn openapi_schemas() -> serde_json::Map<String, serde_json::Value> {
         _ => serde_json::Map::new(),
     };
     schemas.insert("Case".into(), serde_json::Value::Object(case));
+    for schema in schemas.values_mut() {
+        to_openapi_3_0(schema);
+    }
     schemas
+}
+
+/// Rewrites the JSON Schema keywords OpenAPI 3.0 lacks in its own terms,
+/// in `schema` and its subschemas: `const: v` becomes `enum: [v]`, and
+/// `type: [T, "null"]` becomes `type: T, nullable: true`.
+fn to_openapi_3_0(schema: &mut serde_json::Value) {
+    use serde_json::Value;
+    match schema {
+        Value::Object(map) => {
+            if let Some(value) = map.remove("const") {
+                map.insert("enum".into(), Value::Array(vec![value]));
+            }
+            if let Some(Value::Array(types)) = map.get("type") {
+                let named: Vec<Value> = types.iter().filter(|t| *t != "null").cloned().collect();
+                if named.len() == 1 && types.len() == 2 {
+                    map.insert("type".into(), named[0].clone());
+                    map.insert("nullable".into(), Value::Bool(true));
+                }
+            }
+            map.values_mut().for_each(to_openapi_3_0);
+        }
+        Value::Array(items) => items.iter_mut().for_each(to_openapi_3_0),
+        _ => {}
+    }
 }
 
 /// What a run stores of its steps (the CLI's files, the service's rows).
