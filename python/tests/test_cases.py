@@ -21,6 +21,19 @@ def test_cantilever_defaults_are_the_built_in_example(binary: Path) -> None:
     assert json.dumps(cases.cantilever(), sort_keys=True) == json.dumps(built_in, sort_keys=True)
 
 
+def test_every_bundled_example_is_the_built_in_one_and_valid(binary: Path) -> None:
+    listed = subprocess.run([str(binary), "example"], check=True, capture_output=True, text=True).stdout
+    assert tuple(listed.split()) == cases.EXAMPLES
+    for name in cases.EXAMPLES:
+        printed = subprocess.run(
+            [str(binary), "example", name], check=True, capture_output=True, text=True
+        ).stdout
+        assert cases.example(name) == json.loads(printed), name
+        cases.validate(cases.example(name))
+    with pytest.raises(ValueError, match="no built-in example"):
+        cases.example("bridge")
+
+
 def test_cantilever_takes_cells_points_and_steps() -> None:
     case = cases.cantilever(cell_size=0.75, points=(112, 32), load_steps=10)
     assert case["grid"]["cell_size"] == 0.75

@@ -217,14 +217,22 @@ fn seconds(s: f64) -> Option<Duration> {
 /// call on: call it before announcing the start, or a signal sent as soon as
 /// the announcement is read kills the process without a clean shutdown.
 fn shutdown_signal() -> impl std::future::Future<Output = ()> {
+    // Both handlers are installed here, not when first polled (as
+    // `tokio::signal::ctrl_c()` would be).
     #[cfg(unix)]
-    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
-        .expect("install the SIGTERM handler");
+    let (mut term, mut interrupt) = {
+        use tokio::signal::unix::{SignalKind, signal};
+        (
+            signal(SignalKind::terminate()).expect("install the SIGTERM handler"),
+            signal(SignalKind::interrupt()).expect("install the SIGINT handler"),
+        )
+    };
+    #[cfg(not(unix))]
     let ctrl_c = tokio::signal::ctrl_c();
     async move {
         #[cfg(unix)]
         tokio::select! {
-            _ = ctrl_c => {}
+            _ = interrupt.recv() => {}
             _ = term.recv() => {}
         }
         #[cfg(not(unix))]

@@ -8,6 +8,7 @@ use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use mpm::StepReport;
 use tokio::runtime::Handle;
+use tokio::sync::Semaphore;
 use zip::ZipWriter;
 use zip::write::SimpleFileOptions;
 
@@ -17,6 +18,8 @@ use crate::jobs::{JobRow, Store};
 use crate::results::{
     BOUNDARY_SERIES, CASE_FILE, POINTS_SERIES, SUMMARY_FILE, Series, StepFiles, Summary,
 };
+
+static BUILDING: Semaphore = Semaphore::const_new(1);
 
 pub async fn archive(
     State(state): State<AppState>,
@@ -29,6 +32,12 @@ pub async fn archive(
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("job {id}")))?;
     let reports = jobs::reports(&state.store, id).await?;
+    // An archive is built whole in memory (up to about the job's stored
+    // size): one at a time, so that requests for several cannot add up.
+    let _building = BUILDING
+        .acquire()
+        .await
+        .map_err(|e| ApiError::Internal(format!("archive: {e}")))?;
     let store = state.store.clone();
     let runtime = Handle::current();
     // Compressing a large job takes a while: off the async threads.

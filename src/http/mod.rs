@@ -168,6 +168,41 @@ mod tests {
         );
     }
 
+    /// The Python client bundles the built-in examples: they must be this
+    /// build's.
+    #[test]
+    fn the_python_clients_examples_are_the_built_in_ones() {
+        let bundled = [
+            (
+                "column",
+                include_str!("../../python/src/mpm_client/examples/column.json"),
+            ),
+            (
+                "cantilever-grid",
+                include_str!("../../python/src/mpm_client/examples/cantilever-grid.json"),
+            ),
+            (
+                "cantilever",
+                include_str!("../../python/src/mpm_client/examples/cantilever.json"),
+            ),
+            (
+                "plate-with-hole",
+                include_str!("../../python/src/mpm_client/examples/plate-with-hole.json"),
+            ),
+            (
+                "footing",
+                include_str!("../../python/src/mpm_client/examples/footing.json"),
+            ),
+        ];
+        assert_eq!(bundled.map(|(name, _)| name), mpm::case::builtin::NAMES);
+        for (name, text) in bundled {
+            assert!(
+                Some(text) == mpm::case::builtin::get(name),
+                "python/src/mpm_client/examples/{name}.json is stale: copy crates/mpm/cases/{name}.json"
+            );
+        }
+    }
+
     /// The generated case schemas take no name of a hand-written one.
     #[test]
     fn generated_schemas_add_to_the_contract_and_replace_nothing() {

@@ -50,6 +50,7 @@ pub struct Links {
     pub steps: String,
     pub result: String,
     pub cancel: String,
+    pub archive: String,
 }
 
 impl JobView {
@@ -81,6 +82,7 @@ impl JobView {
                 steps: format!("{base}/steps"),
                 result: format!("{base}/result"),
                 cancel: format!("{base}/cancel"),
+                archive: format!("{base}/archive"),
                 this: base,
             },
         }

@@ -60,8 +60,12 @@ before(async () => {
   const failing = structuredClone(cantilever);
   failing.title = 'cantilever allowed two Newton iterations a step';
   failing.analysis.newton = { max_iterations: 2 };
+  const thinned = structuredClone(cantilever);
+  thinned.title = 'cantilever storing the points of every second step, no columns';
+  thinned.output = { every: 2, fields: [] };
   jobs.cantilever = (await call('POST', '/jobs', cantilever)).id;
   jobs.failing = (await call('POST', '/jobs', failing)).id;
+  jobs.thinned = (await call('POST', '/jobs', thinned)).id;
   for (const id of Object.values(jobs)) {
     await until(`job ${id} to end`, async () => {
       const job = await call('GET', `/jobs/${id}`);
@@ -117,6 +121,7 @@ test('the page asks for the token, refuses a wrong one and lists the jobs with t
   assert.deepEqual(Object.fromEntries(rows), {
     [jobs.cantilever]: 'succeeded',
     [jobs.failing]: 'failed',
+    [jobs.thinned]: 'succeeded',
   });
   // The token is kept for the tab: a reload goes straight to the list.
   await page.reload();
@@ -164,6 +169,12 @@ test('a finished job shows its body, boundary, slider, fields and plots', async 
   assert.equal(byTitle.reactions.circles, 2 * 2 * 6);
   assert.equal(byTitle['Newton iterations per step'].bars, 5);
 
+  // The archive downloads with the token.
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click('#download')]);
+  assert.equal(download.suggestedFilename(), `job-${jobs.cantilever}.zip`);
+  const zip = await download.path();
+  assert.ok(zip && (await import('node:fs')).statSync(zip).size > 10000, 'the archive is nearly empty');
+
   if (process.env.SCREENSHOT) {
     await page.selectOption('#field', 'u');
     await page.$eval('#step-slider', (s) => { s.value = 5; s.dispatchEvent(new Event('input')); });
@@ -182,6 +193,23 @@ test('a failed job shows its error with step, iteration and residual', async () 
   assert.match(text, /^failed: /);
   assert.match(text, /\(step \d, iteration 2, residual \d\.\d+e-\d+\)$/);
   // Step 0 was stored before the solve failed: the body is still shown.
+  await page.waitForSelector('#points[data-points="896"]');
+  await page.close();
+});
+
+test('a job that stores no columns and thins its steps still shows its body', async () => {
+  const page = await browser.newPage();
+  await signedIn(page);
+  await page.click(`a[href="#/jobs/${jobs.thinned}"]`);
+  await page.waitForSelector('#points[data-points="896"]');
+  assert.match(await page.textContent('.legend'), /no field stored to colour by/);
+  const drawn = await canvasStatistics(page);
+  assert.ok(drawn.red > 500, 'no boundary drawn');
+  // Step 3 kept no points (every 2); step 4 did.
+  await page.$eval('#step-slider', (s) => { s.value = 3; s.dispatchEvent(new Event('input')); });
+  await page.waitForFunction(() => document.querySelector('#step-note').textContent.includes('not stored'));
+  assert.equal(await page.$eval('#points', (c) => c.dataset.points), '0');
+  await page.$eval('#step-slider', (s) => { s.value = 4; s.dispatchEvent(new Event('input')); });
   await page.waitForSelector('#points[data-points="896"]');
   await page.close();
 });

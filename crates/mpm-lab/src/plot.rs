@@ -149,8 +149,8 @@ impl Plot {
                 ""
             };
             // A line through each run of drawable points: a failed run
-            // breaks it.
-            for run in series.points.split(|p| failed(p)) {
+            // (a NaN value, placed or not) breaks it.
+            for run in series.points.split(|p| p.1.is_nan()) {
                 let pts: Vec<(f64, f64)> = run
                     .iter()
                     .filter(|p| drawable(p))

@@ -437,21 +437,26 @@ fn row(s: &mut String, r: &Run, reference: Option<&Measured>) {
 type PlotValue<'a> = dyn Fn(&Run, &Measured) -> Option<(f64, f64)> + 'a;
 
 fn write_plots(out: &Path, runs: &[Run], cells: &[f64]) -> Result<(), LabError> {
-    // Against points, a failed run is marked where it would be (a NaN
-    // value); against wall time, it has no place.
+    // Each series runs through its runs by point count. A failed run breaks
+    // the line (a NaN value): against points it is marked where it would
+    // be; against wall time it has no place.
     let series = |value: &PlotValue<'_>, by_points: bool| {
         let mut all = Vec::new();
         for method in [Method::Ibm, Method::Grid] {
             for (k, &h) in cells.iter().enumerate() {
-                let mut points: Vec<(f64, f64)> = runs
+                let mut these: Vec<&Run> = runs
                     .iter()
                     .filter(|r| r.method == method && r.h == h)
+                    .collect();
+                these.sort_by_key(|r| r.points);
+                let points: Vec<(f64, f64)> = these
+                    .iter()
                     .filter_map(|r| match &r.outcome {
                         Ok(m) => value(r, m),
-                        Err(_) => by_points.then_some((r.points as f64, f64::NAN)),
+                        Err(_) if by_points => Some((r.points as f64, f64::NAN)),
+                        Err(_) => Some((f64::NAN, f64::NAN)),
                     })
                     .collect();
-                points.sort_by(|a, b| a.0.total_cmp(&b.0));
                 if !points.is_empty() {
                     all.push(Series {
                         label: format!("{} h = {h} m", method.name()),

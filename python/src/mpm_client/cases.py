@@ -18,7 +18,18 @@ from jsonschema.validators import validator_for
 
 from .errors import CaseError
 
-__all__ = ["cantilever", "validate", "schema", "CaseError"]
+__all__ = ["cantilever", "example", "EXAMPLES", "validate", "schema", "CaseError"]
+
+# The service's built-in examples (`mpm example NAME`), bundled as JSON.
+EXAMPLES = ("column", "cantilever-grid", "cantilever", "plate-with-hole", "footing")
+
+
+def example(name: str) -> dict:
+    """The built-in example `name` (one of `EXAMPLES`), as `mpm example NAME` prints it."""
+    if name not in EXAMPLES:
+        raise ValueError(f"no built-in example {name!r}; available: {', '.join(EXAMPLES)}")
+    text = resources.files(__package__).joinpath("examples", f"{name}.json").read_text()
+    return json.loads(text)
 
 # The paper's beam (Bing et al. 2017): 10 m x 2 m, E = 1 MPa, nu = 0.25.
 _LENGTH = 10.0

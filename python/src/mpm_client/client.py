@@ -32,7 +32,11 @@ __all__ = ["Client", "Step", "Result"]
 
 _ENDED = ("succeeded", "failed", "cancelled")
 _PAGE = 500  # the service's largest page of GET /jobs
-_FIRST_PAUSE = 0.02  # s, the first pause of `Client.wait`, doubled up to its `poll`
+# `Client.wait`'s pauses: the first (s), and the growth of each next one up
+# to its `poll`. A job is then seen ending at most a quarter of its time
+# late; a poll costs the server about a millisecond.
+_FIRST_PAUSE = 0.01
+_PAUSE_GROWTH = 1.25
 
 # A step document's point columns and the shape of one point's entry.
 _COLUMNS: dict[str, tuple] = {
@@ -227,6 +231,7 @@ class Client:
         body: bytes | None = None,
         headers: Mapping[str, str] | None = None,
         query: Mapping[str, Any] | None = None,
+        timeout: float | None = None,
     ) -> http.client.HTTPResponse:
         url = self.url + path
         if query:
@@ -241,7 +246,7 @@ class Client:
         for name, value in (headers or {}).items():
             request.add_header(name, value)
         try:
-            return urllib.request.urlopen(request, timeout=self.timeout)
+            return urllib.request.urlopen(request, timeout=timeout or self.timeout)
         except urllib.error.HTTPError as e:
             try:
                 data = self._read(e, f"{method} {path}")
@@ -320,8 +325,9 @@ class Client:
         """Poll the job until it ends; returns the final job.
 
         poll: the longest pause between polls, s; the first pauses are
-        shorter (20 ms, doubling up to `poll`), so a job of a few tens of
-        milliseconds is not kept waiting half a second.
+        shorter (10 ms, growing by a quarter each time up to `poll`), so a
+        job is seen ending within about a quarter of its time, and one of a
+        few tens of milliseconds is not kept waiting half a second.
         progress: show load steps done/of on stderr. timeout: give up after
         this many seconds with `TimeoutError` (the job goes on). Raises
         `JobFailed` (with the job's error: kind, message, step, iteration,
@@ -339,7 +345,7 @@ class Client:
                 if deadline is not None and time.monotonic() >= deadline:
                     raise TimeoutError(f"job {id} is still {job['status']} after {timeout} s")
                 time.sleep(pause)
-                pause = min(poll, 2 * pause)
+                pause = min(poll, _PAUSE_GROWTH * pause)
         finally:
             bar.close()
         if job["status"] == "failed":
@@ -373,8 +379,11 @@ class Client:
         """Probe histories, reactions, applied loads, Newton statistics and timings (see `Result`)."""
         return Result.from_json(self._json("GET", f"/jobs/{int(id)}/result"))
 
-    def download(self, id: int, folder: str | os.PathLike) -> Path:
+    def download(self, id: int, folder: str | os.PathLike, timeout: float = 600.0) -> Path:
         """Fetch the job's archive and unpack it into `folder` (made if missing).
+
+        The server builds the whole zip before it answers (one at a time),
+        so a large job may take a while: `timeout` (s) bounds that wait.
 
         The layout `mpm run --out DIR` writes: `summary.json`, `case.json`,
         `points.pvd`, `boundary.pvd` and `steps/step_NNNN.{json,vtu}`,
@@ -385,7 +394,7 @@ class Client:
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile() as archive:
-            with self._open("GET", f"/jobs/{int(id)}/archive") as response:
+            with self._open("GET", f"/jobs/{int(id)}/archive", timeout=timeout) as response:
                 try:
                     shutil.copyfileobj(response, archive)
                 except (OSError, http.client.HTTPException) as e:

@@ -4,6 +4,10 @@
 // no build step: `mpm serve` embeds this file as it is.
 
 const app = document.getElementById('app');
+// The token form, kept here: pages replace what `app` holds.
+const tokenForm = document.getElementById('token-form');
+const tokenInput = document.getElementById('token-input');
+const tokenError = document.getElementById('token-error');
 const TOKEN_KEY = 'mpm-token';
 const REFRESH_MS = 2000;
 
@@ -11,11 +15,13 @@ const REFRESH_MS = 2000;
 
 class Unauthorized extends Error {}
 
-async function api(path) {
-  const headers = {};
+function authorization() {
   const token = sessionStorage.getItem(TOKEN_KEY);
-  if (token) headers.Authorization = `Bearer ${token}`;
-  const response = await fetch(path, { headers });
+  return token ? { Authorization: `Bearer ${token}` } : {};
+}
+
+async function api(path) {
+  const response = await fetch(path, { headers: authorization() });
   if (response.status === 401) throw new Unauthorized();
   const body = await response.json().catch(() => null);
   if (!response.ok) {
@@ -27,17 +33,15 @@ async function api(path) {
 
 // Asks for the token, then shows the page again.
 function askForToken() {
-  const form = document.getElementById('token-form');
-  const error = document.getElementById('token-error');
-  app.replaceChildren(form);
-  form.hidden = false;
-  error.hidden = !sessionStorage.getItem(TOKEN_KEY);
-  error.textContent = 'That token was refused.';
-  form.onsubmit = (event) => {
+  app.replaceChildren(tokenForm);
+  tokenForm.hidden = false;
+  tokenError.hidden = !sessionStorage.getItem(TOKEN_KEY);
+  tokenError.textContent = 'That token was refused.';
+  tokenForm.onsubmit = (event) => {
     event.preventDefault();
-    sessionStorage.setItem(TOKEN_KEY, document.getElementById('token-input').value);
-    form.hidden = true;
-    document.body.append(form);
+    sessionStorage.setItem(TOKEN_KEY, tokenInput.value);
+    tokenForm.hidden = true;
+    document.body.append(tokenForm);
     route();
   };
 }
@@ -76,13 +80,18 @@ function formatNumber(v) {
 // ---- routing: #/ is the list, #/jobs/ID a job ----
 
 let leavePage = () => {};
+// Counts navigations: a page still loading when the user moves on finds
+// itself stale and leaves `app` alone.
+let navigation = 0;
 
 function route() {
   leavePage();
   leavePage = () => {};
+  const mine = ++navigation;
+  const stale = () => mine !== navigation;
   const match = location.hash.match(/^#\/jobs\/(\d+)/);
-  const show = match ? () => jobPage(Number(match[1])) : () => jobList();
-  show().catch(failed);
+  const show = match ? () => jobPage(Number(match[1]), stale) : () => jobList(stale);
+  show().catch((e) => stale() || failed(e));
 }
 
 function failed(e) {
@@ -91,7 +100,8 @@ function failed(e) {
 }
 
 // A page that refreshes itself until it is left.
-function everyFewSeconds(refresh) {
+function everyFewSeconds(refresh, stale) {
+  if (stale()) return;
   let timer = null;
   let left = false;
   const tick = async () => {
@@ -111,7 +121,7 @@ function everyFewSeconds(refresh) {
 
 // ---- the job list ----
 
-async function jobList() {
+async function jobList(stale) {
   const table = el('table', { class: 'jobs' });
   const fill = (page) => {
     const rows = page.jobs.map((job) =>
@@ -132,6 +142,7 @@ async function jobList() {
       ...rows);
   };
   const page = await api('/jobs?limit=100');
+  if (stale()) return;
   fill(page);
   const total = el('p', { class: 'note' });
   const note = (p) => { total.textContent = `${p.total} jobs, newest first; this list updates every ${REFRESH_MS / 1000} s.`; };
@@ -142,7 +153,7 @@ async function jobList() {
     const p = await api('/jobs?limit=100');
     fill(p);
     note(p);
-  });
+  }, stale);
 }
 
 // ---- one job ----
@@ -162,13 +173,27 @@ const FIELDS = [
   { key: 'body', label: 'body', unit: 'index', needs: 'body', value: (c, i) => c.body[i] },
 ];
 
-async function jobPage(id) {
+// Step documents kept per page: they may hold a million points each.
+const CACHED_STEPS = 6;
+
+async function jobPage(id, stale) {
   const [job, kase] = await Promise.all([api(`/jobs/${id}`), api(`/jobs/${id}/case`)]);
+  if (stale()) return;
   document.title = `mpm job ${id}`;
-  const steps = new Map(); // step number -> step document
+  const steps = new Map(); // step number -> step document, oldest first
   const loadStep = async (k) => {
-    if (!steps.has(k)) steps.set(k, await api(`/jobs/${id}/steps/${k}`));
+    if (!steps.has(k)) {
+      steps.set(k, await api(`/jobs/${id}/steps/${k}`));
+      if (steps.size > CACHED_STEPS) steps.delete(steps.keys().next().value);
+    }
     return steps.get(k);
+  };
+  // Which steps keep their points (the case's `output.every`, and the last).
+  const every = (kase.output && kase.output.every) || 1;
+  const stored = (k) => k === 0 || k === job.progress.of || k % every === 0;
+  const latestStored = (k) => {
+    while (k > 0 && !stored(k)) k--;
+    return k;
   };
 
   const heading = el('h1', {}, `Job #${id} `, statusBadge(job.status));
@@ -183,9 +208,22 @@ async function jobPage(id) {
   const message = el('p', { class: 'note', id: 'step-note' });
   const plots = el('div', { class: 'plots' });
   const caseText = el('pre', {}, JSON.stringify(kase, null, 2));
+  // The whole job as `mpm run` writes it; fetched with the token, saved
+  // from memory.
+  const download = el('button', { id: 'download' }, 'download all (zip)');
+  download.addEventListener('click', async () => {
+    const response = await fetch(`/jobs/${id}/archive`, { headers: authorization() });
+    if (!response.ok) {
+      message.textContent = `archive: HTTP ${response.status}`;
+      return;
+    }
+    const url = URL.createObjectURL(await response.blob());
+    el('a', { href: url, download: `job-${id}.zip` }).click();
+    setTimeout(() => URL.revokeObjectURL(url), 10000);
+  });
   app.replaceChildren(
     el('p', {}, el('a', { href: '#/' }, '← all jobs')),
-    heading, summary, errorBox,
+    heading, summary, el('p', {}, download), errorBox,
     el('div', { class: 'controls' },
       el('label', {}, 'load step ', slider), stepLabel,
       el('label', {}, 'colour by ', fieldSelect)),
@@ -211,9 +249,10 @@ async function jobPage(id) {
         .map((k) => `${k} ${formatNumber(j.error[k])}`).join(', ');
       errorBox.textContent = `${j.status}: ${j.error.kind}: ${j.error.message}${where ? ` (${where})` : ''}`;
     }
-    const atEnd = Number(slider.value) === Number(slider.max);
+    // Follow the newest step with points while the slider is at the end.
+    const atEnd = Number(slider.value) >= latestStored(Number(slider.max));
     slider.max = j.progress.step;
-    if (atEnd) slider.value = j.progress.step;
+    if (atEnd) slider.value = latestStored(j.progress.step);
   };
 
   const draw = async () => {
@@ -222,10 +261,14 @@ async function jobPage(id) {
     let doc;
     try {
       doc = await loadStep(k);
+      if (!reference) reference = (await loadStep(0)).points;
     } catch (e) {
+      if (e instanceof Unauthorized) throw e;
       message.textContent = `step ${k}: ${e.message}`;
       return;
     }
+    // The slider moved on while this step loaded.
+    if (Number(slider.value) !== k) return;
     const lf = doc.report.load_factor;
     stepLabel.textContent = `step ${k} of ${current.job.progress.of}, load factor ${formatNumber(lf)}`;
     if (!doc.points) {
@@ -233,9 +276,9 @@ async function jobPage(id) {
       clear(canvas);
       return;
     }
-    if (!reference) reference = (await loadStep(0)).points;
     offerFields(fieldSelect, doc.points);
-    const field = FIELDS.find((f) => f.key === fieldSelect.value) || FIELDS[0];
+    // None when the case stores no column to colour by: one colour.
+    const field = FIELDS.find((f) => f.key === fieldSelect.value) || null;
     const drawn = drawBody(canvas, doc, reference, field, kase.grid);
     drawColourBar(colourBar, barLabels, field, drawn.range);
     message.textContent = `${drawn.points} points and ${drawn.curves} boundary curve(s) drawn; ` +
@@ -247,10 +290,13 @@ async function jobPage(id) {
   };
 
   showJob(job);
-  slider.addEventListener('input', draw);
-  fieldSelect.addEventListener('change', draw);
+  slider.value = latestStored(job.progress.step);
+  const redraw = () => draw().catch((e) => stale() || failed(e));
+  slider.addEventListener('input', redraw);
+  fieldSelect.addEventListener('change', redraw);
   if (job.progress.step > 0 || job.status !== 'queued') {
     current.result = await api(`/jobs/${id}/result`);
+    if (stale()) return;
     showPlots(current.result);
   }
   await draw();
@@ -267,7 +313,7 @@ async function jobPage(id) {
         await draw();
       }
       if (j.status !== 'queued' && j.status !== 'running') leavePage();
-    });
+    }, stale);
   }
 }
 
@@ -332,7 +378,7 @@ function drawBody(canvas, doc, reference, field, grid) {
     ctx.stroke();
   }
 
-  const values = Array.from({ length: n }, (_, i) => field.value(c, i));
+  const values = Array.from({ length: n }, (_, i) => (field ? field.value(c, i) : 0));
   let [lo, hi] = [Infinity, -Infinity];
   for (const v of values) if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
   if (!(hi > lo)) { const m = Number.isFinite(lo) ? lo : 0; [lo, hi] = [m - 0.5 * Math.abs(m || 1), m + 0.5 * Math.abs(m || 1)]; }
@@ -366,6 +412,11 @@ function drawBody(canvas, doc, reference, field, grid) {
 }
 
 function drawColourBar(bar, labels, field, [lo, hi]) {
+  bar.hidden = !field;
+  if (!field) {
+    labels.replaceChildren(el('div', {}, 'no field stored to colour by (output.fields)'));
+    return;
+  }
   const ctx = bar.getContext('2d');
   for (let y = 0; y < bar.height; y++) {
     ctx.fillStyle = colour(1 - y / (bar.height - 1));
