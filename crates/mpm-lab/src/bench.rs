@@ -13,6 +13,7 @@ use std::fs;
 use std::path::Path;
 use std::time::Instant;
 
+use mpm::linsolve::{FillOrdering, last_factor_entries, set_fill_ordering};
 use mpm::report::StepTimings;
 use mpm::{Case, NoObserver, Simulation};
 use serde_json::{Value, json};
@@ -75,6 +76,9 @@ pub struct Row {
     iterations: usize,
     timings: StepTimings,
     peak_mib: Option<f64>,
+    /// Entries of the last Cholesky factor (0: none was computed).
+    #[serde(default)]
+    factor_entries: usize,
 }
 
 pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabError> {
@@ -137,6 +141,7 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabErr
             target *= 10;
         }
     }
+    report.push_str(&ordering_comparison(max_points)?);
     report.push_str(&return_map_cost()?);
     // `mpm bench-queue` writes its own section: keep it.
     let earlier = fs::read_to_string(out).unwrap_or_default();
@@ -225,12 +230,66 @@ fn return_map_cost() -> Result<String, LabError> {
     Ok(text)
 }
 
+/// The environment variable a `bench-row` child reads its fill ordering
+/// from: `minimum_degree` or `nested_dissection` (the default).
+const ORDERING_VARIABLE: &str = "MPM_BENCH_FILL_ORDERING";
+
+/// Cholesky's fill-reducing orderings compared on the symmetric scene (the
+/// column), from 1e4 points up: the factor's entries, the factorisation's
+/// time and the peak memory.
+fn ordering_comparison(max_points: usize) -> Result<String, LabError> {
+    let mut text = String::from(
+        "\n## Fill-reducing ordering\n\n\
+         The column's tangent is symmetric (Cholesky): faer's approximate minimum degree against nested \
+         dissection of the active nodes by grid lines (`crates/mpm/src/ordering.rs`). First two load steps; \
+         factor entries of the last factorisation; factorisation seconds per step (the symbolic analysis \
+         included, once a step).\n\n\
+         | points | active DOFs | ordering | factor entries | entries / DOF | factorisation s / step | s / step | peak MiB |\n\
+         |---:|---:|---|---:|---:|---:|---:|---:|\n",
+    );
+    let mut target = 10_000;
+    while target <= max_points {
+        for ordering in ["minimum_degree", "nested_dissection"] {
+            let row = measure_in_child_with(0, target, Some(ordering))?;
+            let steps = row.steps as f64;
+            let line = format!(
+                "| {} | {} | {} | {} | {:.0} | {:.3} | {:.3} | {} |\n",
+                row.points,
+                row.dofs,
+                ordering.replace('_', " "),
+                row.factor_entries,
+                row.factor_entries as f64 / row.dofs.max(1) as f64,
+                row.timings.factorisation / steps,
+                row.timings.total / steps,
+                row.peak_mib
+                    .map_or("n/a".to_string(), |m| format!("{m:.0}")),
+            );
+            eprint!("{line}");
+            text.push_str(&line);
+        }
+        target *= 10;
+    }
+    Ok(text)
+}
+
 /// Runs one row in a child process (`mpm bench-row`), so that its peak
 /// memory is its own.
 fn measure_in_child(scene: usize, target: usize) -> Result<Row, LabError> {
-    let output = std::process::Command::new(std::env::current_exe()?)
-        .args(["bench-row", &scene.to_string(), &target.to_string()])
-        .output()?;
+    measure_in_child_with(scene, target, None)
+}
+
+/// [`measure_in_child`] with Cholesky's fill ordering named.
+fn measure_in_child_with(
+    scene: usize,
+    target: usize,
+    ordering: Option<&str>,
+) -> Result<Row, LabError> {
+    let mut command = std::process::Command::new(std::env::current_exe()?);
+    command.args(["bench-row", &scene.to_string(), &target.to_string()]);
+    if let Some(ordering) = ordering {
+        command.env(ORDERING_VARIABLE, ordering);
+    }
+    let output = command.output()?;
     if !output.status.success() {
         return Err(LabError::Failed(
             String::from_utf8_lossy(&output.stderr).trim().to_string(),
@@ -245,6 +304,15 @@ pub fn bench_row(scene: usize, target: usize) -> Result<(), LabError> {
     let scene = SCENES
         .get(scene)
         .ok_or_else(|| LabError::Input(format!("no scene {scene}")))?;
+    match std::env::var(ORDERING_VARIABLE).as_deref() {
+        Ok("minimum_degree") => set_fill_ordering(FillOrdering::MinimumDegree),
+        Ok("nested_dissection") | Err(_) => set_fill_ordering(FillOrdering::NestedDissection),
+        Ok(other) => {
+            return Err(LabError::Input(format!(
+                "{ORDERING_VARIABLE}={other}: not minimum_degree or nested_dissection"
+            )));
+        }
+    }
     let row = measure(scene, target)?;
     println!(
         "{}",
@@ -276,6 +344,7 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, LabError> {
         iterations,
         timings,
         peak_mib: peak_memory_mib(),
+        factor_entries: last_factor_entries(),
     })
 }
 

@@ -16,6 +16,7 @@ use crate::grid::{Connectivity, Link};
 use crate::linsolve::{Factorisation, SparseSolver};
 use crate::material::{Material, Response};
 use crate::newton::{Equilibrium, InvertedPoint};
+use crate::ordering;
 use crate::particles::MaterialPoints;
 use crate::report::StepTimings;
 use crate::supports::HeldDofs;
@@ -98,6 +99,10 @@ impl<'a> StepEquilibrium<'a> {
             ghost,
             fbar,
         } = terms;
+        // Cholesky's elimination order, for the tangents that are symmetric
+        // (see `correction`); LU orders its own columns.
+        let order = (loading.is_empty() && fbar.is_none())
+            .then(|| ordering::nested_dissection(&conn.nodes, &pattern));
         Self {
             conn,
             pattern,
@@ -116,7 +121,7 @@ impl<'a> StepEquilibrium<'a> {
             u: Vec::new(),
             f_int: Vec::new(),
             responses: Vec::new(),
-            solver: SparseSolver::new(conn.n_dofs()),
+            solver: SparseSolver::new(conn.n_dofs(), order),
             timings: StepTimings::default(),
         }
     }

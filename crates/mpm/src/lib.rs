@@ -32,6 +32,7 @@ pub mod material;
 pub mod model;
 pub mod newton;
 pub mod observer;
+pub mod ordering;
 pub mod particles;
 pub mod probes;
 pub mod reference_edge;

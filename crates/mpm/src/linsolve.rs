@@ -6,15 +6,59 @@
 //! A symmetric tangent (hyperelastic material, dead loads) is factorised by
 //! Cholesky; LU is used when the tangent is not symmetric, and as a fallback
 //! when Cholesky meets a non-positive pivot (an indefinite tangent, e.g. past
-//! a limit point). On this 2-core machine faer's sequential mode measured
-//! about 1.8x faster than its rayon mode, so the solver sets `Par::Seq`.
+//! a limit point). Cholesky orders the unknowns by nested dissection of the
+//! grid's active nodes (`ordering.rs`) when it is given them, and runs on
+//! rayon's threads for the largest systems; LU keeps faer's COLAMD and
+//! sequential mode (which measured about 1.8x faster than its rayon mode
+//! at 1e5 unknowns on this 2-core machine).
 
+use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering as Atomic};
+
+use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
+use faer::perm::PermRef;
+use faer::sparse::linalg::cholesky::{
+    SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+};
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Mat, Side};
+use faer::{Conj, Mat, Par, Side};
 
 use crate::assembly::Pattern;
+
+/// The fill-reducing ordering of a Cholesky factorisation (LU orders its
+/// columns by faer's COLAMD, which takes no other).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FillOrdering {
+    /// faer's approximate minimum degree.
+    MinimumDegree,
+    /// Nested dissection of the active nodes by grid lines (`ordering.rs`),
+    /// when the solver is given the nodes.
+    NestedDissection,
+}
+
+static ORDERING: AtomicU8 = AtomicU8::new(1);
+/// Entries of the last Cholesky factor in this process, for benchmarks.
+static LAST_FACTOR_ENTRIES: AtomicUsize = AtomicUsize::new(0);
+
+/// Entries (the fill) of the last Cholesky factor this process computed;
+/// 0 before the first.
+pub fn last_factor_entries() -> usize {
+    LAST_FACTOR_ENTRIES.load(Atomic::Relaxed)
+}
+
+/// The ordering every later Cholesky factorisation in this process uses
+/// (for benchmarks comparing them; nested dissection by default).
+pub fn set_fill_ordering(ordering: FillOrdering) {
+    ORDERING.store(ordering as u8, Atomic::Relaxed);
+}
+
+pub fn fill_ordering() -> FillOrdering {
+    match ORDERING.load(Atomic::Relaxed) {
+        0 => FillOrdering::MinimumDegree,
+        _ => FillOrdering::NestedDissection,
+    }
+}
 
 /// Which factorisation produced a solution.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -24,20 +68,42 @@ pub enum Factorisation {
     Lu,
 }
 
+/// From this many unknowns up, Cholesky factorises on rayon's threads:
+/// measured on the GIMP column (2 cores), sequential was 1.28x faster at
+/// 48k DOFs and parallel 1.15x faster at 479k (`BENCHMARKS.md`); the
+/// crossover lies between, and this splits the difference.
+const PARALLEL_FROM_DOFS: usize = 150_000;
+
 /// A linear solver bound to one sparsity pattern.
 pub struct SparseSolver {
     n: usize,
-    llt: Option<SymbolicLlt<usize>>,
+    /// The nested-dissection order of the DOFs, `order[k]` eliminated k-th,
+    /// and its inverse.
+    order: Option<(Vec<usize>, Vec<usize>)>,
+    llt: Option<SymbolicCholesky<usize>>,
     lu: Option<SymbolicLu<usize>>,
     /// Seconds spent in symbolic analysis (reported inside factorisation time).
     pub symbolic_seconds: f64,
 }
 
 impl SparseSolver {
-    pub fn new(n: usize) -> Self {
+    /// A solver of `n` unknowns; `order`, when given (and the process's
+    /// [`fill_ordering`] is nested dissection), is the elimination order
+    /// of Cholesky factorisations.
+    pub fn new(n: usize, order: Option<Vec<usize>>) -> Self {
         faer::set_global_parallelism(faer::Par::Seq);
+        let order = order
+            .filter(|_| fill_ordering() == FillOrdering::NestedDissection)
+            .map(|order| {
+                let mut inverse = vec![0; n];
+                for (k, &dof) in order.iter().enumerate() {
+                    inverse[dof] = k;
+                }
+                (order, inverse)
+            });
         Self {
             n,
+            order,
             llt: None,
             lu: None,
             symbolic_seconds: 0.0,
@@ -70,14 +136,31 @@ impl SparseSolver {
         if symmetric {
             if self.llt.is_none() {
                 let s = std::time::Instant::now();
+                let ordering = match &self.order {
+                    Some((order, inverse)) => {
+                        SymmetricOrdering::Custom(PermRef::new_checked(order, inverse, self.n))
+                    }
+                    None => SymmetricOrdering::Amd,
+                };
                 self.llt = Some(
-                    SymbolicLlt::try_new(structure, Side::Upper).map_err(|e| format!("{e:?}"))?,
+                    factorize_symbolic_cholesky(
+                        structure,
+                        Side::Upper,
+                        ordering,
+                        Default::default(),
+                    )
+                    .map_err(|e| format!("{e:?}"))?,
                 );
                 self.symbolic_seconds += s.elapsed().as_secs_f64();
             }
-            let symbolic = self.llt.clone().expect("just built");
-            if let Ok(llt) = Llt::try_new_with_symbolic(symbolic, matrix, Side::Upper) {
-                let (x, timing) = timed_solve(&llt, &b, t0);
+            let symbolic = self.llt.as_ref().expect("just built");
+            let par = if self.n >= PARALLEL_FROM_DOFS {
+                Par::rayon(0)
+            } else {
+                Par::Seq
+            };
+            if let Some((x, timing)) = cholesky(symbolic, matrix, &b, par, t0) {
+                LAST_FACTOR_ENTRIES.store(symbolic.len_val(), Atomic::Relaxed);
                 return Ok((x, Factorisation::Cholesky, timing));
             }
         }
@@ -92,6 +175,41 @@ impl SparseSolver {
         let (x, timing) = timed_solve(&lu, &b, t0);
         Ok((x, Factorisation::Lu, timing))
     }
+}
+
+/// Factorises `matrix` (its upper triangle) by Cholesky on `symbolic` and
+/// solves for `b`; `None` when it is not positive definite.
+fn cholesky(
+    symbolic: &SymbolicCholesky<usize>,
+    matrix: SparseColMatRef<'_, usize, f64>,
+    b: &Mat<f64>,
+    par: Par,
+    started: std::time::Instant,
+) -> Option<(Vec<f64>, Timing)> {
+    let mut values = vec![0.0; symbolic.len_val()];
+    let mut scratch =
+        MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
+    let llt = symbolic
+        .factorize_numeric_llt(
+            &mut values,
+            matrix,
+            Side::Upper,
+            Default::default(),
+            par,
+            MemStack::new(&mut scratch),
+            Default::default(),
+        )
+        .ok()?;
+    let factorise = started.elapsed().as_secs_f64();
+    let t = std::time::Instant::now();
+    let mut x = b.clone();
+    let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, par));
+    llt.solve_in_place_with_conj(Conj::No, x.as_mut(), par, MemStack::new(&mut scratch));
+    let timing = Timing {
+        factorise,
+        solve: t.elapsed().as_secs_f64(),
+    };
+    Some((column(&x), timing))
 }
 
 /// Solves with a finished factorisation; the factorisation's time is the

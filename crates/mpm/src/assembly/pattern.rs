@@ -16,6 +16,17 @@ pub struct Pattern {
 }
 
 impl Pattern {
+    /// A pattern of these compressed columns alone (no node lists), for
+    /// tests of what reads only the columns.
+    #[cfg(test)]
+    pub fn from_columns(col_ptr: Vec<usize>, row_idx: Vec<usize>) -> Self {
+        Self {
+            col_ptr,
+            row_idx,
+            ..Self::default()
+        }
+    }
+
     /// Two nodes are neighbours when some point links to both.
     /// Two nodes are also neighbours when they share one of the `groups`
     /// (couplings that do not come from points, e.g. boundary loads).
