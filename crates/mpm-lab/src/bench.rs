@@ -13,8 +13,8 @@ use std::fs;
 use std::path::Path;
 use std::time::Instant;
 
-use mpm::linsolve::{FillOrdering, last_factor_entries, set_fill_ordering};
-use mpm::report::StepTimings;
+use mpm::linsolve::{FillOrdering, last_factor_entries, set_fill_ordering, solver_reuse_counts};
+use mpm::report::{StepMemory, StepTimings};
 use mpm::{Case, NoObserver, Simulation};
 use serde_json::{Value, json};
 
@@ -79,6 +79,15 @@ pub struct Row {
     /// Entries of the last Cholesky factor (0: none was computed).
     #[serde(default)]
     factor_entries: usize,
+    /// Steps that analysed a new pattern, and steps that reused the last
+    /// step's analysis.
+    #[serde(default)]
+    analysed_steps: usize,
+    #[serde(default)]
+    reused_steps: usize,
+    /// Heap bytes by component at the last step's end.
+    #[serde(default)]
+    memory: StepMemory,
 }
 
 pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabError> {
@@ -347,6 +356,7 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, LabError> {
     let mut timings = StepTimings::default();
     let mut iterations = 0;
     let mut dofs = 0;
+    let mut memory = StepMemory::default();
     for step in 1..=steps {
         let r = sim
             .load_step(step, &mut NoObserver)
@@ -354,7 +364,9 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, LabError> {
         iterations += r.newton.iterations;
         dofs = r.active_dofs;
         timings += &r.timings;
+        memory = r.memory;
     }
+    let (analysed_steps, reused_steps) = solver_reuse_counts();
     Ok(Row {
         points: sim.points.len(),
         dofs,
@@ -363,6 +375,9 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, LabError> {
         timings,
         peak_mib: peak_memory_mib(),
         factor_entries: last_factor_entries(),
+        analysed_steps,
+        reused_steps,
+        memory,
     })
 }
 

@@ -220,6 +220,7 @@ impl Simulation {
             wait: s.wait,
         };
         self.steps_done = c.steps_done;
+        self.analysed = None;
         Ok(())
     }
 

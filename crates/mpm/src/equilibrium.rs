@@ -8,7 +8,7 @@ use std::time::Instant;
 use nalgebra::Matrix2;
 use rayon::prelude::*;
 
-use crate::assembly::{self, FbarCells, FbarTrial, GhostFaces, Pattern, SoftCells};
+use crate::assembly::{self, FbarCells, FbarTrial, GhostFaces, NodeAdjacency, Pattern, SoftCells};
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
 use crate::configuration::Configuration;
@@ -18,7 +18,7 @@ use crate::material::{Material, Response};
 use crate::newton::{Equilibrium, InvertedPoint};
 use crate::ordering;
 use crate::particles::MaterialPoints;
-use crate::report::StepTimings;
+use crate::report::{StepMemory, StepTimings};
 use crate::supports::HeldDofs;
 
 /// What a load step's system is made of besides the material: the grid
@@ -81,14 +81,42 @@ pub struct StepEquilibrium<'a> {
     u: Vec<f64>,
     f_int: Vec<f64>,
     responses: Vec<Response>,
+    /// The tangent's values, kept from iteration to iteration.
+    k: Vec<f64>,
     solver: SparseSolver,
     timings: StepTimings,
+    memory: StepMemory,
+}
+
+/// A step's pattern (its node adjacency) with the solver that analysed it,
+/// handed to the next step: if its pattern is the same, the solver's
+/// analysis serves it.
+pub struct AnalysedPattern {
+    adjacency: NodeAdjacency,
+    pub(crate) solver: SparseSolver,
+}
+
+/// What a converged step leaves: the points' responses and the band terms
+/// to commit, what it cost, and its analysed pattern.
+pub struct ConvergedStep {
+    pub responses: Vec<Response>,
+    pub band: BandTerms,
+    pub timings: StepTimings,
+    pub memory: StepMemory,
+    pub analysed: AnalysedPattern,
 }
 
 impl<'a> StepEquilibrium<'a> {
     /// The system of a step on the configuration `start`; `pattern` must
-    /// hold every coupling of `terms` ([`StepTerms::pattern`]).
-    pub fn new(start: &Configuration<'a>, terms: StepTerms<'a>, pattern: Pattern) -> Self {
+    /// hold every coupling of `terms` ([`StepTerms::pattern`]). `previous`
+    /// is the last step's analysed pattern, whose solver is reused when
+    /// the patterns are the same.
+    pub fn new(
+        start: &Configuration<'a>,
+        terms: StepTerms<'a>,
+        pattern: Pattern,
+        previous: Option<AnalysedPattern>,
+    ) -> Self {
         let conn = start.conn;
         let StepTerms {
             held,
@@ -99,10 +127,16 @@ impl<'a> StepEquilibrium<'a> {
             ghost,
             fbar,
         } = terms;
-        // Cholesky's elimination order, for the tangents that are symmetric
-        // (see `correction`); LU orders its own columns.
-        let order = (loading.is_empty() && fbar.is_none())
-            .then(|| ordering::nested_dissection(&conn.nodes, &pattern));
+        let solver = match previous {
+            Some(previous) if pattern.is(&previous.adjacency) => previous.solver.reused(),
+            _ => {
+                // Cholesky's elimination order, for the tangents that are
+                // symmetric (see `correction`); LU orders its own columns.
+                let order = (loading.is_empty() && fbar.is_none())
+                    .then(|| ordering::nested_dissection(&conn.nodes, &pattern));
+                SparseSolver::new(conn.n_dofs(), order)
+            }
+        };
         Self {
             conn,
             pattern,
@@ -121,8 +155,10 @@ impl<'a> StepEquilibrium<'a> {
             u: Vec::new(),
             f_int: Vec::new(),
             responses: Vec::new(),
-            solver: SparseSolver::new(conn.n_dofs(), order),
+            k: Vec::new(),
+            solver,
             timings: StepTimings::default(),
+            memory: StepMemory::default(),
         }
     }
 
@@ -156,10 +192,18 @@ impl<'a> StepEquilibrium<'a> {
         [0, 1].map(|c| self.f_ext.iter().skip(c).step_by(2).sum())
     }
 
-    /// What the step commits once converged: the points' responses and the
-    /// band terms that carry the anchors.
-    pub fn into_converged(self) -> (Vec<Response>, BandTerms, StepTimings) {
-        (self.responses, self.band, self.timings)
+    /// What the step commits once converged, and what it hands on.
+    pub fn into_converged(self) -> ConvergedStep {
+        ConvergedStep {
+            responses: self.responses,
+            band: self.band,
+            timings: self.timings,
+            memory: self.memory,
+            analysed: AnalysedPattern {
+                adjacency: self.pattern.adjacency(),
+                solver: self.solver,
+            },
+        }
     }
 }
 
@@ -233,7 +277,14 @@ impl Equilibrium for StepEquilibrium<'_> {
 
     fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
         let t = Instant::now();
-        let mut k = assembly::stiffness(self.conn, &self.pattern, self.points, &self.responses);
+        let mut k = std::mem::take(&mut self.k);
+        assembly::stiffness(
+            self.conn,
+            &self.pattern,
+            self.points,
+            &self.responses,
+            &mut k,
+        );
         if let Some(soft) = &self.soft {
             soft.add_to(&self.pattern, &mut k);
         }
@@ -253,7 +304,17 @@ impl Equilibrium for StepEquilibrium<'_> {
         }
         assembly::constrain(&self.pattern, &mut k, &self.held.fixed);
         self.timings.assembly += t.elapsed().as_secs_f64();
-        let (du, kind, timing) = self.solver.solve(&self.pattern, &k, r, symmetric)?;
+        let solved = self.solver.solve(&self.pattern, &k, r, symmetric);
+        self.memory = StepMemory {
+            points: self.points.heap_bytes(),
+            links: self.conn.heap_bytes(),
+            pattern: self.pattern.heap_bytes(),
+            tangent: std::mem::size_of_val(k.as_slice()),
+            responses: std::mem::size_of_val(self.responses.as_slice()),
+            solver: self.solver.memory(),
+        };
+        self.k = k;
+        let (du, kind, timing) = solved?;
         self.timings.factorisation += timing.factorise;
         self.timings.solve += timing.solve;
         if du.iter().any(|v| !v.is_finite()) {

@@ -1,8 +1,11 @@
-//! Sparse direct solves with faer, symbolic analysis once per load step.
+//! Sparse direct solves with faer, symbolic analysis once per pattern.
 //!
 //! The pattern of the tangent is fixed during a step, so the fill-reducing
 //! ordering and elimination tree are computed at the first iteration and
 //! reused by every later one; only the numeric factorisation is repeated.
+//! A step whose pattern equals the last step's (no point crossed into a
+//! new cell's reach) takes over the last step's solver and its analysis
+//! ([`crate::equilibrium::StepEquilibrium::new`]).
 //! A symmetric tangent (hyperelastic material, dead loads) is factorised by
 //! Cholesky; LU is used when the tangent is not symmetric, and as a fallback
 //! when Cholesky meets a non-positive pivot (an indefinite tangent, e.g. past
@@ -18,7 +21,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
-    SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+    SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -40,6 +43,16 @@ pub enum FillOrdering {
 static ORDERING: AtomicU8 = AtomicU8::new(1);
 /// Entries of the last Cholesky factor in this process, for benchmarks.
 static LAST_FACTOR_ENTRIES: AtomicUsize = AtomicUsize::new(0);
+/// Steps of this process that analysed their pattern, and that took over
+/// the last step's analysis, for benchmarks.
+static ANALYSED: AtomicUsize = AtomicUsize::new(0);
+static REUSED: AtomicUsize = AtomicUsize::new(0);
+
+/// Solvers this process built for a new pattern, and solvers it reused for
+/// an unchanged one (see [`SparseSolver::reused`]).
+pub fn solver_reuse_counts() -> (usize, usize) {
+    (ANALYSED.load(Atomic::Relaxed), REUSED.load(Atomic::Relaxed))
+}
 
 /// Entries (the fill) of the last Cholesky factor this process computed;
 /// 0 before the first.
@@ -82,8 +95,24 @@ pub struct SparseSolver {
     order: Option<(Vec<usize>, Vec<usize>)>,
     llt: Option<SymbolicCholesky<usize>>,
     lu: Option<SymbolicLu<usize>>,
-    /// Seconds spent in symbolic analysis (reported inside factorisation time).
-    pub symbolic_seconds: f64,
+    /// Bytes of the last Cholesky factorisation: its values and its
+    /// numeric scratch.
+    factor_bytes: usize,
+    scratch_bytes: usize,
+    /// Later systems (load steps) this solver was reused for.
+    reuses: usize,
+}
+
+/// Bytes a solver holds or last needed, by part.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SolverMemory {
+    /// The last Cholesky factor's values.
+    pub factor_values: usize,
+    /// Its structure (row indices and pointers of the factor, the
+    /// permutation and the nested-dissection order).
+    pub factor_structure: usize,
+    /// Scratch of the numeric factorisation (freed after each).
+    pub scratch: usize,
 }
 
 impl SparseSolver {
@@ -92,6 +121,7 @@ impl SparseSolver {
     /// of Cholesky factorisations.
     pub fn new(n: usize, order: Option<Vec<usize>>) -> Self {
         faer::set_global_parallelism(faer::Par::Seq);
+        ANALYSED.fetch_add(1, Atomic::Relaxed);
         let order = order
             .filter(|_| fill_ordering() == FillOrdering::NestedDissection)
             .map(|order| {
@@ -106,7 +136,48 @@ impl SparseSolver {
             order,
             llt: None,
             lu: None,
-            symbolic_seconds: 0.0,
+            factor_bytes: 0,
+            scratch_bytes: 0,
+            reuses: 0,
+        }
+    }
+
+    /// This solver, for a later system of the same pattern (the caller
+    /// checks that it is): counted for [`solver_reuse_counts`].
+    pub fn reused(mut self) -> Self {
+        REUSED.fetch_add(1, Atomic::Relaxed);
+        self.reuses += 1;
+        self
+    }
+
+    /// Systems after the first this solver served.
+    pub fn reuses(&self) -> usize {
+        self.reuses
+    }
+
+    /// What the solver holds, and what its last factorisation needed.
+    pub fn memory(&self) -> SolverMemory {
+        let index = std::mem::size_of::<usize>();
+        let mut structure = self
+            .order
+            .as_ref()
+            .map_or(0, |(o, i)| (o.len() + i.len()) * index);
+        if let Some(llt) = &self.llt {
+            structure += 2 * llt.nrows() * index;
+            structure += match llt.raw() {
+                SymbolicCholeskyRaw::Supernodal(s) => {
+                    (s.row_idx().len() + s.col_ptr_for_row_idx().len() + s.col_ptr_for_val().len())
+                        * index
+                }
+                SymbolicCholeskyRaw::Simplicial(s) => {
+                    (s.row_idx().len() + s.col_ptr().len()) * index
+                }
+            };
+        }
+        SolverMemory {
+            factor_values: self.factor_bytes,
+            factor_structure: structure,
+            scratch: self.scratch_bytes,
         }
     }
 
@@ -135,7 +206,6 @@ impl SparseSolver {
         let b = Mat::from_fn(self.n, 1, |i, _| rhs[i]);
         if symmetric {
             if self.llt.is_none() {
-                let s = std::time::Instant::now();
                 let ordering = match &self.order {
                     Some((order, inverse)) => {
                         SymmetricOrdering::Custom(PermRef::new_checked(order, inverse, self.n))
@@ -151,7 +221,6 @@ impl SparseSolver {
                     )
                     .map_err(|e| format!("{e:?}"))?,
                 );
-                self.symbolic_seconds += s.elapsed().as_secs_f64();
             }
             let symbolic = self.llt.as_ref().expect("just built");
             let par = if self.n >= PARALLEL_FROM_DOFS {
@@ -159,15 +228,16 @@ impl SparseSolver {
             } else {
                 Par::Seq
             };
+            let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
+            self.scratch_bytes = scratch.size_bytes();
+            self.factor_bytes = symbolic.len_val() * std::mem::size_of::<f64>();
             if let Some((x, timing)) = cholesky(symbolic, matrix, &b, par, t0) {
                 LAST_FACTOR_ENTRIES.store(symbolic.len_val(), Atomic::Relaxed);
                 return Ok((x, Factorisation::Cholesky, timing));
             }
         }
         if self.lu.is_none() {
-            let s = std::time::Instant::now();
             self.lu = Some(SymbolicLu::try_new(structure).map_err(|e| format!("{e:?}"))?);
-            self.symbolic_seconds += s.elapsed().as_secs_f64();
         }
         let symbolic = self.lu.clone().expect("just built");
         let lu = Lu::try_new_with_symbolic(symbolic, matrix)

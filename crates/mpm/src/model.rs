@@ -159,6 +159,7 @@ impl Simulation {
             fbar: case.analysis.volumetric == crate::case::Volumetric::Fbar,
             step_size: StepSize::default(),
             steps_done: 0,
+            analysed: None,
             substepping: Substepping {
                 min_fraction: case.analysis.substepping.min_fraction,
                 max_cutbacks: case.analysis.substepping.max_cutbacks as usize,

@@ -4,7 +4,7 @@
 
 use serde::Serialize;
 
-use crate::linsolve::Factorisation;
+use crate::linsolve::{Factorisation, SolverMemory};
 use crate::particles::MaterialPoints;
 
 /// Wall-clock seconds spent in each stage of a load step.
@@ -35,6 +35,40 @@ impl std::ops::AddAssign<&StepTimings> for StepTimings {
         self.solve += t.solve;
         self.update += t.update;
         self.total += t.total;
+    }
+}
+
+/// Heap bytes of a load step's largest data, by component, at the end of
+/// its last Newton iteration (the step's peak is near their sum).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
+pub struct StepMemory {
+    /// The material points' state: positions, volumes, deformation,
+    /// history, stress.
+    pub points: usize,
+    /// Point-node links (node, shape function value and gradient) and the
+    /// active nodes' keys.
+    pub links: usize,
+    /// The stiffness pattern: node adjacency, node-to-link incidence and
+    /// the compressed columns' pointers and row indices.
+    pub pattern: usize,
+    /// The tangent's values.
+    pub tangent: usize,
+    /// Every point's trial stress, tangent and history.
+    pub responses: usize,
+    /// The factorisation.
+    pub solver: SolverMemory,
+}
+
+impl StepMemory {
+    pub fn total(&self) -> usize {
+        self.points
+            + self.links
+            + self.pattern
+            + self.tangent
+            + self.responses
+            + self.solver.factor_values
+            + self.solver.factor_structure
+            + self.solver.scratch
     }
 }
 
@@ -78,6 +112,9 @@ pub struct StepReport {
     /// force). Zero when absent from a stored step.
     #[serde(default)]
     pub applied_load: [f64; 2],
+    /// What the step's data weighed (for benchmarks; not stored).
+    #[serde(skip)]
+    pub memory: StepMemory,
 }
 
 impl StepReport {

@@ -26,7 +26,7 @@ use crate::boundary::BoundaryLoop;
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::{BoundaryLoading, LoadedStretch};
 use crate::configuration::Configuration;
-use crate::equilibrium::{StepEquilibrium, StepTerms, increment};
+use crate::equilibrium::{AnalysedPattern, StepEquilibrium, StepTerms, increment};
 use crate::grid::{Basis, Connectivity, Grid, NodeKey};
 use crate::material::{Elastic, Response};
 use crate::newton::{self, NewtonSettings, SolveError};
@@ -152,6 +152,8 @@ pub struct Simulation {
     pub load_steps: usize,
     /// Load steps converged (and committed) so far.
     pub(crate) steps_done: usize,
+    /// The last converged step's pattern and solver, for the next step.
+    pub(crate) analysed: Option<AnalysedPattern>,
 }
 
 impl Simulation {
@@ -171,6 +173,7 @@ impl Simulation {
             probes: self.probes.reports(),
             reactions: vec![[0.0; 2]; self.n_supports],
             applied_load: [0.0; 2],
+            memory: Default::default(),
         };
         (report, StepState::new(self))
     }
@@ -301,7 +304,8 @@ impl Simulation {
         self.check_inside_extent(extent_checked_after)?;
 
         let conn = self.reset_grid();
-        let mut eq = self.assemble(&conn, load_factor);
+        let previous = self.analysed.take();
+        let mut eq = self.assemble(&conn, load_factor, previous);
         let grid_seconds = clock.lap();
 
         let (u, newton) = newton::solve(&mut eq, &self.settings, step, observer)?;
@@ -310,7 +314,9 @@ impl Simulation {
         let reactions = eq.reactions(&self.anchors, &u, self.n_supports);
         let applied_load = eq.applied_load();
         let active_dofs = eq.n_free_dofs();
-        let (responses, band, solve_timings) = eq.into_converged();
+        let converged = eq.into_converged();
+        self.analysed = Some(converged.analysed);
+        let (responses, band) = (converged.responses, converged.band);
         self.update_points(&conn, &u, &responses);
         self.probes.advect(&self.grid, self.basis, &conn, &u);
         self.advance_anchors(&band, &conn, &u);
@@ -318,7 +324,7 @@ impl Simulation {
             grid: grid_seconds,
             update: clock.lap(),
             total: clock.total(),
-            ..solve_timings
+            ..converged.timings
         };
 
         Ok(StepReport {
@@ -334,6 +340,7 @@ impl Simulation {
             probes: self.probes.reports(),
             reactions,
             applied_load,
+            memory: converged.memory,
         })
     }
 
@@ -351,6 +358,7 @@ impl Simulation {
         &'a self,
         conn: &'a Connectivity,
         load_factor: f64,
+        previous: Option<AnalysedPattern>,
     ) -> StepEquilibrium<'a> {
         let start = Configuration {
             grid: &self.grid,
@@ -369,7 +377,7 @@ impl Simulation {
             fbar: self.fbar.then(|| FbarCells::new(&start)),
         };
         let pattern = terms.pattern(conn);
-        StepEquilibrium::new(&start, terms, pattern)
+        StepEquilibrium::new(&start, terms, pattern, previous)
     }
 
     /// Whether a node lies in the grid's extent (with a tolerance of 1e-9 h).
@@ -567,7 +575,7 @@ mod tests {
     fn first_tangent_condition(case: &Case) -> f64 {
         let sim = Simulation::new(case).unwrap();
         let conn = sim.reset_grid();
-        let mut eq = sim.assemble(&conn, 1.0 / sim.load_steps as f64);
+        let mut eq = sim.assemble(&conn, 1.0 / sim.load_steps as f64, None);
         let n = conn.n_dofs();
         eq.out_of_balance(&vec![0.0; n]).unwrap();
         let free: Vec<usize> = (0..n).filter(|&i| !eq.is_held(i)).collect();
@@ -676,7 +684,7 @@ mod tests {
             let case = Case::from_json(&case.to_string()).unwrap();
             let sim = Simulation::new(&case).unwrap();
             let conn = sim.reset_grid();
-            let mut eq = sim.assemble(&conn, 1.0);
+            let mut eq = sim.assemble(&conn, 1.0, None);
             let n = conn.n_dofs();
             // A smooth trial state and direction: bending and squeezing.
             let field = |a: f64, b: f64| -> Vec<f64> {
@@ -716,5 +724,34 @@ mod tests {
                 "{volumetric}, ghost {ghost}, {model}: {relative:e}"
             );
         }
+    }
+
+    /// A step whose pattern is the last step's reuses its solver and the
+    /// symbolic analysis, and gets the answer of a fresh one to the bit:
+    /// the cantilever under 1/750 of its weight moves 3.6 mm at most, and
+    /// its points start 0.125 m from the edges of their 0.5 m cells, so all
+    /// four steps have one pattern.
+    #[test]
+    fn an_unchanged_pattern_reuses_the_analysis_exactly() {
+        let mut case = crate::case::builtin::json("cantilever-grid").unwrap();
+        case["bodies"][0]["material"]["density"] = 0.1.into();
+        case["analysis"]["load_steps"] = 4.into();
+        let case = Case::from_json(&case.to_string()).unwrap();
+        let run = |reuse: bool| {
+            let mut sim = Simulation::new(&case).unwrap();
+            for step in 1..=4 {
+                if !reuse {
+                    sim.analysed = None;
+                }
+                sim.load_step(step, &mut crate::NoObserver).unwrap();
+            }
+            let reuses = sim.analysed.as_ref().map(|a| a.solver.reuses());
+            (sim.points.position, reuses)
+        };
+        let (reusing, reuses) = run(true);
+        let (fresh, none) = run(false);
+        assert_eq!(reuses, Some(3));
+        assert_eq!(none, Some(0));
+        assert_eq!(reusing, fresh);
     }
 }

@@ -19,7 +19,7 @@ pub mod stiffness;
 pub use fbar::{FbarCells, FbarTrial};
 pub use forces::{body_force, internal_force};
 pub use ghost_faces::GhostFaces;
-pub use pattern::{Pattern, constrain};
+pub use pattern::{NodeAdjacency, Pattern, constrain};
 pub use soft_cells::SoftCells;
 pub use stiffness::stiffness;
 

@@ -11,8 +11,21 @@ pub struct Pattern {
     /// Neighbours of node `b` are `neighbours[first[b]..first[b + 1]]`, sorted.
     first: Vec<usize>,
     neighbours: Vec<u32>,
+    /// The links that touch node `b` are `incident[touching[b]..touching[b + 1]]`,
+    /// each as (point, index into `Connectivity::links`): the stiffness
+    /// assembly fills node `b`'s columns from them alone.
+    touching: Vec<usize>,
+    incident: Vec<(u32, u32)>,
     pub col_ptr: Vec<usize>,
     pub row_idx: Vec<usize>,
+}
+
+/// The nodes adjacent to each active node: what determines a [`Pattern`]'s
+/// compressed columns.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeAdjacency {
+    first: Vec<usize>,
+    neighbours: Vec<u32>,
 }
 
 impl Pattern {
@@ -39,28 +52,29 @@ impl Pattern {
                 node_groups[a as usize].push(g as u32);
             }
         }
-        // Node -> points incidence, in compressed form.
-        let mut start = vec![0usize; n_nodes + 1];
+        // Node -> links incidence, in compressed form.
+        let mut touching = vec![0usize; n_nodes + 1];
         for l in &conn.links {
-            start[l.node as usize + 1] += 1;
+            touching[l.node as usize + 1] += 1;
         }
         for i in 0..n_nodes {
-            start[i + 1] += start[i];
+            touching[i + 1] += touching[i];
         }
-        let mut fill = start.clone();
-        let mut incident = vec![0u32; conn.links.len()];
+        let mut fill = touching.clone();
+        let mut incident = vec![(0u32, 0u32); conn.links.len()];
         for p in 0..conn.n_points() {
-            for l in conn.point_links(p) {
-                incident[fill[l.node as usize]] = p as u32;
-                fill[l.node as usize] += 1;
+            for k in conn.offsets[p]..conn.offsets[p + 1] {
+                let node = conn.links[k].node as usize;
+                incident[fill[node]] = (p as u32, k as u32);
+                fill[node] += 1;
             }
         }
         let lists: Vec<Vec<u32>> = (0..n_nodes)
             .into_par_iter()
             .map(|b| {
-                let mut nb: Vec<u32> = incident[start[b]..start[b + 1]]
+                let mut nb: Vec<u32> = incident[touching[b]..touching[b + 1]]
                     .iter()
-                    .flat_map(|&p| conn.point_links(p as usize).iter().map(|l| l.node))
+                    .flat_map(|&(p, _)| conn.point_links(p as usize).iter().map(|l| l.node))
                     .collect();
                 if let Some(gs) = node_groups.get(b) {
                     nb.extend(gs.iter().flat_map(|&g| groups[g as usize].iter().copied()));
@@ -92,9 +106,66 @@ impl Pattern {
         Self {
             first,
             neighbours,
+            touching,
+            incident,
             col_ptr,
             row_idx,
         }
+    }
+
+    /// The links that touch node `b`: (point, index into
+    /// `Connectivity::links`).
+    #[inline]
+    pub(crate) fn incident(&self, b: usize) -> &[(u32, u32)] {
+        &self.incident[self.touching[b]..self.touching[b + 1]]
+    }
+
+    /// `values` cut into each node's two columns, in node order.
+    pub(crate) fn node_columns_mut<'v>(&self, mut values: &'v mut [f64]) -> Vec<&'v mut [f64]> {
+        let n_nodes = self.first.len().saturating_sub(1);
+        let mut columns = Vec::with_capacity(n_nodes);
+        for b in 0..n_nodes {
+            let (column, rest) = values.split_at_mut(self.col_ptr[2 * b + 2] - self.col_ptr[2 * b]);
+            columns.push(column);
+            values = rest;
+        }
+        columns
+    }
+
+    /// Offset of row node `a`'s 2x2 block within column node `b`'s columns
+    /// (as cut by [`Pattern::node_columns_mut`]); entry `(r, c)` is at
+    /// `offset + r + c * 2 * degree(b)`.
+    #[inline]
+    pub(crate) fn block_in_column(&self, a: u32, b: u32) -> usize {
+        let nb = &self.neighbours[self.first[b as usize]..self.first[b as usize + 1]];
+        2 * nb.binary_search(&a).expect("linked nodes are neighbours")
+    }
+
+    /// The node adjacency the compressed columns are made from, for telling
+    /// later whether a pattern is this one ([`Pattern::is`]) without
+    /// keeping the columns (eight times its size).
+    pub fn adjacency(&self) -> NodeAdjacency {
+        NodeAdjacency {
+            first: self.first.clone(),
+            neighbours: self.neighbours.clone(),
+        }
+    }
+
+    /// Whether this pattern is the one `adjacency` was taken from (then a
+    /// solver's symbolic analysis of one serves the other).
+    pub fn is(&self, adjacency: &NodeAdjacency) -> bool {
+        self.first == adjacency.first && self.neighbours == adjacency.neighbours
+    }
+
+    /// Bytes held on the heap.
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        size_of_val(self.first.as_slice())
+            + size_of_val(self.neighbours.as_slice())
+            + size_of_val(self.touching.as_slice())
+            + size_of_val(self.incident.as_slice())
+            + size_of_val(self.col_ptr.as_slice())
+            + size_of_val(self.row_idx.as_slice())
     }
 
     pub fn nnz(&self) -> usize {

@@ -92,6 +92,14 @@ impl Connectivity {
         }
     }
 
+    /// Bytes of the links, offsets and node keys on the heap.
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        size_of_val(self.nodes.as_slice())
+            + size_of_val(self.offsets.as_slice())
+            + size_of_val(self.links.as_slice())
+    }
+
     pub fn n_nodes(&self) -> usize {
         self.nodes.len()
     }

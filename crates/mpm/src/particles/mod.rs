@@ -37,6 +37,22 @@ pub struct MaterialPoints {
 }
 
 impl MaterialPoints {
+    /// Bytes of the points' state on the heap.
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        size_of_val(self.position.as_slice())
+            + size_of_val(self.reference.as_slice())
+            + size_of_val(self.volume0.as_slice())
+            + size_of_val(self.mass.as_slice())
+            + size_of_val(self.material.as_slice())
+            + size_of_val(self.lattice.as_slice())
+            + size_of_val(self.domain.as_slice())
+            + size_of_val(self.deformation.as_slice())
+            + size_of_val(self.history.as_slice())
+            + size_of_val(self.yielding.as_slice())
+            + size_of_val(self.stress.as_slice())
+    }
+
     /// Adds a body's points, seeded in its reference state, with their
     /// material and density; the body's index is the material's.
     pub fn add_body(&mut self, material: Material, density: f64, seeds: &[SeedPoint]) {
