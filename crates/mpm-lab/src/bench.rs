@@ -13,7 +13,10 @@ use std::fs;
 use std::path::Path;
 use std::time::Instant;
 
-use mpm::linsolve::{FillOrdering, last_factor_entries, set_fill_ordering, solver_reuse_counts};
+use mpm::linsolve::{
+    FillOrdering, SymmetricMethod, last_factor_entries, set_fill_ordering, set_symmetric_method,
+    solver_reuse_counts, symmetric_solve_counts,
+};
 use mpm::report::{StepMemory, StepTimings};
 use mpm::{Case, NoObserver, Simulation};
 use serde_json::{Value, json};
@@ -88,7 +91,23 @@ pub struct Row {
     /// Heap bytes by component at the last step's end.
     #[serde(default)]
     memory: StepMemory,
+    /// Symmetric solves by a fresh factorisation, by CG with a kept
+    /// factor, and those CG solves' iterations.
+    #[serde(default)]
+    fresh_factorisations: usize,
+    #[serde(default)]
+    cg_solves: usize,
+    #[serde(default)]
+    cg_iterations: usize,
 }
+
+/// Sections of BENCHMARKS.md that `mpm bench` keeps: `mpm bench-queue`'s,
+/// and the measurements too long for it (see the closing notes in docs/).
+const KEPT_SECTIONS: [&str; 3] = [
+    "## Job queue",
+    "## Ten million points",
+    "## Before and after",
+];
 
 pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabError> {
     let mut report = String::new();
@@ -121,6 +140,7 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabErr
     );
     report.push_str("| scene | points | active DOFs | s / step | s / iteration | iterations / step | grid | point loop | assembly | factorisation | solve | update | points/s | peak MiB |\n");
     report.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    let mut largest = Vec::new();
     for (index, scene) in SCENES.iter().enumerate() {
         let mut target = 1_000;
         while target <= max_points {
@@ -148,18 +168,26 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabErr
             );
             eprint!("{line}");
             report.push_str(&line);
+            if target * 10 > max_points {
+                largest.push((scene.name, row));
+            }
             target *= 10;
         }
     }
+    report.push_str(&memory_by_component(&largest));
+    report.push_str(&symmetric_methods(max_points)?);
     report.push_str(&ordering_comparison(max_points)?);
+    report.push_str(&symbolic_reuse()?);
     report.push_str(&return_map_cost()?);
-    // `mpm bench-queue` writes its own section: keep it.
+    // Sections written by other commands or by hand: keep them.
     let earlier = fs::read_to_string(out).unwrap_or_default();
-    if let Some(start) = earlier.find("\n## Job queue") {
-        let rest = &earlier[start + 1..];
-        let end = rest[3..].find("\n## ").map_or(rest.len(), |i| i + 4);
-        report.push('\n');
-        report.push_str(&rest[..end]);
+    for heading in KEPT_SECTIONS {
+        if let Some(start) = earlier.find(&format!("\n{heading}")) {
+            let rest = &earlier[start + 1..];
+            let end = rest[3..].find("\n## ").map_or(rest.len(), |i| i + 4);
+            report.push('\n');
+            report.push_str(&rest[..end]);
+        }
     }
     fs::write(out, &report)?;
     println!("{report}");
@@ -243,6 +271,126 @@ fn return_map_cost() -> Result<String, LabError> {
 /// The environment variable a `bench-row` child reads its fill ordering
 /// from: `minimum_degree` or `nested_dissection` (the default).
 const ORDERING_VARIABLE: &str = "MPM_BENCH_FILL_ORDERING";
+/// `direct` or `kept_factor_cg`: how the child solves symmetric tangents
+/// whatever their size ([`set_symmetric_method`]).
+const METHOD_VARIABLE: &str = "MPM_BENCH_SYMMETRIC_METHOD";
+
+/// Heap bytes per point by component at the largest size of each scene,
+/// beside the peak resident set per point.
+fn memory_by_component(largest: &[(&str, Row)]) -> String {
+    let mut text = String::from(
+        "\n## Memory per point\n\n\
+         Heap bytes per material point by component at the end of the second load step of the largest row \
+         of each scene above (`StepMemory`): the points' state; their links to the active nodes (node, shape \
+         function value and gradient) with the node keys; the stiffness pattern (node adjacency, node-to-link \
+         incidence, compressed columns' pointers and row indices); the tangent's values; every point's \
+         trial stress, tangent and history; the Cholesky factor's values and structure; the numeric \
+         factorisation's scratch (freed after each). Peak is the process's high-water resident set.\n\n\
+         | scene | points | points' state | links | pattern | tangent | responses | factor values | factor structure | factorisation scratch | sum | peak |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for (name, row) in largest {
+        let m = &row.memory;
+        let per = |bytes: usize| format!("{:.0}", bytes as f64 / row.points as f64);
+        let peak = row.peak_mib.map_or("n/a".to_string(), |mib| {
+            format!("{:.0}", mib * 1024.0 * 1024.0 / row.points as f64)
+        });
+        text.push_str(&format!(
+            "| {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {peak} |\n",
+            row.points,
+            per(m.points),
+            per(m.links),
+            per(m.pattern),
+            per(m.tangent),
+            per(m.responses),
+            per(m.solver.factor_values),
+            per(m.solver.factor_structure),
+            per(m.solver.scratch),
+            per(m.total()),
+        ));
+    }
+    text
+}
+
+/// Symmetric tangents solved by factorising every one (direct) against CG
+/// preconditioned by a kept factor, on both scenes from 1e4 points up.
+fn symmetric_methods(max_points: usize) -> Result<String, LabError> {
+    let mut text = String::from(
+        "\n## Symmetric solves: direct against CG with a kept factor\n\n\
+         Both scenes' tangents are symmetric. Direct: every Newton iteration's tangent factorised in double \
+         precision. Kept factor: CG to a relative residual of 1e-12, preconditioned by the single-precision \
+         factor of an earlier tangent of the pattern, refreshed when CG took more than 10 iterations \
+         (`crates/mpm/src/krylov.rs`). The default switches from direct to the kept factor at 40,000 DOFs. \
+         First two load steps; fresh factorisations, CG solves and CG iterations over both.\n\n\
+         | scene | points | active DOFs | method | s / step | factorisation s / step | solve s / step | Newton iterations | factorisations | CG solves | CG iterations | peak MiB |\n\
+         |---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for (index, scene) in SCENES.iter().enumerate() {
+        let mut target = 10_000;
+        while target <= max_points {
+            for method in ["direct", "kept_factor_cg"] {
+                let row = measure_in_child_with(index, target, &[(METHOD_VARIABLE, method)])?;
+                let steps = row.steps as f64;
+                let line = format!(
+                    "| {} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} | {} | {} | {} |\n",
+                    scene.name,
+                    row.points,
+                    row.dofs,
+                    if method == "direct" {
+                        "direct"
+                    } else {
+                        "kept factor + CG"
+                    },
+                    row.timings.total / steps,
+                    row.timings.factorisation / steps,
+                    row.timings.solve / steps,
+                    row.iterations,
+                    row.fresh_factorisations,
+                    row.cg_solves,
+                    row.cg_iterations,
+                    row.peak_mib
+                        .map_or("n/a".to_string(), |m| format!("{m:.0}")),
+                );
+                eprint!("{line}");
+                text.push_str(&line);
+            }
+            target *= 10;
+        }
+    }
+    Ok(text)
+}
+
+/// Load steps that reused the last step's symbolic analysis (the pattern
+/// unchanged), over whole runs of the built-in examples.
+fn symbolic_reuse() -> Result<String, LabError> {
+    let mut text = String::from(
+        "\n## Symbolic analysis reused across load steps\n\n\
+         A step whose stiffness pattern (node adjacency) equals the last step's takes over its solver: the \
+         fill-reducing ordering and symbolic factorisation (and a kept factor). Whole runs of the built-in \
+         examples; solves counted over every converged or failed try.\n\n\
+         | example | points | load steps | steps that analysed | steps that reused | reused |\n\
+         |---|---:|---:|---:|---:|---:|\n",
+    );
+    for name in mpm::case::builtin::NAMES {
+        let case = Case::from_json(&example(name).to_string())
+            .map_err(|e| LabError::Failed(e.to_string()))?;
+        let mut sim = Simulation::new(&case).map_err(|e| LabError::Failed(e.to_string()))?;
+        let (analysed, reused) = solver_reuse_counts();
+        sim.run(&mut NoObserver)
+            .map_err(|e| LabError::Failed(format!("{name}: {e}")))?;
+        let (analysed, reused) = (
+            solver_reuse_counts().0 - analysed,
+            solver_reuse_counts().1 - reused,
+        );
+        text.push_str(&format!(
+            "| {name} | {} | {} | {analysed} | {reused} | {:.0}% |\n",
+            sim.points.len(),
+            sim.load_steps,
+            100.0 * reused as f64 / (analysed + reused).max(1) as f64
+        ));
+    }
+    Ok(text)
+}
 
 /// Cholesky's fill-reducing orderings compared on the symmetric scene (the
 /// column), from 1e4 points up: the factor's entries, the factorisation's
@@ -251,9 +399,9 @@ fn ordering_comparison(max_points: usize) -> Result<String, LabError> {
     let mut text = String::from(
         "\n## Fill-reducing ordering\n\n\
          The column's tangent is symmetric (Cholesky): faer's approximate minimum degree against nested \
-         dissection of the active nodes by grid lines (`crates/mpm/src/ordering.rs`). First two load steps; \
-         factor entries of the last factorisation; factorisation seconds per step (the symbolic analysis \
-         included, once a step).\n\n\
+         dissection of the active nodes by grid lines (`crates/mpm/src/ordering.rs`). First two load steps, \
+         every tangent factorised (the direct method); factor entries of the last factorisation; \
+         factorisation seconds per step (the symbolic analysis included, once a step).\n\n\
          | points | active DOFs | ordering | factor entries | entries / DOF | factorisation s / step | s / step | peak MiB |\n\
          |---:|---:|---|---:|---:|---:|---:|---:|\n",
     );
@@ -265,7 +413,8 @@ fn ordering_comparison(max_points: usize) -> Result<String, LabError> {
             .into_iter()
             .enumerate()
         {
-            let row = measure_in_child_with(0, target, Some(ordering))?;
+            let variables = [(ORDERING_VARIABLE, ordering), (METHOD_VARIABLE, "direct")];
+            let row = measure_in_child_with(0, target, &variables)?;
             let steps = row.steps as f64;
             growth[k].push((row.dofs as f64, row.timings.factorisation / steps));
             let line = format!(
@@ -302,20 +451,19 @@ fn ordering_comparison(max_points: usize) -> Result<String, LabError> {
 /// Runs one row in a child process (`mpm bench-row`), so that its peak
 /// memory is its own.
 fn measure_in_child(scene: usize, target: usize) -> Result<Row, LabError> {
-    measure_in_child_with(scene, target, None)
+    measure_in_child_with(scene, target, &[])
 }
 
-/// [`measure_in_child`] with Cholesky's fill ordering named.
+/// [`measure_in_child`] with these environment variables set (the fill
+/// ordering, the symmetric method).
 fn measure_in_child_with(
     scene: usize,
     target: usize,
-    ordering: Option<&str>,
+    variables: &[(&str, &str)],
 ) -> Result<Row, LabError> {
     let mut command = std::process::Command::new(std::env::current_exe()?);
     command.args(["bench-row", &scene.to_string(), &target.to_string()]);
-    if let Some(ordering) = ordering {
-        command.env(ORDERING_VARIABLE, ordering);
-    }
+    command.envs(variables.iter().copied());
     let output = command.output()?;
     if !output.status.success() {
         return Err(LabError::Failed(
@@ -337,6 +485,16 @@ pub fn bench_row(scene: usize, target: usize) -> Result<(), LabError> {
         Ok(other) => {
             return Err(LabError::Input(format!(
                 "{ORDERING_VARIABLE}={other}: not minimum_degree or nested_dissection"
+            )));
+        }
+    }
+    match std::env::var(METHOD_VARIABLE).as_deref() {
+        Ok("direct") => set_symmetric_method(Some(SymmetricMethod::Direct)),
+        Ok("kept_factor_cg") => set_symmetric_method(Some(SymmetricMethod::KeptFactorCg)),
+        Err(_) => set_symmetric_method(None),
+        Ok(other) => {
+            return Err(LabError::Input(format!(
+                "{METHOD_VARIABLE}={other}: not direct or kept_factor_cg"
             )));
         }
     }
@@ -367,6 +525,7 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, LabError> {
         memory = r.memory;
     }
     let (analysed_steps, reused_steps) = solver_reuse_counts();
+    let (fresh_factorisations, cg_solves, cg_iterations) = symmetric_solve_counts();
     Ok(Row {
         points: sim.points.len(),
         dofs,
@@ -378,6 +537,9 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, LabError> {
         analysed_steps,
         reused_steps,
         memory,
+        fresh_factorisations,
+        cg_solves,
+        cg_iterations,
     })
 }
 

@@ -27,6 +27,7 @@ pub mod configuration;
 pub mod equilibrium;
 pub mod geometry;
 pub mod grid;
+pub mod krylov;
 pub mod linsolve;
 pub mod material;
 pub mod model;

@@ -14,6 +14,13 @@
 //! rayon's threads for the largest systems; LU keeps faer's COLAMD and
 //! sequential mode (which measured about 1.8x faster than its rayon mode
 //! at 1e5 unknowns on this 2-core machine).
+//!
+//! From [`KEPT_FACTOR_FROM_DOFS`] unknowns up, a symmetric tangent is not
+//! factorised at every Newton iteration: CG solves it to a relative
+//! residual of 1e-12, preconditioned by the kept single-precision factor of
+//! an earlier tangent of the pattern ([`crate::krylov`]), which is
+//! refreshed when CG needs more than [`REFRESH_AFTER`] iterations, and is
+//! kept in double precision if a fresh single one fails to serve.
 
 use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering as Atomic};
 
@@ -21,13 +28,15 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
-    SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
+    LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
-use faer::{Conj, Mat, Par, Side};
+use faer::traits::ComplexField;
+use faer::{Conj, Mat, MatMut, Par, Side};
 
 use crate::assembly::Pattern;
+use crate::krylov;
 
 /// The fill-reducing ordering of a Cholesky factorisation (LU orders its
 /// columns by faer's COLAMD, which takes no other).
@@ -101,6 +110,100 @@ pub struct SparseSolver {
     scratch_bytes: usize,
     /// Later systems (load steps) this solver was reused for.
     reuses: usize,
+    /// The last Cholesky factor (of an earlier tangent of this pattern),
+    /// kept to precondition CG when the method is
+    /// [`SymmetricMethod::KeptFactorCg`].
+    kept: Option<KeptFactor>,
+    /// Whether the kept factor is in double precision (a single-precision
+    /// one failed to serve).
+    double_kept: bool,
+    method: SymmetricMethod,
+    /// How the last CG solve ended.
+    last_cg: Option<krylov::CgOutcome>,
+    /// Numeric factorisations this solver made.
+    factorisations: usize,
+    /// Whether the next symmetric solve factorises afresh (the last CG
+    /// solve took more than [`REFRESH_AFTER`] iterations).
+    refresh: bool,
+}
+
+/// Relative residual CG solves to with a kept factor: well below Newton's
+/// tolerances (1e-9 and up), so the iterates match a direct solve's to
+/// many digits.
+const CG_TOLERANCE: f64 = 1e-12;
+/// CG iterations allowed before the tangent is factorised afresh.
+const CG_MAX_ITERATIONS: usize = 30;
+/// A CG solve that took more iterations than this asks for a fresh factor
+/// at the next solve.
+const REFRESH_AFTER: usize = 10;
+
+/// How symmetric tangents are solved.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SymmetricMethod {
+    /// Every tangent factorised in double precision.
+    Direct,
+    /// CG preconditioned by a kept factor of an earlier tangent of the
+    /// pattern ([`crate::krylov`]), refreshed when CG slows down.
+    KeptFactorCg,
+}
+
+/// From this many unknowns up, symmetric tangents are solved by
+/// [`SymmetricMethod::KeptFactorCg`]: measured (`mpm bench`, 2 cores, first
+/// two load steps) it takes 28% off the wide column's step and 11% off the
+/// cantilever's at 0.5M DOFs, 19% and 0% at 50k; at 5k it cost the
+/// cantilever 12% more. Below it every answer is the direct solve's.
+const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
+
+/// 0: by size; 1: direct; 2: kept factor (benchmarks compare them).
+static METHOD: AtomicU8 = AtomicU8::new(0);
+static FRESH_SOLVES: AtomicUsize = AtomicUsize::new(0);
+static CG_SOLVES: AtomicUsize = AtomicUsize::new(0);
+static CG_ITERATIONS: AtomicUsize = AtomicUsize::new(0);
+
+/// Makes every later solver in this process use `method` whatever its
+/// size (`None`: by size, the default), for benchmarks.
+pub fn set_symmetric_method(method: Option<SymmetricMethod>) {
+    let code = match method {
+        None => 0,
+        Some(SymmetricMethod::Direct) => 1,
+        Some(SymmetricMethod::KeptFactorCg) => 2,
+    };
+    METHOD.store(code, Atomic::Relaxed);
+}
+
+/// The method a solver of `n` unknowns uses.
+pub fn symmetric_method(n: usize) -> SymmetricMethod {
+    match METHOD.load(Atomic::Relaxed) {
+        1 => SymmetricMethod::Direct,
+        2 => SymmetricMethod::KeptFactorCg,
+        _ if n >= KEPT_FACTOR_FROM_DOFS => SymmetricMethod::KeptFactorCg,
+        _ => SymmetricMethod::Direct,
+    }
+}
+
+/// (fresh factorisations, CG solves, CG iterations) of symmetric systems
+/// in this process.
+pub fn symmetric_solve_counts() -> (usize, usize, usize) {
+    (
+        FRESH_SOLVES.load(Atomic::Relaxed),
+        CG_SOLVES.load(Atomic::Relaxed),
+        CG_ITERATIONS.load(Atomic::Relaxed),
+    )
+}
+
+/// The values of a kept Cholesky factor.
+enum KeptFactor {
+    Single(Vec<f32>),
+    Double(Vec<f64>),
+}
+
+impl KeptFactor {
+    fn bytes(&self) -> usize {
+        match self {
+            KeptFactor::Single(v) => std::mem::size_of_val(v.as_slice()),
+            KeptFactor::Double(v) => std::mem::size_of_val(v.as_slice()),
+        }
+    }
 }
 
 /// Bytes a solver holds or last needed, by part.
@@ -139,7 +242,19 @@ impl SparseSolver {
             factor_bytes: 0,
             scratch_bytes: 0,
             reuses: 0,
+            method: symmetric_method(n),
+            last_cg: None,
+            factorisations: 0,
+            kept: None,
+            double_kept: false,
+            refresh: false,
         }
+    }
+
+    /// This solver with its symmetric tangents solved by `method`.
+    pub fn with_method(mut self, method: SymmetricMethod) -> Self {
+        self.method = method;
+        self
     }
 
     /// This solver, for a later system of the same pattern (the caller
@@ -148,6 +263,16 @@ impl SparseSolver {
         REUSED.fetch_add(1, Atomic::Relaxed);
         self.reuses += 1;
         self
+    }
+
+    /// How the last CG solve with a kept factor ended (`None` before one).
+    pub fn last_cg(&self) -> Option<krylov::CgOutcome> {
+        self.last_cg
+    }
+
+    /// Numeric factorisations this solver made.
+    pub fn factorisations(&self) -> usize {
+        self.factorisations
     }
 
     /// Systems after the first this solver served.
@@ -179,6 +304,147 @@ impl SparseSolver {
             factor_structure: structure,
             scratch: self.scratch_bytes,
         }
+    }
+
+    /// Solves the symmetric `K x = rhs` by CG preconditioned by the kept
+    /// factor (of this tangent or an earlier one of the pattern),
+    /// factorising afresh when there is none, when the last CG solve was
+    /// slow, or when CG fails with a stale factor. The factor is kept in
+    /// single precision (half the memory and bandwidth) until a fresh one
+    /// fails to serve, then in double. `None` when even a fresh double
+    /// factor does not serve (then `K` is not positive definite, or CG
+    /// cannot reach its tolerance).
+    fn cg_with_kept_factor(
+        &mut self,
+        pattern: &Pattern,
+        values: &[f64],
+        rhs: &[f64],
+        par: Par,
+    ) -> Option<(Vec<f64>, Factorisation, Timing)> {
+        let mut timing = Timing::default();
+        loop {
+            let fresh = self.kept.is_none() || self.refresh;
+            if fresh {
+                let t = std::time::Instant::now();
+                self.refresh = false;
+                let factorised = self.factorise_kept(pattern, values, par);
+                timing.factorise += t.elapsed().as_secs_f64();
+                if !factorised {
+                    if self.double_kept {
+                        return None;
+                    }
+                    self.double_kept = true;
+                    continue;
+                }
+            }
+            let t = std::time::Instant::now();
+            let symbolic = self.llt.as_ref()?;
+            let mut scratch = MemBuffer::new(
+                symbolic
+                    .solve_in_place_scratch::<f64>(1, par)
+                    .or(symbolic.solve_in_place_scratch::<f32>(1, par)),
+            );
+            let mut single = Vec::new();
+            let kept = self.kept.as_ref()?;
+            let n = self.n;
+            let (x, outcome) = krylov::preconditioned_cg(
+                |x, y| krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, values, x, y),
+                |z| {
+                    let stack = MemStack::new(&mut scratch);
+                    match kept {
+                        KeptFactor::Double(values) => {
+                            let column = MatMut::from_column_major_slice_mut(z, n, 1);
+                            LltRef::new(symbolic, values).solve_in_place_with_conj(
+                                Conj::No,
+                                column,
+                                par,
+                                stack,
+                            );
+                        }
+                        KeptFactor::Single(values) => {
+                            single.clear();
+                            single.extend(z.iter().map(|&v| v as f32));
+                            let column = MatMut::from_column_major_slice_mut(&mut single, n, 1);
+                            LltRef::new(symbolic, values).solve_in_place_with_conj(
+                                Conj::No,
+                                column,
+                                par,
+                                stack,
+                            );
+                            for (z, s) in z.iter_mut().zip(&single) {
+                                *z = f64::from(*s);
+                            }
+                        }
+                    }
+                },
+                rhs,
+                CG_TOLERANCE,
+                CG_MAX_ITERATIONS,
+            );
+            timing.solve += t.elapsed().as_secs_f64();
+            self.last_cg = Some(outcome);
+            if outcome.converged {
+                CG_SOLVES.fetch_add(1, Atomic::Relaxed);
+                CG_ITERATIONS.fetch_add(outcome.iterations, Atomic::Relaxed);
+                self.refresh = outcome.iterations > REFRESH_AFTER;
+                return Some((x, Factorisation::Cholesky, timing));
+            }
+            if fresh {
+                if self.double_kept {
+                    self.kept = None;
+                    return None;
+                }
+                self.double_kept = true;
+            }
+            self.refresh = true;
+        }
+    }
+
+    /// Factorises `K` into the kept factor, in the precision the solver
+    /// keeps; false (keeping none) when it is not positive definite in it.
+    fn factorise_kept(&mut self, pattern: &Pattern, values: &[f64], par: Par) -> bool {
+        let Some(symbolic) = self.llt.as_ref() else {
+            return false;
+        };
+        let structure = self.structure(pattern);
+        let len = symbolic.len_val();
+        // The old factor's storage is reused when the precision is the same.
+        let kept = match (self.kept.take(), self.double_kept) {
+            (Some(KeptFactor::Double(mut v)), true) => {
+                v.resize(len, 0.0);
+                KeptFactor::Double(v)
+            }
+            (Some(KeptFactor::Single(mut v)), false) => {
+                v.resize(len, 0.0);
+                KeptFactor::Single(v)
+            }
+            (_, true) => KeptFactor::Double(vec![0.0; len]),
+            (_, false) => KeptFactor::Single(vec![0.0; len]),
+        };
+        let (kept, ok, scratch_bytes) = match kept {
+            KeptFactor::Double(mut factor) => {
+                let matrix = SparseColMatRef::new(structure, values);
+                let (ok, bytes) = factorise(symbolic, matrix, &mut factor, par);
+                (KeptFactor::Double(factor), ok, bytes)
+            }
+            KeptFactor::Single(mut factor) => {
+                let single: Vec<f32> = values.iter().map(|&v| v as f32).collect();
+                let matrix = SparseColMatRef::new(structure, &single);
+                let (ok, bytes) = factorise(symbolic, matrix, &mut factor, par);
+                (
+                    KeptFactor::Single(factor),
+                    ok,
+                    bytes + std::mem::size_of_val(single.as_slice()),
+                )
+            }
+        };
+        self.scratch_bytes = scratch_bytes;
+        self.factor_bytes = kept.bytes();
+        self.factorisations += 1;
+        FRESH_SOLVES.fetch_add(1, Atomic::Relaxed);
+        LAST_FACTOR_ENTRIES.store(len, Atomic::Relaxed);
+        self.kept = ok.then_some(kept);
+        ok
     }
 
     fn structure<'a>(&self, pattern: &'a Pattern) -> SymbolicSparseColMatRef<'a, usize> {
@@ -222,17 +488,24 @@ impl SparseSolver {
                     .map_err(|e| format!("{e:?}"))?,
                 );
             }
-            let symbolic = self.llt.as_ref().expect("just built");
             let par = if self.n >= PARALLEL_FROM_DOFS {
                 Par::rayon(0)
             } else {
                 Par::Seq
             };
+            if self.method == SymmetricMethod::KeptFactorCg
+                && let Some(solved) = self.cg_with_kept_factor(pattern, values, rhs, par)
+            {
+                return Ok(solved);
+            }
+            let symbolic = self.llt.as_ref().expect("just built");
             let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
             self.scratch_bytes = scratch.size_bytes();
             self.factor_bytes = symbolic.len_val() * std::mem::size_of::<f64>();
+            self.factorisations += 1;
             if let Some((x, timing)) = cholesky(symbolic, matrix, &b, par, t0) {
                 LAST_FACTOR_ENTRIES.store(symbolic.len_val(), Atomic::Relaxed);
+                FRESH_SOLVES.fetch_add(1, Atomic::Relaxed);
                 return Ok((x, Factorisation::Cholesky, timing));
             }
         }
@@ -247,6 +520,30 @@ impl SparseSolver {
     }
 }
 
+/// Factorises `matrix` (its upper triangle) by Cholesky on `symbolic` into
+/// `factor`: whether it was positive definite, and the scratch's bytes.
+fn factorise<T: ComplexField>(
+    symbolic: &SymbolicCholesky<usize>,
+    matrix: SparseColMatRef<'_, usize, T>,
+    factor: &mut [T],
+    par: Par,
+) -> (bool, usize) {
+    let request = symbolic.factorize_numeric_llt_scratch::<T>(par, Default::default());
+    let mut scratch = MemBuffer::new(request);
+    let ok = symbolic
+        .factorize_numeric_llt(
+            factor,
+            matrix,
+            Side::Upper,
+            Default::default(),
+            par,
+            MemStack::new(&mut scratch),
+            Default::default(),
+        )
+        .is_ok();
+    (ok, request.size_bytes())
+}
+
 /// Factorises `matrix` (its upper triangle) by Cholesky on `symbolic` and
 /// solves for `b`; `None` when it is not positive definite.
 fn cholesky(
@@ -257,24 +554,19 @@ fn cholesky(
     started: std::time::Instant,
 ) -> Option<(Vec<f64>, Timing)> {
     let mut values = vec![0.0; symbolic.len_val()];
-    let mut scratch =
-        MemBuffer::new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()));
-    let llt = symbolic
-        .factorize_numeric_llt(
-            &mut values,
-            matrix,
-            Side::Upper,
-            Default::default(),
-            par,
-            MemStack::new(&mut scratch),
-            Default::default(),
-        )
-        .ok()?;
+    if !factorise(symbolic, matrix, &mut values, par).0 {
+        return None;
+    }
     let factorise = started.elapsed().as_secs_f64();
     let t = std::time::Instant::now();
     let mut x = b.clone();
     let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, par));
-    llt.solve_in_place_with_conj(Conj::No, x.as_mut(), par, MemStack::new(&mut scratch));
+    LltRef::new(symbolic, &values).solve_in_place_with_conj(
+        Conj::No,
+        x.as_mut(),
+        par,
+        MemStack::new(&mut scratch),
+    );
     let timing = Timing {
         factorise,
         solve: t.elapsed().as_secs_f64(),
@@ -308,4 +600,89 @@ pub struct Timing {
 
 fn column(x: &Mat<f64>) -> Vec<f64> {
     (0..x.nrows()).map(|i| x[(i, 0)]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The 5-point Laplacian of an m x m grid plus `shift` on the diagonal,
+    /// both triangles stored.
+    fn laplacian(m: usize, shift: f64) -> (Pattern, Vec<f64>) {
+        let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
+        for j in 0..m * m {
+            let (x, y) = (j % m, j / m);
+            let mut entries = vec![(j, 4.0 + shift)];
+            if x > 0 {
+                entries.push((j - 1, -1.0));
+            }
+            if x + 1 < m {
+                entries.push((j + 1, -1.0));
+            }
+            if y > 0 {
+                entries.push((j - m, -1.0));
+            }
+            if y + 1 < m {
+                entries.push((j + m, -1.0));
+            }
+            entries.sort_by_key(|e| e.0);
+            for (i, v) in entries {
+                row_idx.push(i);
+                values.push(v);
+            }
+            col_ptr.push(row_idx.len());
+        }
+        (Pattern::from_columns(col_ptr, row_idx), values)
+    }
+
+    fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
+        let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
+        norm(&mut a.iter().zip(b).map(|(x, y)| x - y)) / norm(&mut b.iter().copied())
+    }
+
+    /// CG with a kept single-precision factor answers as a fresh double
+    /// factorisation does, to the accuracy CG is asked for (1e-12 on the
+    /// residual; the Laplacian's condition number, about 700 at m = 40,
+    /// allows 1e-9 on the solution), first with the factor of the same
+    /// matrix and then with it stale: 0.01 added to the diagonal moves the
+    /// lowest eigenvalue (0.0117) by 85%, so CG needs several iterations,
+    /// but far fewer than its limit of 30, and does not refactorise.
+    #[test]
+    fn a_kept_factor_answers_as_a_fresh_one() {
+        let m = 40;
+        let rhs: Vec<f64> = (0..m * m).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
+        let mut kept = SparseSolver::new(m * m, None).with_method(SymmetricMethod::KeptFactorCg);
+        let mut direct = SparseSolver::new(m * m, None).with_method(SymmetricMethod::Direct);
+        for shift in [0.0, 0.01] {
+            let (pattern, values) = laplacian(m, shift);
+            let (x, kind, _) = kept.solve(&pattern, &values, &rhs, true).unwrap();
+            let (y, _, _) = direct.solve(&pattern, &values, &rhs, true).unwrap();
+            assert_eq!(kind, Factorisation::Cholesky);
+            let cg = kept.last_cg().expect("CG ran");
+            assert!(cg.converged, "{cg:?}");
+            // The stale factor makes CG work for it; a fresh one hardly.
+            assert!(
+                (shift > 0.0) == (cg.iterations >= 3),
+                "shift {shift}: {cg:?}"
+            );
+            assert_eq!(kept.factorisations(), 1);
+            let difference = relative_difference(&x, &y);
+            assert!(difference < 1e-9, "shift {shift}: {difference:e}");
+        }
+    }
+
+    /// An indefinite symmetric matrix defeats the single and double kept
+    /// factors and Cholesky; LU answers it.
+    #[test]
+    fn an_indefinite_tangent_falls_back_to_lu() {
+        let m = 10;
+        let (pattern, values) = laplacian(m, -4.5);
+        let rhs = vec![1.0; m * m];
+        let mut solver = SparseSolver::new(m * m, None).with_method(SymmetricMethod::KeptFactorCg);
+        let (x, kind, _) = solver.solve(&pattern, &values, &rhs, true).unwrap();
+        assert_eq!(kind, Factorisation::Lu);
+        let mut kx = vec![0.0; m * m];
+        krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, &values, &x, &mut kx);
+        assert!(relative_difference(&kx, &rhs) < 1e-10);
+    }
 }
