@@ -131,8 +131,8 @@ impl<'a> StepEquilibrium<'a> {
             Some(previous) if pattern.is(&previous.adjacency) => previous.solver.reused(),
             _ => {
                 // Cholesky's elimination order, for the tangents that are
-                // symmetric (see `correction`); LU orders its own columns.
-                let order = (loading.is_empty() && fbar.is_none())
+                // symmetric; LU orders its own columns.
+                let order = symmetric_tangent(&loading, fbar.as_ref(), start.points)
                     .then(|| ordering::nested_dissection(&conn.nodes, &pattern));
                 SparseSolver::new(conn.n_dofs(), order)
             }
@@ -295,10 +295,7 @@ impl Equilibrium for StepEquilibrium<'_> {
             fbar.add_to(self.conn, self.points, trial, &self.pattern, &mut k);
         }
         self.band.add_stiffness(&self.pattern, &mut k);
-        // Boundary loads move with the boundary: their load stiffness makes
-        // the tangent non-symmetric, and so does F-bar's. Hyperelastic
-        // materials under loads that do not move have a symmetric tangent.
-        let symmetric = self.loading.is_empty() && self.fbar.is_none();
+        let symmetric = symmetric_tangent(&self.loading, self.fbar.as_ref(), self.points);
         for (row, col, value) in self.loading.stiffness(&self.u) {
             self.pattern.add(&mut k, row, col, value);
         }
@@ -322,6 +319,19 @@ impl Equilibrium for StepEquilibrium<'_> {
         }
         Ok((du, kind))
     }
+}
+
+/// Whether a step's tangent is symmetric (then Cholesky and CG solve it).
+/// Boundary loads move with the boundary: their load stiffness makes the
+/// tangent non-symmetric, and so do F-bar's coupling and non-associated
+/// plastic flow. The elastic models and associated flow under loads that
+/// do not move have a symmetric tangent.
+fn symmetric_tangent(
+    loading: &BoundaryLoading,
+    fbar: Option<&FbarCells>,
+    points: &MaterialPoints,
+) -> bool {
+    loading.is_empty() && fbar.is_none() && points.materials.iter().all(Material::symmetric_tangent)
 }
 
 /// The point loop with F-bar: every point's `dJ`, its cell's average, then

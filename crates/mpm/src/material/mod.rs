@@ -126,6 +126,17 @@ impl Material {
         }
     }
 
+    /// Whether the tangent `dP/d(dF)` has major symmetry (then so has the
+    /// stiffness it makes): for the elastic models and associated flow,
+    /// not for a dilation angle other than the friction angle.
+    pub fn symmetric_tangent(&self) -> bool {
+        match self {
+            Material::Hencky(_) | Material::LinearElastic(_) | Material::VonMises(_) => true,
+            Material::DruckerPrager(m) => m.eta_flow == m.eta,
+            Material::MohrCoulomb(m) => m.dilation == m.friction,
+        }
+    }
+
     /// History of an undeformed, unstressed point.
     pub fn initial_history(&self) -> History {
         match self {
@@ -271,5 +282,52 @@ mod tests {
         let expected = e * l.ln() / l;
         assert!((resp.cauchy.plane[1] - expected).abs() < 1e-10 * expected.abs());
         assert!(resp.cauchy.plane[0].abs() < 1e-10 && resp.cauchy.zz.abs() < 1e-10);
+    }
+
+    /// Yielding under a turned, sheared increment after a stretch that
+    /// yielded them: the elastic model and the associated flow rules keep
+    /// the tangent symmetric to round-off; non-associated flow (psi = 5 deg
+    /// against phi = 30 deg) makes it unsymmetric by far more. What
+    /// `symmetric_tangent` says must match.
+    #[test]
+    fn only_non_associated_flow_makes_the_tangent_unsymmetric() {
+        let elastic = Elastic::from_young_poisson(20e6, 0.3);
+        let (c, phi, psi) = (10e3, 30f64.to_radians(), 5f64.to_radians());
+        let models = [
+            Material::Hencky(elastic),
+            Material::VonMises(VonMises {
+                elastic,
+                yield_stress: 2.0 * c,
+                hardening: 1e5,
+            }),
+            Material::DruckerPrager(DruckerPrager::plane_strain_match(elastic, c, phi, phi)),
+            Material::DruckerPrager(DruckerPrager::plane_strain_match(elastic, c, phi, psi)),
+            Material::MohrCoulomb(MohrCoulomb {
+                elastic,
+                cohesion: c,
+                friction: phi,
+                dilation: phi,
+            }),
+            Material::MohrCoulomb(MohrCoulomb {
+                elastic,
+                cohesion: c,
+                friction: phi,
+                dilation: psi,
+            }),
+        ];
+        let stretch = Matrix2::new(0.004, 0.0, 0.0, -0.004);
+        let sheared = Matrix2::new(0.002, 0.0011, -0.0006, -0.0017);
+        for m in models {
+            let yielded = m.respond(&m.initial_history(), &stretch, 1.0).history;
+            let r = m.respond(&yielded, &sheared, 1.0);
+            let flowing = r.history.plastic_strain > yielded.plastic_strain;
+            assert_eq!(flowing, !matches!(m, Material::Hencky(_)), "{m:?}");
+            let asymmetry = (r.tangent - r.tangent.transpose()).norm() / r.tangent.norm();
+            if m.symmetric_tangent() {
+                assert!(asymmetry < 1e-10, "{m:?}: {asymmetry:e}");
+            } else {
+                assert!(asymmetry > 1e-3, "{m:?}: {asymmetry:e}");
+            }
+        }
     }
 }

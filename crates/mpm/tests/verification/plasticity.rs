@@ -133,6 +133,47 @@ fn a_frictional_block_squeezed_past_yield_flows_at_the_unconfined_strength() {
     }
 }
 
+/// The frictional block above with non-associated flow (dilation 5
+/// degrees against friction 20): the stress state on Mohr-Coulomb's main
+/// plane does not depend on the flow rule, so Mohr-Coulomb reaches the
+/// same unconfined strength, and Newton still converges quadratically in
+/// every plastic step: the tangent is not symmetric (by about half its norm
+/// at phi = 30, psi = 5 degrees, `material::tests`), so it is solved whole
+/// by LU. (Before the models told their tangents apart, every iteration
+/// here first tried Cholesky on the upper triangle, met a non-positive
+/// pivot and fell back to LU.)
+#[test]
+fn non_associated_flow_keeps_newton_quadratic() {
+    let (e, c, phi) = (1.0e6, 1.0e3, 20f64);
+    let strength = -2.0 * c * phi.to_radians().cos() / (1.0 - phi.to_radians().sin());
+    for model in ["mohr_coulomb", "drucker_prager"] {
+        let material = json!({ "model": model, "youngs_modulus": e, "poisson_ratio": 0.3,
+                               "density": 0.0, "cohesion": c, "friction_angle": phi,
+                               "dilation_angle": 5.0 });
+        let (sim, report) = run(&squeezed_block(material, 0.05));
+        assert!(sim.points.yielding.iter().all(|&y| y), "{model}");
+        assert_quadratic(&report.steps, model);
+        for s in &report.steps {
+            assert_eq!(
+                s.newton.factorisation,
+                Some(mpm::linsolve::Factorisation::Lu)
+            );
+        }
+        if model == "mohr_coulomb" {
+            let worst = sim
+                .points
+                .stress
+                .iter()
+                .enumerate()
+                .fold(0.0f64, |w, (p, s)| {
+                    let j = sim.points.jacobian(p);
+                    w.max((s.plane[1] * j - strength).abs())
+                });
+            assert!(worst < 1e-3 * c, "{model}: {worst:e}");
+        }
+    }
+}
+
 /// Hill's thick cylinder (1950, *The Mathematical Theory of Plasticity*,
 /// ch. V): a plane-strain tube a = 1 m, b = 2 m of elastic-perfectly
 /// plastic von Mises material (k = sigma_y / sqrt(3)) under internal
