@@ -149,9 +149,10 @@ pub enum SymmetricMethod {
 
 /// From this many unknowns up, symmetric tangents are solved by
 /// [`SymmetricMethod::KeptFactorCg`]: measured (`mpm bench`, 2 cores, first
-/// two load steps) it takes 28% off the wide column's step and 11% off the
-/// cantilever's at 0.5M DOFs, 19% and 0% at 50k; at 5k it cost the
-/// cantilever 12% more. Below it every answer is the direct solve's.
+/// two load steps, BENCHMARKS.md) it takes 28% off the GIMP column's step
+/// at 479k DOFs and 20% at 48k, and costs the bilinear cantilever 1-2% at
+/// both (within noise), with 6-11% less peak memory at 0.5M DOFs; at 5k
+/// DOFs it costs both 7%. Below it every answer is the direct solve's.
 const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
 
 /// 0: by size; 1: direct; 2: kept factor (benchmarks compare them).
