@@ -129,7 +129,9 @@ impl<'a> StepEquilibrium<'a> {
         } = terms;
         let solver = match previous {
             Some(previous) if pattern.is(&previous.adjacency) => previous.solver.reused(),
-            _ => {
+            previous => {
+                // Freed before the new order and factor are made.
+                drop(previous);
                 // Cholesky's elimination order, for the tangents that are
                 // symmetric; LU orders its own columns.
                 let order = symmetric_tangent(&loading, fbar.as_ref(), start.points)

@@ -16,7 +16,9 @@ use rayon::prelude::*;
 pub struct CgOutcome {
     /// Products with `K` after the first preconditioned solve.
     pub iterations: usize,
-    /// `|b - K x| / |b|` at the end.
+    /// `|r| / |b|` at the end, `r` CG's recurrence's residual (equal to
+    /// `b - K x` in exact arithmetic; on an ill-conditioned `K` the true
+    /// residual ends above it).
     pub relative_residual: f64,
     pub converged: bool,
 }
@@ -63,8 +65,6 @@ pub fn preconditioned_cg(
 ) -> (Vec<f64>, CgOutcome) {
     let n = b.len();
     let b_norm = dot(b, b).sqrt();
-    let mut x = b.to_vec();
-    precondition(&mut x);
     if b_norm == 0.0 {
         let outcome = CgOutcome {
             iterations: 0,
@@ -73,6 +73,8 @@ pub fn preconditioned_cg(
         };
         return (vec![0.0; n], outcome);
     }
+    let mut x = b.to_vec();
+    precondition(&mut x);
     let mut kp = vec![0.0; n];
     product(&x, &mut kp);
     let mut r: Vec<f64> = b.iter().zip(&kp).map(|(b, k)| b - k).collect();
@@ -117,10 +119,14 @@ pub fn preconditioned_cg(
 mod tests {
     use super::*;
 
-    /// A 1D Laplacian (tridiagonal 2, -1) preconditioned by the exact
-    /// inverse of a 10% stiffer one: CG's error falls by at least
-    /// (sqrt(k) - 1) / (sqrt(k) + 1) per iteration, k = 1.1 the spread of
-    /// M^-1 K's eigenvalues, so 1e-12 takes at most 12.
+    /// A 1D Laplacian K (tridiagonal 2, -1, n = 200) preconditioned by the
+    /// exact inverse of M = K + 1e-4 I. M^-1 K's eigenvalues l / (l + 1e-4)
+    /// spread over k = 1.42 (K's smallest is 2 - 2 cos(pi / 201) = 2.44e-4),
+    /// so CG's error falls by (sqrt(k) - 1) / (sqrt(k) + 1) = 0.087 or
+    /// more an iteration in the energy norm: 1e-12 takes at most 12, and
+    /// the residual's 2-norm, up to sqrt(cond K) = 128 times the energy
+    /// norm's ratio, 14. It takes 5 (the spectrum clusters); one does not
+    /// do.
     #[test]
     fn a_near_preconditioner_converges_in_a_few_iterations() {
         let n: usize = 200;
@@ -136,30 +142,29 @@ mod tests {
             }
             col_ptr.push(row_idx.len());
         }
-        // M = 1.1 K: M^-1 z = K^-1 z / 1.1, by the Thomas algorithm.
+        // M^-1 z by the Thomas algorithm on (M's diagonal, -1).
+        let diagonal = 2.0 + 1e-4;
         let precondition = |z: &mut [f64]| {
             let mut c = vec![0.0; n];
             let mut d = z.to_vec();
-            c[0] = -0.5;
-            d[0] /= 2.0;
+            c[0] = -1.0 / diagonal;
+            d[0] /= diagonal;
             for i in 1..n {
-                let m = 2.0 + c[i - 1];
+                let m = diagonal + c[i - 1];
                 c[i] = -1.0 / m;
                 d[i] = (d[i] + d[i - 1]) / m;
             }
             for i in (0..n - 1).rev() {
                 d[i] -= c[i] * d[i + 1];
             }
-            for (z, d) in z.iter_mut().zip(d) {
-                *z = d / 1.1;
-            }
+            z.copy_from_slice(&d);
         };
         let b: Vec<f64> = (0..n).map(|i| ((i * 7) % 13) as f64 - 6.0).collect();
         let product =
             |x: &[f64], y: &mut [f64]| symmetric_product(&col_ptr, &row_idx, &values, x, y);
         let (x, outcome) = preconditioned_cg(product, precondition, &b, 1e-12, 50);
         assert!(outcome.converged, "{outcome:?}");
-        assert!(outcome.iterations <= 12, "{outcome:?}");
+        assert!((2..=14).contains(&outcome.iterations), "{outcome:?}");
         let mut kx = vec![0.0; n];
         symmetric_product(&col_ptr, &row_idx, &values, &x, &mut kx);
         let error = kx

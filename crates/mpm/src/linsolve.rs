@@ -127,14 +127,20 @@ pub struct SparseSolver {
     refresh: bool,
 }
 
-/// Relative residual CG solves to with a kept factor: well below Newton's
-/// tolerances (1e-9 and up), so the iterates match a direct solve's to
-/// many digits.
+/// Relative residual (CG's recurrence's) CG solves to with a kept factor:
+/// well below Newton's tolerances (1e-9 and up). On a well-conditioned
+/// tangent the answer matches a direct solve's to many digits; on an
+/// ill-conditioned one neither reaches this true residual, and Newton,
+/// which measures the true out-of-balance force, judges either.
 const CG_TOLERANCE: f64 = 1e-12;
-/// CG iterations allowed before the tangent is factorised afresh.
+/// CG iterations allowed with a fresh single-precision factor before it
+/// is judged too imprecise (then the factor is kept in double).
 const CG_MAX_ITERATIONS: usize = 30;
-/// A CG solve that took more iterations than this asks for a fresh factor
-/// at the next solve.
+/// CG iterations allowed with a stale factor before the tangent is
+/// factorised afresh.
+const CG_MAX_ITERATIONS_STALE: usize = 20;
+/// A CG solve with a stale factor that took more iterations than this asks
+/// for a fresh factor at the next solve.
 const REFRESH_AFTER: usize = 10;
 
 /// How symmetric tangents are solved.
@@ -149,10 +155,12 @@ pub enum SymmetricMethod {
 
 /// From this many unknowns up, symmetric tangents are solved by
 /// [`SymmetricMethod::KeptFactorCg`]: measured (`mpm bench`, 2 cores, first
-/// two load steps, BENCHMARKS.md) it takes 28% off the GIMP column's step
-/// at 479k DOFs and 20% at 48k, and costs the bilinear cantilever 1-2% at
-/// both (within noise), with 6-11% less peak memory at 0.5M DOFs; at 5k
-/// DOFs it costs both 7%. Below it every answer is the direct solve's.
+/// two load steps, two runs, BENCHMARKS.md) it takes 28-31% off the GIMP
+/// column's step at 479k DOFs and 18-20% at 48k, and changes the bilinear
+/// cantilever's by -3% to +9% (noise level), with 2-15% less peak memory
+/// at 0.5M DOFs. At 5k DOFs it was 7% slower on both in one run and 15%
+/// faster on the column in the other. Below it every answer is the direct
+/// solve's.
 const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
 
 /// 0: by size; 1: direct; 2: kept factor (benchmarks compare them).
@@ -190,6 +198,13 @@ pub fn symmetric_solve_counts() -> (usize, usize, usize) {
         CG_SOLVES.load(Atomic::Relaxed),
         CG_ITERATIONS.load(Atomic::Relaxed),
     )
+}
+
+/// What the kept-factor path made of a symmetric system.
+enum Kept {
+    Solved(Vec<f64>, Timing),
+    /// Neither a single nor a double factorisation succeeded.
+    NotPositiveDefinite,
 }
 
 /// The values of a kept Cholesky factor.
@@ -308,20 +323,21 @@ impl SparseSolver {
     }
 
     /// Solves the symmetric `K x = rhs` by CG preconditioned by the kept
-    /// factor (of this tangent or an earlier one of the pattern),
-    /// factorising afresh when there is none, when the last CG solve was
-    /// slow, or when CG fails with a stale factor. The factor is kept in
-    /// single precision (half the memory and bandwidth) until a fresh one
-    /// fails to serve, then in double. `None` when even a fresh double
-    /// factor does not serve (then `K` is not positive definite, or CG
-    /// cannot reach its tolerance).
+    /// factor (of this tangent or an earlier one of the pattern). A fresh
+    /// factor is made when there is none, when CG with a stale one took
+    /// more than [`REFRESH_AFTER`] iterations last time, or when CG fails
+    /// with a stale one. The factor is kept in single precision (half the
+    /// memory and bandwidth) until a fresh single one fails to serve; then
+    /// in double, whose fresh factor answers directly (the direct method's
+    /// answer). [`Kept::NotPositiveDefinite`] when the double factorisation
+    /// fails too (then only LU serves).
     fn cg_with_kept_factor(
         &mut self,
         pattern: &Pattern,
         values: &[f64],
         rhs: &[f64],
         par: Par,
-    ) -> Option<(Vec<f64>, Factorisation, Timing)> {
+    ) -> Kept {
         let mut timing = Timing::default();
         loop {
             let fresh = self.kept.is_none() || self.refresh;
@@ -332,22 +348,35 @@ impl SparseSolver {
                 timing.factorise += t.elapsed().as_secs_f64();
                 if !factorised {
                     if self.double_kept {
-                        return None;
+                        // Not a matter of precision: K is not positive definite.
+                        self.double_kept = false;
+                        return Kept::NotPositiveDefinite;
                     }
                     self.double_kept = true;
                     continue;
                 }
             }
+            let Some(symbolic) = self.llt.as_ref() else {
+                return Kept::NotPositiveDefinite;
+            };
+            let Some(kept) = self.kept.as_ref() else {
+                return Kept::NotPositiveDefinite;
+            };
             let t = std::time::Instant::now();
-            let symbolic = self.llt.as_ref()?;
             let mut scratch = MemBuffer::new(
                 symbolic
                     .solve_in_place_scratch::<f64>(1, par)
                     .or(symbolic.solve_in_place_scratch::<f32>(1, par)),
             );
             let mut single = Vec::new();
-            let kept = self.kept.as_ref()?;
             let n = self.n;
+            // A fresh double factor is exact: its solve is the answer.
+            let direct = fresh && matches!(kept, KeptFactor::Double(_));
+            let max_iterations = match (direct, fresh) {
+                (true, _) => 0,
+                (false, true) => CG_MAX_ITERATIONS,
+                (false, false) => CG_MAX_ITERATIONS_STALE,
+            };
             let (x, outcome) = krylov::preconditioned_cg(
                 |x, y| krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, values, x, y),
                 |z| {
@@ -380,21 +409,18 @@ impl SparseSolver {
                 },
                 rhs,
                 CG_TOLERANCE,
-                CG_MAX_ITERATIONS,
+                max_iterations,
             );
             timing.solve += t.elapsed().as_secs_f64();
             self.last_cg = Some(outcome);
-            if outcome.converged {
+            if direct || outcome.converged {
                 CG_SOLVES.fetch_add(1, Atomic::Relaxed);
                 CG_ITERATIONS.fetch_add(outcome.iterations, Atomic::Relaxed);
-                self.refresh = outcome.iterations > REFRESH_AFTER;
-                return Some((x, Factorisation::Cholesky, timing));
+                self.refresh = !fresh && outcome.iterations > REFRESH_AFTER;
+                return Kept::Solved(x, timing);
             }
             if fresh {
-                if self.double_kept {
-                    self.kept = None;
-                    return None;
-                }
+                // A fresh single factor is not precise enough for this K.
                 self.double_kept = true;
             }
             self.refresh = true;
@@ -494,20 +520,38 @@ impl SparseSolver {
             } else {
                 Par::Seq
             };
-            if self.method == SymmetricMethod::KeptFactorCg
-                && let Some(solved) = self.cg_with_kept_factor(pattern, values, rhs, par)
-            {
-                return Ok(solved);
-            }
-            let symbolic = self.llt.as_ref().expect("just built");
-            let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
-            self.scratch_bytes = scratch.size_bytes();
-            self.factor_bytes = symbolic.len_val() * std::mem::size_of::<f64>();
-            self.factorisations += 1;
-            if let Some((x, timing)) = cholesky(symbolic, matrix, &b, par, t0) {
-                LAST_FACTOR_ENTRIES.store(symbolic.len_val(), Atomic::Relaxed);
-                FRESH_SOLVES.fetch_add(1, Atomic::Relaxed);
-                return Ok((x, Factorisation::Cholesky, timing));
+            let kept = match self.method {
+                SymmetricMethod::KeptFactorCg => {
+                    // The symbolic analysis, if this solve made it, counts
+                    // as factorisation.
+                    let analysis = t0.elapsed().as_secs_f64();
+                    Some((
+                        self.cg_with_kept_factor(pattern, values, rhs, par),
+                        analysis,
+                    ))
+                }
+                SymmetricMethod::Direct => None,
+            };
+            match kept {
+                Some((Kept::Solved(x, mut timing), analysis)) => {
+                    timing.factorise += analysis;
+                    return Ok((x, Factorisation::Cholesky, timing));
+                }
+                // Neither precision factorised it: only LU serves.
+                Some((Kept::NotPositiveDefinite, _)) => {}
+                None => {
+                    let symbolic = self.llt.as_ref().expect("just built");
+                    let scratch =
+                        symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
+                    self.scratch_bytes = scratch.size_bytes();
+                    self.factor_bytes = symbolic.len_val() * std::mem::size_of::<f64>();
+                    self.factorisations += 1;
+                    if let Some((x, timing)) = cholesky(symbolic, matrix, &b, par, t0) {
+                        LAST_FACTOR_ENTRIES.store(symbolic.len_val(), Atomic::Relaxed);
+                        FRESH_SOLVES.fetch_add(1, Atomic::Relaxed);
+                        return Ok((x, Factorisation::Cholesky, timing));
+                    }
+                }
             }
         }
         if self.lu.is_none() {

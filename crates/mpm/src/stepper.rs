@@ -190,6 +190,8 @@ impl Simulation {
             observer.step_finished(&report, &StepState::new(self));
             steps.push(report);
         }
+        // The last step's solver (and its factor) serves no later step.
+        self.analysed = None;
         Ok(RunReport {
             points: self.points.len(),
             load_steps: self.load_steps,

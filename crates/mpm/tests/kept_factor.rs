@@ -2,8 +2,13 @@
 //! does, through a whole large-deformation run. Its own test binary: the
 //! symmetric method is set for the whole process.
 
-use mpm::linsolve::{SymmetricMethod, set_symmetric_method, symmetric_solve_counts};
+use std::sync::Mutex;
+
+use mpm::linsolve::{Factorisation, SymmetricMethod, set_symmetric_method, symmetric_solve_counts};
 use mpm::{Case, NoObserver, Simulation};
+
+/// The method and the solve counters are the process's: one test at a time.
+static SERIAL: Mutex<()> = Mutex::new(());
 
 /// AMPLE's self-weight column (`verification/column.rs`: 52% compression
 /// in 40 steps, top displacement -25.940 m exactly) with 64 cells over
@@ -16,6 +21,7 @@ use mpm::{Case, NoObserver, Simulation};
 /// correct what error that leaves.
 #[test]
 fn a_kept_factor_solves_the_column_as_direct_factorisation_does() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let mut case = mpm::case::builtin::json("column").unwrap();
     let h = 50.0 / 64.0;
     case["grid"]["cell_size"] = h.into();
@@ -52,4 +58,45 @@ fn a_kept_factor_solves_the_column_as_direct_factorisation_does() {
         cg_solves > 2 * factorisations,
         "{factorisations} {cg_solves}"
     );
+}
+
+/// A block of Mohr-Coulomb soil with non-associated flow (friction 20,
+/// dilation 5 degrees) squeezed 5% past yield in 5 steps, with the kept
+/// factor forced on: its tangent is unsymmetric, so no step may try a
+/// Cholesky factor (CG on an unsymmetric matrix, or a factor of its upper
+/// triangle) and every one is solved by LU.
+#[test]
+fn an_unsymmetric_tangent_never_meets_the_kept_factor() {
+    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let case = serde_json::json!({
+        "version": 1,
+        "analysis": { "load_steps": 5 },
+        "grid": { "cell_size": 0.25, "origin": [0.1, 0.07] },
+        "basis": "gimp",
+        "bodies": [{
+            "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [1.0, 1.0] } },
+            "points": { "count": [8, 8] },
+            "material": { "model": "mohr_coulomb", "youngs_modulus": 1.0e6, "poisson_ratio": 0.3,
+                          "density": 0.0, "cohesion": 1.0e3, "friction_angle": 20.0,
+                          "dilation_angle": 5.0 }
+        }],
+        "supports": [
+            { "on": { "x": 0.0 }, "fix": "normal", "method": "ibm" },
+            { "on": { "y": 0.0 }, "fix": "normal", "method": "ibm" },
+            { "on": { "y": 1.0 }, "fix": "y", "method": "ibm", "displacement": [0.0, -0.05] }
+        ]
+    });
+    let case = Case::from_json(&case.to_string()).unwrap();
+    set_symmetric_method(Some(SymmetricMethod::KeptFactorCg));
+    let before = symmetric_solve_counts();
+    let report = Simulation::new(&case)
+        .unwrap()
+        .run(&mut NoObserver)
+        .unwrap();
+    let after = symmetric_solve_counts();
+    set_symmetric_method(None);
+    assert_eq!(after, before, "symmetric solves were tried");
+    for step in &report.steps {
+        assert_eq!(step.newton.factorisation, Some(Factorisation::Lu));
+    }
 }
