@@ -6,8 +6,8 @@
 //! A step whose pattern equals the last step's (no point crossed into a
 //! new cell's reach) takes over the last step's solver and its analysis
 //! ([`crate::equilibrium::StepEquilibrium::new`]).
-//! A symmetric tangent (hyperelastic material, dead loads) is factorised by
-//! Cholesky; LU is used when the tangent is not symmetric, and as a fallback
+//! A symmetric tangent (elastic or associated plastic materials, loads
+//! that do not move, no F-bar) is factorised by Cholesky; LU is used when the tangent is not symmetric, and as a fallback
 //! when Cholesky meets a non-positive pivot (an indefinite tangent, e.g. past
 //! a limit point). Cholesky orders the unknowns by nested dissection of the
 //! grid's active nodes (`ordering.rs`) when it is given them, and runs on
@@ -19,8 +19,9 @@
 //! factorised at every Newton iteration: CG solves it to a relative
 //! residual of 1e-12, preconditioned by the kept single-precision factor of
 //! an earlier tangent of the pattern ([`crate::krylov`]), which is
-//! refreshed when CG needs more than [`REFRESH_AFTER`] iterations, and is
-//! kept in double precision if a fresh single one fails to serve.
+//! refreshed when CG with it needed more than [`REFRESH_AFTER`]
+//! iterations, and is kept in double precision if a fresh single one fails
+//! to serve.
 
 use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering as Atomic};
 
@@ -123,7 +124,8 @@ pub struct SparseSolver {
     /// Numeric factorisations this solver made.
     factorisations: usize,
     /// Whether the next symmetric solve factorises afresh (the last CG
-    /// solve took more than [`REFRESH_AFTER`] iterations).
+    /// solve with a stale factor took more than [`REFRESH_AFTER`]
+    /// iterations).
     refresh: bool,
 }
 
