@@ -320,9 +320,10 @@ fn symmetric_methods(max_points: usize) -> Result<String, LabError> {
     let mut text = String::from(
         "\n## Symmetric solves: direct against CG with a kept factor\n\n\
          Both scenes' tangents are symmetric. Direct: every Newton iteration's tangent factorised in double \
-         precision. Kept factor: CG to a relative residual of 1e-12, preconditioned by the single-precision \
-         factor of an earlier tangent of the pattern, refreshed when CG took more than 10 iterations \
-         (`crates/mpm/src/krylov.rs`). The default switches from direct to the kept factor at 40,000 DOFs. \
+         precision. Kept factor: CG to the accuracy Newton's forcing term asks for (`crates/mpm/src/newton.rs`, \
+         1e-3 to 3e-7), preconditioned by the single-precision factor of an earlier tangent of the pattern, \
+         refreshed when CG with it reduced the residual by less than 0.15 an iteration \
+         (`crates/mpm/src/krylov.rs`, `linsolve.rs`). The default switches from direct to the kept factor at 40,000 DOFs. \
          First two load steps; fresh factorisations, CG solves and CG iterations over both.\n\n\
          | scene | points | active DOFs | method | s / step | factorisation s / step | solve s / step | Newton iterations | factorisations | CG solves | CG iterations | peak MiB |\n\
          |---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",

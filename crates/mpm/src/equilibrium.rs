@@ -277,7 +277,11 @@ impl Equilibrium for StepEquilibrium<'_> {
         Ok((r, scale))
     }
 
-    fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
+    fn correction(
+        &mut self,
+        r: &[f64],
+        accuracy: f64,
+    ) -> Result<(Vec<f64>, Factorisation), String> {
         let t = Instant::now();
         let mut k = std::mem::take(&mut self.k);
         assembly::stiffness(
@@ -303,7 +307,7 @@ impl Equilibrium for StepEquilibrium<'_> {
         }
         assembly::constrain(&self.pattern, &mut k, &self.held.fixed);
         self.timings.assembly += t.elapsed().as_secs_f64();
-        let solved = self.solver.solve(&self.pattern, &k, r, symmetric);
+        let solved = self.solver.solve(&self.pattern, &k, r, symmetric, accuracy);
         self.memory = StepMemory {
             points: self.points.heap_bytes(),
             links: self.conn.heap_bytes(),

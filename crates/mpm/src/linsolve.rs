@@ -16,12 +16,12 @@
 //! at 1e5 unknowns on this 2-core machine).
 //!
 //! From [`KEPT_FACTOR_FROM_DOFS`] unknowns up, a symmetric tangent is not
-//! factorised at every Newton iteration: CG solves it to a relative
-//! residual of 1e-12, preconditioned by the kept single-precision factor of
-//! an earlier tangent of the pattern ([`crate::krylov`]), which is
-//! refreshed when CG with it needed more than [`REFRESH_AFTER`]
-//! iterations, and is kept in double precision if a fresh single one fails
-//! to serve.
+//! factorised at every Newton iteration: CG solves it to the accuracy
+//! Newton asks for ([`crate::newton::forcing_term`]), preconditioned by the
+//! kept single-precision factor of an earlier tangent of the pattern
+//! ([`crate::krylov`]), which is refreshed when CG with it reduced the
+//! residual by less than [`REFRESH_RATE`] an iteration, and is kept in
+//! double precision if a fresh single one fails to serve.
 
 use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering as Atomic};
 
@@ -124,26 +124,45 @@ pub struct SparseSolver {
     /// Numeric factorisations this solver made.
     factorisations: usize,
     /// Whether the next symmetric solve factorises afresh (the last CG
-    /// solve with a stale factor took more than [`REFRESH_AFTER`]
-    /// iterations).
+    /// solve with a stale factor converged slower than [`REFRESH_RATE`]).
     refresh: bool,
 }
 
-/// Relative residual (CG's recurrence's) CG solves to with a kept factor:
-/// well below Newton's tolerances (1e-9 and up). On a well-conditioned
-/// tangent the answer matches a direct solve's to many digits; on an
-/// ill-conditioned one neither reaches this true residual, and Newton,
-/// which measures the true out-of-balance force, judges either.
-const CG_TOLERANCE: f64 = 1e-12;
+/// The smallest relative residual (CG's recurrence's) CG is asked to reach
+/// with a kept factor, whatever accuracy Newton asks for
+/// ([`crate::newton::forcing_term`], 3e-7 and up at its default
+/// tolerance). On an ill-conditioned tangent the true residual ends above
+/// the recurrence's, and Newton, which measures the true out-of-balance
+/// force, judges the answer.
+const CG_FLOOR: f64 = 1e-12;
 /// CG iterations allowed with a fresh single-precision factor before it
 /// is judged too imprecise (then the factor is kept in double).
 const CG_MAX_ITERATIONS: usize = 30;
 /// CG iterations allowed with a stale factor before the tangent is
 /// factorised afresh.
 const CG_MAX_ITERATIONS_STALE: usize = 20;
-/// A CG solve with a stale factor that took more iterations than this asks
-/// for a fresh factor at the next solve.
-const REFRESH_AFTER: usize = 10;
+/// A CG solve with a stale factor whose residual fell by less than this
+/// factor an iteration (on average) asks for a fresh factor at the next
+/// solve. A fresh factor costs as much as 7 (1e5 column points) to 13
+/// (1e6) CG iterations; at 0.15 a stale factor needs about 7 iterations
+/// to Newton's 1e-6 where a fresh one needs 1 or 2, so over the two or
+/// three solves left in a step a refresh about pays for itself. Measured
+/// on the column's first two steps: stale factors converge at 0.07-0.09
+/// an iteration and are not refreshed at 1e5 or 1e6 points; at 0.063 the
+/// 1e5 column refreshed one and spent 0.97 s factorising and solving
+/// against 0.90 s.
+const REFRESH_RATE: f64 = 0.15;
+
+/// CG's residual reduction per iteration, on average.
+fn contraction(outcome: &krylov::CgOutcome) -> f64 {
+    if outcome.iterations == 0 {
+        0.0
+    } else {
+        outcome
+            .relative_residual
+            .powf(1.0 / outcome.iterations as f64)
+    }
+}
 
 /// How symmetric tangents are solved.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -326,9 +345,10 @@ impl SparseSolver {
 
     /// Solves the symmetric `K x = rhs` by CG preconditioned by the kept
     /// factor (of this tangent or an earlier one of the pattern). A fresh
-    /// factor is made when there is none, when CG with a stale one took
-    /// more than [`REFRESH_AFTER`] iterations last time, or when CG fails
-    /// with a stale one. The factor is kept in single precision (half the
+    /// factor is made when there is none, when CG with a stale one
+    /// converged slower than [`REFRESH_RATE`] last time, or when CG fails
+    /// with a stale one. CG stops at the relative residual `accuracy`
+    /// (at least [`CG_FLOOR`]). The factor is kept in single precision (half the
     /// memory and bandwidth) until a fresh single one fails to serve; then
     /// in double, whose fresh factor answers directly (the direct method's
     /// answer). [`Kept::NotPositiveDefinite`] when the double factorisation
@@ -338,6 +358,7 @@ impl SparseSolver {
         pattern: &Pattern,
         values: &[f64],
         rhs: &[f64],
+        accuracy: f64,
         par: Par,
     ) -> Kept {
         let mut timing = Timing::default();
@@ -410,7 +431,7 @@ impl SparseSolver {
                     }
                 },
                 rhs,
-                CG_TOLERANCE,
+                accuracy.max(CG_FLOOR),
                 max_iterations,
             );
             timing.solve += t.elapsed().as_secs_f64();
@@ -418,7 +439,7 @@ impl SparseSolver {
             if direct || outcome.converged {
                 CG_SOLVES.fetch_add(1, Atomic::Relaxed);
                 CG_ITERATIONS.fetch_add(outcome.iterations, Atomic::Relaxed);
-                self.refresh = !fresh && outcome.iterations > REFRESH_AFTER;
+                self.refresh = !fresh && contraction(&outcome) > REFRESH_RATE;
                 return Kept::Solved(x, timing);
             }
             if fresh {
@@ -494,6 +515,7 @@ impl SparseSolver {
         values: &[f64],
         rhs: &[f64],
         symmetric: bool,
+        accuracy: f64,
     ) -> Result<(Vec<f64>, Factorisation, Timing), String> {
         let t0 = std::time::Instant::now();
         let structure = self.structure(pattern);
@@ -528,7 +550,7 @@ impl SparseSolver {
                     // as factorisation.
                     let analysis = t0.elapsed().as_secs_f64();
                     Some((
-                        self.cg_with_kept_factor(pattern, values, rhs, par),
+                        self.cg_with_kept_factor(pattern, values, rhs, accuracy, par),
                         analysis,
                     ))
                 }
@@ -702,8 +724,8 @@ mod tests {
         let mut direct = SparseSolver::new(m * m, None).with_method(SymmetricMethod::Direct);
         for shift in [0.0, 0.01] {
             let (pattern, values) = laplacian(m, shift);
-            let (x, kind, _) = kept.solve(&pattern, &values, &rhs, true).unwrap();
-            let (y, _, _) = direct.solve(&pattern, &values, &rhs, true).unwrap();
+            let (x, kind, _) = kept.solve(&pattern, &values, &rhs, true, 1e-12).unwrap();
+            let (y, _, _) = direct.solve(&pattern, &values, &rhs, true, 1e-12).unwrap();
             assert_eq!(kind, Factorisation::Cholesky);
             let cg = kept.last_cg().expect("CG ran");
             assert!(cg.converged, "{cg:?}");
@@ -726,7 +748,7 @@ mod tests {
         let (pattern, values) = laplacian(m, -4.5);
         let rhs = vec![1.0; m * m];
         let mut solver = SparseSolver::new(m * m, None).with_method(SymmetricMethod::KeptFactorCg);
-        let (x, kind, _) = solver.solve(&pattern, &values, &rhs, true).unwrap();
+        let (x, kind, _) = solver.solve(&pattern, &values, &rhs, true, 1e-12).unwrap();
         assert_eq!(kind, Factorisation::Lu);
         let mut kx = vec![0.0; m * m];
         krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, &values, &x, &mut kx);

@@ -207,8 +207,11 @@ pub trait Equilibrium {
     /// out-of-balance force (zero on constrained DOFs) and the force scale it
     /// is measured against.
     fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint>;
-    /// Solves `K du = r` with the tangent at the last trial state.
-    fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String>;
+    /// Solves `K du = r` with the tangent at the last trial state, to a
+    /// relative residual `|r - K du| / |r|` of at most `accuracy` (an
+    /// iterative solver may stop there; a direct one answers exactly).
+    fn correction(&mut self, r: &[f64], accuracy: f64)
+    -> Result<(Vec<f64>, Factorisation), String>;
 }
 
 /// The line search along a Newton direction `du` from a state with
@@ -374,7 +377,7 @@ pub fn solve(
             });
         }
         let (du, kind) = eq
-            .correction(&r)
+            .correction(&r, forcing_term(residual, settings.tolerance))
             .map_err(|message| SolveError::LinearSolve {
                 step,
                 iteration,
@@ -426,6 +429,35 @@ pub fn solve(
     unreachable!("the loop returns")
 }
 
+/// How accurately the correction at a Newton iteration whose relative
+/// out-of-balance force is `residual` must solve `K du = r`, as the
+/// relative linear residual `|r - K du| / |r|`: an inexact Newton method's
+/// forcing term (Dembo, Eisenstat & Steihaug 1982, SIAM J. Numer. Anal.
+/// 19; Eisenstat & Walker 1996, SIAM J. Sci. Comput. 17).
+///
+/// A linear residual of `eta |r|` adds at most `eta * residual` to the
+/// next iteration's relative out-of-balance force, beside exact Newton's
+/// `C residual^2`. The larger of two bounds is asked for:
+/// - [`FORCING_GAIN`]` * residual`: what it adds is of Newton's own
+///   quadratic order, so convergence stays quadratic (DES, Theorem 3.3);
+/// - `0.1 * tolerance / residual`: what it adds is a tenth of the
+///   tolerance, so the iteration that would converge with an exact solve
+///   still does.
+///
+/// capped at [`FORCING_MAX`] far from the solution. The smallest it asks
+/// for is `sqrt(0.1 tolerance FORCING_GAIN)`, 3e-7 at the default
+/// tolerance, where Newton's own error is 1e-7 of the force scale.
+pub fn forcing_term(residual: f64, tolerance: f64) -> f64 {
+    (FORCING_GAIN * residual)
+        .max(0.1 * tolerance / residual)
+        .min(FORCING_MAX)
+}
+
+/// [`forcing_term`]'s gain on the relative residual.
+const FORCING_GAIN: f64 = 1e-3;
+/// [`forcing_term`]'s loosest accuracy.
+const FORCING_MAX: f64 = 1e-3;
+
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
@@ -443,10 +475,12 @@ mod tests {
     use crate::observer::NoObserver;
 
     /// Scalar equation `x^3 = 8` with its exact derivative: Newton must
-    /// converge to 2 quadratically.
+    /// converge to 2 quadratically. `inexact`: each correction leaves the
+    /// largest linear residual allowed, `accuracy |r|`.
     struct Cubic {
         x0: f64,
         x: f64,
+        inexact: bool,
     }
 
     impl Equilibrium for Cubic {
@@ -457,14 +491,26 @@ mod tests {
             self.x = self.x0 + u[0];
             Ok((vec![8.0 - self.x.powi(3)], 8.0))
         }
-        fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
-            Ok((vec![r[0] / (3.0 * self.x * self.x)], Factorisation::Lu))
+        fn correction(
+            &mut self,
+            r: &[f64],
+            accuracy: f64,
+        ) -> Result<(Vec<f64>, Factorisation), String> {
+            let short = if self.inexact { 1.0 - accuracy } else { 1.0 };
+            Ok((
+                vec![short * r[0] / (3.0 * self.x * self.x)],
+                Factorisation::Lu,
+            ))
         }
     }
 
     #[test]
     fn converges_quadratically_on_a_smooth_equation() {
-        let mut eq = Cubic { x0: 3.0, x: 3.0 };
+        let mut eq = Cubic {
+            x0: 3.0,
+            x: 3.0,
+            inexact: false,
+        };
         let (u, info) = solve(&mut eq, &NewtonSettings::default(), 1, &mut NoObserver).unwrap();
         assert!((3.0 + u[0] - 2.0).abs() < 1e-9);
         // Once in the basin, r_{k+1} ~ C r_k^p with p = 2.
@@ -474,6 +520,44 @@ mod tests {
         assert!(order > 1.8, "{r:?}");
         // Every full step reduced the residual: the line search took them.
         assert!(info.step_lengths.iter().all(|&a| a == 1.0), "{info:?}");
+    }
+
+    /// Corrections that leave as large a linear residual as the forcing
+    /// term allows take exactly as many iterations as exact ones, from
+    /// near and far, at the default tolerance and a tighter one.
+    #[test]
+    fn inexact_corrections_take_no_more_iterations() {
+        for tolerance in [1e-9, 1e-12] {
+            let settings = NewtonSettings {
+                tolerance,
+                ..Default::default()
+            };
+            for x0 in [2.1, 3.0, 10.0, 100.0] {
+                let iterations = |inexact| {
+                    let mut eq = Cubic { x0, x: x0, inexact };
+                    let (u, info) = solve(&mut eq, &settings, 1, &mut NoObserver).unwrap();
+                    assert!((x0 + u[0] - 2.0).abs() < 1e-8, "{info:?}");
+                    info.iterations
+                };
+                assert_eq!(iterations(true), iterations(false), "x0 = {x0}");
+            }
+        }
+    }
+
+    /// The forcing term's bounds (its doc): 1e-3 at the loosest, and at
+    /// the tightest `sqrt(0.1 tolerance 1e-3)`, reached where the two
+    /// bounds cross.
+    #[test]
+    fn the_forcing_term_is_loose_far_and_tightest_midway() {
+        assert_eq!(forcing_term(10.0, 1e-9), 1e-3);
+        let tightest = (1e-10_f64 * 1e-3).sqrt();
+        let sweep: Vec<f64> = (0..=90).map(|k| 10f64.powf(-0.1 * k as f64)).collect();
+        let lowest = sweep
+            .iter()
+            .map(|&r| forcing_term(r, 1e-9))
+            .fold(f64::INFINITY, f64::min);
+        assert!(lowest >= tightest * (1.0 - 1e-12), "{lowest}");
+        assert!(lowest < 1.2 * tightest, "{lowest}");
     }
 
     /// `atan(x) = 0` with its exact derivative: from |x0| > 1.39 full Newton
@@ -493,7 +577,11 @@ mod tests {
             self.x = 3.0 + u[0];
             Ok((vec![-self.x.atan()], 1.0))
         }
-        fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
+        fn correction(
+            &mut self,
+            r: &[f64],
+            _accuracy: f64,
+        ) -> Result<(Vec<f64>, Factorisation), String> {
             Ok((vec![r[0] * (1.0 + self.x * self.x)], Factorisation::Lu))
         }
     }
@@ -548,7 +636,11 @@ mod tests {
             let internal = self.x.powi(3);
             Ok((vec![8.0 - internal], internal.abs().max(8.0)))
         }
-        fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
+        fn correction(
+            &mut self,
+            r: &[f64],
+            _accuracy: f64,
+        ) -> Result<(Vec<f64>, Factorisation), String> {
             Ok((vec![r[0] / (3.0 * self.x * self.x)], Factorisation::Lu))
         }
     }
@@ -578,7 +670,11 @@ mod tests {
 
     #[test]
     fn iteration_cap_is_an_error_that_says_where() {
-        let mut eq = Cubic { x0: 3.0, x: 3.0 };
+        let mut eq = Cubic {
+            x0: 3.0,
+            x: 3.0,
+            inexact: false,
+        };
         let settings = NewtonSettings {
             max_iterations: 2,
             ..Default::default()
@@ -617,7 +713,11 @@ mod tests {
             let r = if x > 3.0 { f64::NAN } else { 8.0 - x.powi(3) };
             Ok((vec![r], 8.0))
         }
-        fn correction(&mut self, r: &[f64]) -> Result<(Vec<f64>, Factorisation), String> {
+        fn correction(
+            &mut self,
+            r: &[f64],
+            _accuracy: f64,
+        ) -> Result<(Vec<f64>, Factorisation), String> {
             Ok((vec![r[0] / (3.0 * self.x * self.x)], Factorisation::Lu))
         }
     }

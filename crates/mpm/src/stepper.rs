@@ -585,7 +585,7 @@ mod tests {
         for (j, &dof) in free.iter().enumerate() {
             let mut e = vec![0.0; n];
             e[dof] = 1.0;
-            let (column, _) = eq.correction(&e).unwrap();
+            let (column, _) = eq.correction(&e, 1e-12).unwrap();
             for (i, &row) in free.iter().enumerate() {
                 inverse[(i, j)] = column[row];
             }
@@ -716,7 +716,7 @@ mod tests {
                 .map(|(p, m)| (p - m) / (2.0 * e))
                 .collect();
             eq.out_of_balance(&u).unwrap();
-            let (w, _) = eq.correction(&dr).unwrap();
+            let (w, _) = eq.correction(&dr, 1e-12).unwrap();
             let norm = |x: &[f64]| x.iter().map(|a| a * a).sum::<f64>().sqrt();
             let error: Vec<f64> = w.iter().zip(&v).map(|(a, b)| a + b).collect();
             let relative = norm(&error) / norm(&v);
