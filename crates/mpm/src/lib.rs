@@ -40,6 +40,7 @@ pub mod reference_edge;
 pub mod report;
 pub mod stepper;
 pub mod supports;
+pub mod triangular;
 pub mod triangulation;
 pub mod vtk;
 

@@ -38,6 +38,7 @@ use faer::{Conj, Mat, MatMut, Par, Side};
 
 use crate::assembly::Pattern;
 use crate::krylov;
+use crate::triangular::SubtreeSchedule;
 
 /// The fill-reducing ordering of a Cholesky factorisation (LU orders its
 /// columns by faer's COLAMD, which takes no other).
@@ -104,6 +105,10 @@ pub struct SparseSolver {
     /// and its inverse.
     order: Option<(Vec<usize>, Vec<usize>)>,
     llt: Option<SymbolicCholesky<usize>>,
+    /// The kept factor's supernodes arranged for parallel triangular
+    /// solves (`triangular.rs`), made with `llt` for
+    /// [`SymmetricMethod::KeptFactorCg`].
+    schedule: Option<SubtreeSchedule>,
     lu: Option<SymbolicLu<usize>>,
     /// Bytes of the last Cholesky factorisation: its values and its
     /// numeric scratch.
@@ -275,6 +280,7 @@ impl SparseSolver {
             n,
             order,
             llt: None,
+            schedule: None,
             lu: None,
             factor_bytes: 0,
             scratch_bytes: 0,
@@ -336,6 +342,10 @@ impl SparseSolver {
                 }
             };
         }
+        structure += self
+            .schedule
+            .as_ref()
+            .map_or(0, SubtreeSchedule::heap_bytes);
         SolverMemory {
             factor_values: self.factor_bytes,
             factor_structure: structure,
@@ -392,6 +402,7 @@ impl SparseSolver {
                     .or(symbolic.solve_in_place_scratch::<f32>(1, par)),
             );
             let mut single = Vec::new();
+            let mut permuted = Vec::new();
             let n = self.n;
             // A fresh double factor is exact: its solve is the answer.
             let direct = fresh && matches!(kept, KeptFactor::Double(_));
@@ -404,30 +415,39 @@ impl SparseSolver {
                 |x, y| krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, values, x, y),
                 |z| {
                     let stack = MemStack::new(&mut scratch);
-                    match kept {
-                        KeptFactor::Double(values) => {
-                            let column = MatMut::from_column_major_slice_mut(z, n, 1);
-                            LltRef::new(symbolic, values).solve_in_place_with_conj(
-                                Conj::No,
-                                column,
-                                par,
-                                stack,
-                            );
+                    match (kept, &self.schedule) {
+                        (KeptFactor::Double(values), Some(schedule)) => {
+                            schedule.solve(symbolic, values, z, &mut permuted);
                         }
-                        KeptFactor::Single(values) => {
-                            single.clear();
-                            single.extend(z.iter().map(|&v| v as f32));
-                            let column = MatMut::from_column_major_slice_mut(&mut single, n, 1);
-                            LltRef::new(symbolic, values).solve_in_place_with_conj(
-                                Conj::No,
-                                column,
-                                par,
-                                stack,
-                            );
-                            for (z, s) in z.iter_mut().zip(&single) {
-                                *z = f64::from(*s);
+                        (KeptFactor::Single(values), Some(schedule)) => {
+                            schedule.solve(symbolic, values, z, &mut permuted);
+                        }
+                        // A simplicial factor: faer's sequential solve.
+                        (kept, None) => match kept {
+                            KeptFactor::Double(values) => {
+                                let column = MatMut::from_column_major_slice_mut(z, n, 1);
+                                LltRef::new(symbolic, values).solve_in_place_with_conj(
+                                    Conj::No,
+                                    column,
+                                    par,
+                                    stack,
+                                );
                             }
-                        }
+                            KeptFactor::Single(values) => {
+                                single.clear();
+                                single.extend(z.iter().map(|&v| v as f32));
+                                let column = MatMut::from_column_major_slice_mut(&mut single, n, 1);
+                                LltRef::new(symbolic, values).solve_in_place_with_conj(
+                                    Conj::No,
+                                    column,
+                                    par,
+                                    stack,
+                                );
+                                for (z, s) in z.iter_mut().zip(&single) {
+                                    *z = f64::from(*s);
+                                }
+                            }
+                        },
                     }
                 },
                 rhs,
@@ -538,6 +558,12 @@ impl SparseSolver {
                     )
                     .map_err(|e| format!("{e:?}"))?,
                 );
+                if self.method == SymmetricMethod::KeptFactorCg {
+                    self.schedule = self
+                        .llt
+                        .as_ref()
+                        .and_then(|llt| SubtreeSchedule::new(llt, rayon::current_num_threads()));
+                }
             }
             let par = if self.n >= PARALLEL_FROM_DOFS {
                 Par::rayon(0)
@@ -591,7 +617,7 @@ impl SparseSolver {
 
 /// Factorises `matrix` (its upper triangle) by Cholesky on `symbolic` into
 /// `factor`: whether it was positive definite, and the scratch's bytes.
-fn factorise<T: ComplexField>(
+pub(crate) fn factorise<T: ComplexField>(
     symbolic: &SymbolicCholesky<usize>,
     matrix: SparseColMatRef<'_, usize, T>,
     factor: &mut [T],
@@ -672,12 +698,12 @@ fn column(x: &Mat<f64>) -> Vec<f64> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// The 5-point Laplacian of an m x m grid plus `shift` on the diagonal,
     /// both triangles stored.
-    fn laplacian(m: usize, shift: f64) -> (Pattern, Vec<f64>) {
+    pub(crate) fn laplacian(m: usize, shift: f64) -> (Pattern, Vec<f64>) {
         let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
         for j in 0..m * m {
             let (x, y) = (j % m, j / m);
