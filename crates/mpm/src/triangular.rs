@@ -235,7 +235,15 @@ impl SubtreeSchedule {
                     own,
                     cols: cols.clone(),
                 };
-                self.forward_wide(rows, values, supernodes.clone(), piece, &mut buffer);
+                self.sweep(
+                    rows,
+                    values,
+                    supernodes.clone(),
+                    piece,
+                    Sweep::Forward {
+                        buffer: &mut buffer,
+                    },
+                );
                 buffer
             })
             .collect();
@@ -248,7 +256,8 @@ impl SubtreeSchedule {
             cols: 0..x.len(),
             own: x,
         };
-        self.forward_wide(rows, values, self.top.iter().copied(), piece, &mut []);
+        let sweep = Sweep::Forward { buffer: &mut [] };
+        self.sweep(rows, values, self.top.iter().copied(), piece, sweep);
     }
 
     /// `x = L^-T x`.
@@ -257,7 +266,8 @@ impl SubtreeSchedule {
             cols: 0..x.len(),
             own: x,
         };
-        self.backward_wide(rows, values, self.top.iter().rev().copied(), piece, &[]);
+        let sweep = Sweep::Backward { top: &[] };
+        self.sweep(rows, values, self.top.iter().rev().copied(), piece, sweep);
         let top: Vec<f64> = self.top_columns.iter().map(|&c| x[c]).collect();
         let pieces = self.task_slices(x);
         self.tasks
@@ -268,21 +278,41 @@ impl SubtreeSchedule {
                     own,
                     cols: cols.clone(),
                 };
-                self.backward_wide(rows, values, supernodes.clone().rev(), piece, &top);
+                let sweep = Sweep::Backward { top: &top };
+                self.sweep(rows, values, supernodes.clone().rev(), piece, sweep);
             });
     }
 
-    /// [`Self::forward_supernodes`], compiled for AVX2 when the processor
-    /// has it (the build targets plain x86-64, whose vectors are half as
-    /// wide).
-    fn forward_wide<T: Copy + Into<f64>>(
+    /// A sweep over `supernodes` on the columns `piece` holds: forward
+    /// with a buffer for the top's rows, backward reading them; compiled
+    /// for AVX2 when the processor has it (the build targets plain x86-64,
+    /// whose vectors are half as wide).
+    fn sweep<T: Copy + Into<f64>>(
         &self,
         rows: &[usize],
         values: &[T],
         supernodes: impl Iterator<Item = usize>,
         piece: Piece,
-        buffer: &mut [f64],
+        sweep: Sweep,
     ) {
+        #[inline(always)]
+        fn run<T: Copy + Into<f64>>(
+            this: &SubtreeSchedule,
+            rows: &[usize],
+            values: &[T],
+            supernodes: impl Iterator<Item = usize>,
+            piece: Piece,
+            sweep: Sweep,
+        ) {
+            match sweep {
+                Sweep::Forward { buffer } => {
+                    this.forward_supernodes(rows, values, supernodes, piece, buffer)
+                }
+                Sweep::Backward { top } => {
+                    this.backward_supernodes(rows, values, supernodes, piece, top)
+                }
+            }
+        }
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             #[target_feature(enable = "avx2")]
@@ -292,43 +322,14 @@ impl SubtreeSchedule {
                 values: &[T],
                 supernodes: impl Iterator<Item = usize>,
                 piece: Piece,
-                buffer: &mut [f64],
+                sweep: Sweep,
             ) {
-                this.forward_supernodes(rows, values, supernodes, piece, buffer)
+                run(this, rows, values, supernodes, piece, sweep)
             }
             // SAFETY: the processor has the feature `wide` is compiled for.
-            return unsafe { wide(self, rows, values, supernodes, piece, buffer) };
+            return unsafe { wide(self, rows, values, supernodes, piece, sweep) };
         }
-        self.forward_supernodes(rows, values, supernodes, piece, buffer)
-    }
-
-    /// [`Self::backward_supernodes`], compiled for AVX2 when the processor
-    /// has it.
-    fn backward_wide<T: Copy + Into<f64>>(
-        &self,
-        rows: &[usize],
-        values: &[T],
-        supernodes: impl Iterator<Item = usize>,
-        piece: Piece,
-        top: &[f64],
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            #[target_feature(enable = "avx2")]
-            unsafe fn wide<T: Copy + Into<f64>>(
-                this: &SubtreeSchedule,
-                rows: &[usize],
-                values: &[T],
-                supernodes: impl Iterator<Item = usize>,
-                piece: Piece,
-                top: &[f64],
-            ) {
-                this.backward_supernodes(rows, values, supernodes, piece, top)
-            }
-            // SAFETY: the processor has the feature `wide` is compiled for.
-            return unsafe { wide(self, rows, values, supernodes, piece, top) };
-        }
-        self.backward_supernodes(rows, values, supernodes, piece, top)
+        run(self, rows, values, supernodes, piece, sweep)
     }
 
     /// The forward solve over `supernodes` (in order) on the columns
@@ -517,6 +518,13 @@ fn dot<T: Copy + Into<f64>>(l: &[T], g: &[f64]) -> f64 {
         }
     }
     sums.iter().sum::<f64>() + tail
+}
+
+/// Which sweep, with the top's rows: a buffer for what a forward sweep
+/// subtracts from them, their final values for a backward one.
+enum Sweep<'t> {
+    Forward { buffer: &'t mut [f64] },
+    Backward { top: &'t [f64] },
 }
 
 /// A task's columns of the solution: `own[k]` is column `cols.start + k`.
