@@ -25,7 +25,9 @@
 
 use super::Pattern;
 use crate::configuration::Configuration;
-use crate::grid::{Basis, node_key};
+use rayon::prelude::*;
+
+use crate::grid::{Basis, LatticeIndex, node_indices};
 
 /// The faces to stabilise and the penalty's weight.
 pub struct GhostFaces {
@@ -49,39 +51,41 @@ impl GhostFaces {
     /// not reach the cell beyond).
     pub fn new(start: &Configuration, basis: Basis, m: f64, gamma: f64) -> Self {
         let Configuration { grid: _, conn, .. } = *start;
-        let node = |i: i64, j: i64| {
-            conn.nodes
-                .binary_search(&node_key(i, j))
-                .ok()
-                .map(|a| a as u32)
-        };
+        let node_coordinates: Vec<(i64, i64)> =
+            conn.nodes.iter().map(|&k| node_indices(k)).collect();
+        let nodes = LatticeIndex::new(&node_coordinates);
+        let node = |i: i64, j: i64| nodes.get(i, j).map(|a| a as u32);
         let mut cells = super::soft_cells::overlapped_cells(start, basis);
         cells.retain(|&(i, j)| {
             [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
                 .iter()
                 .all(|&(a, b)| node(a, b).is_some())
         });
-        let active = |c: (i64, i64)| cells.binary_search(&c).is_ok();
+        let reached = LatticeIndex::new(&cells);
+        let active = |(i, j): (i64, i64)| reached.get(i, j).is_some();
         let at_edge =
             |(i, j): (i64, i64)| (-1..=1).any(|di| (-1..=1).any(|dj| !active((i + di, j + dj))));
-        let mut faces = Vec::new();
-        for &(i, j) in &cells {
-            let edge = at_edge((i, j));
-            // The face to the right: node rows j and j + 1, columns i..=i+2.
-            if active((i + 1, j)) && (edge || at_edge((i + 1, j))) {
-                let row = |r: i64| [node(i, r), node(i + 1, r), node(i + 2, r)];
-                if let Some(f) = collect(row(j), row(j + 1)) {
-                    faces.push(f);
-                }
-            }
-            // The face above: node columns i and i + 1, rows j..=j+2.
-            if active((i, j + 1)) && (edge || at_edge((i, j + 1))) {
-                let column = |c: i64| [node(c, j), node(c, j + 1), node(c, j + 2)];
-                if let Some(f) = collect(column(i), column(i + 1)) {
-                    faces.push(f);
-                }
-            }
-        }
+        let faces = cells
+            .par_iter()
+            .flat_map_iter(|&(i, j)| {
+                let edge = at_edge((i, j));
+                // The face to the right: node rows j and j + 1, columns i..=i+2.
+                let right = (active((i + 1, j)) && (edge || at_edge((i + 1, j))))
+                    .then(|| {
+                        let row = |r: i64| [node(i, r), node(i + 1, r), node(i + 2, r)];
+                        collect(row(j), row(j + 1))
+                    })
+                    .flatten();
+                // The face above: node columns i and i + 1, rows j..=j+2.
+                let above = (active((i, j + 1)) && (edge || at_edge((i, j + 1))))
+                    .then(|| {
+                        let column = |c: i64| [node(c, j), node(c, j + 1), node(c, j + 2)];
+                        collect(column(i), column(i + 1))
+                    })
+                    .flatten();
+                right.into_iter().chain(above)
+            })
+            .collect();
         Self {
             faces,
             weight: gamma * m / 3.0,

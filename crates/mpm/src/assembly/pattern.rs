@@ -69,19 +69,38 @@ impl Pattern {
                 fill[node] += 1;
             }
         }
-        let lists: Vec<Vec<u32>> = (0..n_nodes)
-            .into_par_iter()
-            .map(|b| {
-                let mut nb: Vec<u32> = incident[touching[b]..touching[b + 1]]
-                    .iter()
-                    .flat_map(|&(p, _)| conn.point_links(p as usize).iter().map(|l| l.node))
-                    .collect();
-                if let Some(gs) = node_groups.get(b) {
-                    nb.extend(gs.iter().flat_map(|&g| groups[g as usize].iter().copied()));
+        // Each node's neighbours, gathered once each: `seen[a] == b` marks
+        // node `a` as a neighbour of `b` already (a node's points share
+        // most of their nodes, so a sort of the raw list would be ten
+        // times longer).
+        let neighbours_of = |seen: &mut [u32], b: usize| {
+            let mut nb = Vec::new();
+            let mut add = |a: u32| {
+                if seen[a as usize] != b as u32 {
+                    seen[a as usize] = b as u32;
+                    nb.push(a);
                 }
-                nb.sort_unstable();
-                nb.dedup();
-                nb
+            };
+            for &(p, _) in &incident[touching[b]..touching[b + 1]] {
+                conn.point_links(p as usize)
+                    .iter()
+                    .for_each(|l| add(l.node));
+            }
+            if let Some(gs) = node_groups.get(b) {
+                for &g in gs {
+                    groups[g as usize].iter().for_each(|&a| add(a));
+                }
+            }
+            nb.sort_unstable();
+            nb
+        };
+        // A few runs of nodes a thread, each with its own marks.
+        let run = n_nodes.div_ceil(4 * rayon::current_num_threads()).max(1);
+        let lists: Vec<Vec<u32>> = (0..n_nodes.div_ceil(run))
+            .into_par_iter()
+            .flat_map_iter(|r| {
+                let mut seen = vec![u32::MAX; n_nodes];
+                (r * run..((r + 1) * run).min(n_nodes)).map(move |b| neighbours_of(&mut seen, b))
             })
             .collect();
         let mut first = Vec::with_capacity(n_nodes + 1);

@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::{Basis, Grid, NodeKey, NodeWeight};
+use super::{Basis, Grid, LatticeIndex, NodeKey, NodeWeight, node_indices};
 use crate::particles::MaterialPoints;
 
 /// A point's view of one active node.
@@ -65,26 +65,37 @@ impl Connectivity {
             .collect();
         let mut offsets = Vec::with_capacity(n + 1);
         offsets.push(0);
-        let mut weights = Vec::with_capacity(chunks.iter().map(|c| c.1.len()).sum());
-        for (counts, w) in chunks {
+        for (counts, _) in &chunks {
             for c in counts {
                 offsets.push(offsets.last().unwrap() + c);
             }
-            weights.extend(w);
         }
-        let mut nodes: Vec<NodeKey> = weights.par_iter().map(|w| w.node).collect();
-        nodes.par_sort_unstable();
-        nodes.dedup();
-        let links = weights
+        // The active nodes: each chunk's, then all, sorted and deduplicated
+        // (a chunk's points share most of their nodes).
+        let mut nodes: Vec<NodeKey> = chunks
             .par_iter()
-            .map(|w| Link {
-                node: nodes
-                    .binary_search(&w.node)
-                    .expect("every linked node is active") as u32,
-                n: w.n,
-                grad: w.grad,
+            .flat_map_iter(|(_, weights)| {
+                let mut keys: Vec<NodeKey> = weights.iter().map(|w| w.node).collect();
+                keys.sort_unstable();
+                keys.dedup();
+                keys
             })
             .collect();
+        nodes.par_sort_unstable();
+        nodes.dedup();
+        let coordinates: Vec<(i64, i64)> = nodes.iter().map(|&k| node_indices(k)).collect();
+        let place = LatticeIndex::new(&coordinates);
+        let mut links = Vec::with_capacity(offsets[n]);
+        links.par_extend(chunks.par_iter().flat_map_iter(|(_, weights)| {
+            weights.iter().map(|w| {
+                let (i, j) = node_indices(w.node);
+                Link {
+                    node: place.get(i, j).expect("every linked node is active") as u32,
+                    n: w.n,
+                    grad: w.grad,
+                }
+            })
+        }));
         Self {
             nodes,
             offsets,

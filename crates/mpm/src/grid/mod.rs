@@ -55,9 +55,96 @@ impl Grid {
     }
 }
 
+/// The places of a sorted list of lattice coordinates `(i, j)` (nodes or
+/// cells), looked up in a dense table over their bounding box when it is
+/// not much larger than the list, else by binary search.
+pub struct LatticeIndex<'k> {
+    keys: &'k [(i64, i64)],
+    dense: Option<DenseTable>,
+}
+
+struct DenseTable {
+    lo: (i64, i64),
+    rows: i64,
+    columns: i64,
+    /// Place + 1 of `(lo.0 + c, lo.1 + r)` at `c * rows + r`; 0 for none.
+    place: Vec<u32>,
+}
+
+/// How much larger than the list a dense table may be.
+const DENSE_SLACK: usize = 8;
+
+impl<'k> LatticeIndex<'k> {
+    /// `keys` sorted by `i`, then `j`, without repeats.
+    pub fn new(keys: &'k [(i64, i64)]) -> Self {
+        let dense = (|| {
+            let (first, last) = (keys.first()?, keys.last()?);
+            let (lo_j, hi_j) = keys.iter().fold((i64::MAX, i64::MIN), |(lo, hi), k| {
+                (lo.min(k.1), hi.max(k.1))
+            });
+            let (columns, rows) = (last.0 - first.0 + 1, hi_j - lo_j + 1);
+            let area = usize::try_from(columns.checked_mul(rows)?).ok()?;
+            if area > DENSE_SLACK * keys.len() + 1024 || keys.len() >= u32::MAX as usize {
+                return None;
+            }
+            let mut place = vec![0u32; area];
+            for (k, &(i, j)) in keys.iter().enumerate() {
+                place[((i - first.0) * rows + j - lo_j) as usize] = k as u32 + 1;
+            }
+            Some(DenseTable {
+                lo: (first.0, lo_j),
+                rows,
+                columns,
+                place,
+            })
+        })();
+        Self { keys, dense }
+    }
+
+    /// The place of `(i, j)` in the list.
+    #[inline]
+    pub fn get(&self, i: i64, j: i64) -> Option<usize> {
+        match &self.dense {
+            Some(t) => {
+                let (c, r) = (i - t.lo.0, j - t.lo.1);
+                if c < 0 || r < 0 || c >= t.columns || r >= t.rows {
+                    return None;
+                }
+                t.place[(c * t.rows + r) as usize]
+                    .checked_sub(1)
+                    .map(|k| k as usize)
+            }
+            None => self.keys.binary_search(&(i, j)).ok(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The dense table and the binary search find the same places, inside
+    /// and outside the bounding box.
+    #[test]
+    fn a_lattice_index_finds_what_a_search_finds() {
+        let keys: Vec<(i64, i64)> = (-3..7_i64)
+            .flat_map(|i| (-5..4).map(move |j| (i, j)))
+            .filter(|&(i, j)| (i * 7 + j * 3).rem_euclid(5) != 0)
+            .collect();
+        let dense = LatticeIndex::new(&keys);
+        assert!(dense.dense.is_some());
+        // Two far-apart keys: a table would be 1e12 entries.
+        let sparse_keys = [(0, 0), (1_000_000, 1_000_000)];
+        let sparse = LatticeIndex::new(&sparse_keys);
+        assert!(sparse.dense.is_none());
+        for i in -6..10 {
+            for j in -8..7 {
+                assert_eq!(dense.get(i, j), keys.binary_search(&(i, j)).ok(), "{i} {j}");
+            }
+        }
+        assert_eq!(sparse.get(1_000_000, 1_000_000), Some(1));
+        assert_eq!(sparse.get(5, 5), None);
+    }
 
     #[test]
     fn node_keys_round_trip_and_sort_by_i_then_j() {
