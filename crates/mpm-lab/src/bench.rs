@@ -186,8 +186,11 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabErr
         if let Some(start) = earlier.find(&format!("\n{heading}")) {
             let rest = &earlier[start + 1..];
             let end = rest[3..].find("\n## ").map_or(rest.len(), |i| i + 4);
+            // One blank line between sections, however many the file had.
+            report.truncate(report.trim_end().len());
+            report.push_str("\n\n");
+            report.push_str(rest[..end].trim_end());
             report.push('\n');
-            report.push_str(&rest[..end]);
         }
     }
     fs::write(out, &report)?;
