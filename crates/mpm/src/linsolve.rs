@@ -158,7 +158,10 @@ const CG_MAX_ITERATIONS_STALE: usize = 20;
 /// against 0.90 s.
 const REFRESH_RATE: f64 = 0.15;
 
-/// CG's residual reduction per iteration, on average.
+/// CG's residual reduction per product with `K`, on average: its
+/// relative residual to the power of one over its iterations (the
+/// reduction by the first preconditioned solve, `x0 = M^-1 b`, is counted
+/// in with the others; [`REFRESH_RATE`] was measured with this).
 fn contraction(outcome: &krylov::CgOutcome) -> f64 {
     if outcome.iterations == 0 {
         0.0
@@ -422,7 +425,8 @@ impl SparseSolver {
                         (KeptFactor::Single(values), Some(schedule)) => {
                             schedule.solve(symbolic, values, z, &mut permuted);
                         }
-                        // A simplicial factor: faer's sequential solve.
+                        // A simplicial factor, or supernodes out of
+                        // postorder: faer's sequential solve.
                         (kept, None) => match kept {
                             KeptFactor::Double(values) => {
                                 let column = MatMut::from_column_major_slice_mut(z, n, 1);

@@ -435,18 +435,23 @@ pub fn solve(
 /// forcing term (Dembo, Eisenstat & Steihaug 1982, SIAM J. Numer. Anal.
 /// 19; Eisenstat & Walker 1996, SIAM J. Sci. Comput. 17).
 ///
-/// A linear residual of `eta |r|` adds at most `eta * residual` to the
-/// next iteration's relative out-of-balance force, beside exact Newton's
+/// The reasoning, a heuristic (it takes the tangent as exact, a full step,
+/// and the force scale as unchanged between iterations): a linear
+/// residual of `eta |r|` adds about `eta * residual` to the next
+/// iteration's relative out-of-balance force, beside exact Newton's
 /// `C residual^2`. The larger of two bounds is asked for:
 /// - [`FORCING_GAIN`]` * residual`: what it adds is of Newton's own
-///   quadratic order, so convergence stays quadratic (DES, Theorem 3.3);
-/// - `0.1 * tolerance / residual`: what it adds is a tenth of the
-///   tolerance, so the iteration that would converge with an exact solve
-///   still does.
+///   quadratic order, so far from the tolerance convergence stays
+///   quadratic (DES: a forcing term of the order of the residual keeps
+///   Newton's quadratic rate);
+/// - `0.1 * tolerance / residual`: near the solution what it adds is a
+///   tenth of the tolerance, so an iteration whose exact solve would end
+///   below 0.9 of the tolerance still converges.
 ///
 /// capped at [`FORCING_MAX`] far from the solution. The smallest it asks
 /// for is `sqrt(0.1 tolerance FORCING_GAIN)`, 3e-7 at the default
 /// tolerance, where Newton's own error is 1e-7 of the force scale.
+/// `inexact_corrections_take_no_more_iterations` checks the outcome.
 pub fn forcing_term(residual: f64, tolerance: f64) -> f64 {
     (FORCING_GAIN * residual)
         .max(0.1 * tolerance / residual)

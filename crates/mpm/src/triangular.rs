@@ -50,6 +50,10 @@ pub struct SubtreeSchedule {
     tasks: Vec<(Range<usize>, Range<usize>)>,
     /// The other supernodes, in order.
     top: Vec<usize>,
+    /// The factor's unknowns and values, to check a solve is given the
+    /// factor the schedule was made for.
+    n: usize,
+    len_val: usize,
     /// The top's columns, in order, and each column's place among them
     /// (`usize::MAX` for a task's column).
     top_columns: Vec<usize>,
@@ -160,6 +164,8 @@ impl SubtreeSchedule {
             }
         }
         Some(Self {
+            n,
+            len_val: sn.len_val(),
             first_column,
             columns,
             value_offset,
@@ -203,6 +209,14 @@ impl SubtreeSchedule {
         let SymbolicCholeskyRaw::Supernodal(sn) = symbolic.raw() else {
             unreachable!("a schedule is made of supernodal factors only");
         };
+        assert!(
+            sn.nrows() == self.n
+                && sn.len_val() == self.len_val
+                && values.len() == self.len_val
+                && sn.n_supernodes() == self.columns.len()
+                && b.len() == self.n,
+            "a schedule solves with the factor it was made for"
+        );
         let rows = sn.row_idx();
         let order = symbolic.perm().map(|p| p.arrays().0);
         x.clear();
@@ -588,7 +602,8 @@ mod tests {
         norm(&mut a.iter().zip(b).map(|(x, y)| x - y)) / norm(&mut b.iter().copied())
     }
 
-    /// In parallel over subtrees, the solve is faer's sequential one with
+    /// In parallel over subtrees (in pools of 1, 2 and 4 threads, with a
+    /// schedule made for as many), the solve is faer's sequential one with
     /// the sums in another order: equal to round-off (the Laplacian's
     /// condition number, 8e3 with the shift, times 1e-16), for a factor
     /// in double precision and in single (whose entries, widened to
@@ -604,15 +619,22 @@ mod tests {
                 "{} tasks",
                 schedule.tasks()
             );
-            let mut x = b.clone();
-            schedule.solve(&symbolic, &factor, &mut x, &mut Vec::new());
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let solve = |run: &(dyn Fn(&mut [f64]) + Sync)| {
+                let mut x = b.clone();
+                pool.install(|| run(&mut x));
+                x
+            };
+            let x = solve(&|x| schedule.solve(&symbolic, &factor, x, &mut Vec::new()));
             let error = relative_difference(&x, &faer_solve(&symbolic, &factor, &b));
             assert!(error < 1e-12, "{threads} threads: {error:e}");
 
             let single: Vec<f32> = factor.iter().map(|&v| v as f32).collect();
             let widened: Vec<f64> = single.iter().map(|&v| f64::from(v)).collect();
-            let mut x = b.clone();
-            schedule.solve(&symbolic, &single, &mut x, &mut Vec::new());
+            let x = solve(&|x| schedule.solve(&symbolic, &single, x, &mut Vec::new()));
             let error = relative_difference(&x, &faer_solve(&symbolic, &widened, &b));
             assert!(error < 1e-12, "{threads} threads, single: {error:e}");
         }

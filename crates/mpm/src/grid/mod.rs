@@ -57,7 +57,7 @@ impl Grid {
 
 /// The places of a sorted list of lattice coordinates `(i, j)` (nodes or
 /// cells), looked up in a dense table over their bounding box when it is
-/// not much larger than the list, else by binary search.
+/// at most 8 times the list's length plus 1024, else by binary search.
 pub struct LatticeIndex<'k> {
     keys: &'k [(i64, i64)],
     dense: Option<DenseTable>,
@@ -77,6 +77,7 @@ const DENSE_SLACK: usize = 8;
 impl<'k> LatticeIndex<'k> {
     /// `keys` sorted by `i`, then `j`, without repeats.
     pub fn new(keys: &'k [(i64, i64)]) -> Self {
+        debug_assert!(keys.windows(2).all(|w| w[0] < w[1]), "sorted, no repeats");
         let dense = (|| {
             let (first, last) = (keys.first()?, keys.last()?);
             let (lo_j, hi_j) = keys.iter().fold((i64::MAX, i64::MIN), |(lo, hi), k| {
