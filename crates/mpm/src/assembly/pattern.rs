@@ -160,6 +160,38 @@ impl Pattern {
         2 * nb.binary_search(&a).expect("linked nodes are neighbours")
     }
 
+    /// Fills every 2x2 block below the diagonal from its mirror above it,
+    /// `K(b, a) = K(a, b)^T` for neighbours `a < b`, in parallel over
+    /// columns.
+    pub(crate) fn mirror_upper(&self, values: &mut [f64]) {
+        assert_eq!(values.len(), self.nnz());
+        let n_nodes = self.first.len().saturating_sub(1);
+        let shared = SharedValues(values.as_mut_ptr());
+        (0..n_nodes).into_par_iter().for_each(|a| {
+            let shared = &shared;
+            let nb = &self.neighbours[self.first[a]..self.first[a + 1]];
+            let stride = 2 * nb.len();
+            let below = nb.partition_point(|&b| b as usize <= a);
+            for (k, &b) in nb.iter().enumerate().skip(below) {
+                let (above, stride_b) = self.block(a as u32, b);
+                let at = self.col_ptr[2 * a] + 2 * k;
+                for r in 0..2 {
+                    for c in 0..2 {
+                        // SAFETY: both offsets are inside `values` (the
+                        // pattern's own places). This task writes only
+                        // column a's blocks below the diagonal, which no
+                        // other task writes or reads; every task reads
+                        // only blocks on or above it, which none writes.
+                        unsafe {
+                            *shared.0.add(at + r + c * stride) =
+                                *shared.0.add(above + c + r * stride_b);
+                        }
+                    }
+                }
+            }
+        });
+    }
+
     /// The node adjacency the compressed columns are made from, for telling
     /// later whether a pattern is this one ([`Pattern::is`]) without
     /// keeping the columns (eight times its size).
@@ -220,31 +252,41 @@ impl Pattern {
     }
 }
 
+/// The values of a matrix in a [`Pattern`], shared by the tasks of
+/// [`Pattern::mirror_upper`], which write disjoint places.
+struct SharedValues(*mut f64);
+unsafe impl Sync for SharedValues {}
+
 /// Replaces the rows and columns of fixed DOFs by a scaled identity, so the
-/// solve returns zero increments there.
+/// solve returns zero increments there. Only the fixed DOFs' columns and
+/// their rows' blocks are visited (the held nodes are a boundary's few).
 pub fn constrain(pattern: &Pattern, values: &mut [f64], fixed: &[bool]) {
-    let n = fixed.len();
+    let diagonal = |dof: usize| {
+        let (base, stride) = pattern.block((dof / 2) as u32, (dof / 2) as u32);
+        base + (dof % 2) * (1 + stride)
+    };
     let mut diag_sum = 0.0;
     let mut diag_count = 0usize;
-    for col in 0..n {
-        for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
-            if pattern.row_idx[k] == col && !fixed[col] {
-                diag_sum += values[k].abs();
-                diag_count += 1;
-            }
-        }
+    for dof in (0..fixed.len()).filter(|&d| !fixed[d]) {
+        diag_sum += values[diagonal(dof)].abs();
+        diag_count += 1;
     }
     let scale = if diag_count > 0 {
         diag_sum / diag_count as f64
     } else {
         1.0
     };
-    for col in 0..n {
-        for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
-            let row = pattern.row_idx[k];
-            if fixed[row] || fixed[col] {
-                values[k] = if row == col { scale } else { 0.0 };
-            }
+    for dof in (0..fixed.len()).filter(|&d| fixed[d]) {
+        let (a, c) = ((dof / 2) as u32, dof % 2);
+        for k in pattern.col_ptr[dof]..pattern.col_ptr[dof + 1] {
+            values[k] = 0.0;
         }
+        let nb = &pattern.neighbours[pattern.first[a as usize]..pattern.first[a as usize + 1]];
+        for &b in nb {
+            let (base, stride) = pattern.block(a, b);
+            values[base + c] = 0.0;
+            values[base + c + stride] = 0.0;
+        }
+        values[diagonal(dof)] = scale;
     }
 }

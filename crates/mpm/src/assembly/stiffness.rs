@@ -14,11 +14,19 @@ use crate::particles::MaterialPoints;
 /// Each node's two columns are filled by one task from the points that
 /// touch the node, so threads write disjoint parts of `k` and need no
 /// accumulators of their own.
+///
+/// When every point's tangent `A_p` is `symmetric` (then so is `K`), only
+/// the blocks on and above the diagonal are summed, as they would be
+/// otherwise, and those below are copied from them
+/// ([`Pattern::mirror_upper`]): half the flops, the same upper triangle
+/// to the bit, so a Cholesky factor (which reads that triangle) is the
+/// same too.
 pub fn stiffness(
     conn: &Connectivity,
     pattern: &Pattern,
     points: &MaterialPoints,
     responses: &[Response],
+    symmetric: bool,
     k: &mut Vec<f64>,
 ) {
     k.clear();
@@ -43,6 +51,9 @@ pub fn stiffness(
                     }
                 }
                 for la in conn.point_links(p) {
+                    if symmetric && la.node as usize > b {
+                        continue;
+                    }
                     let base = pattern.block_in_column(la.node, b as u32);
                     for i in 0..2 {
                         for j in 0..2 {
@@ -53,4 +64,7 @@ pub fn stiffness(
                 }
             }
         });
+    if symmetric {
+        pattern.mirror_upper(k);
+    }
 }
