@@ -452,21 +452,18 @@ pub fn increment(links: &[Link], u: &[f64]) -> ([f64; 2], Matrix2<f64>) {
 
 #[cfg(test)]
 mod tests {
+    use super::StepEquilibrium;
     use crate::assembly;
     use crate::case::Case;
     use crate::newton::Equilibrium;
     use crate::stepper::Simulation;
 
-    /// Assembling only the blocks on and above the diagonal of a symmetric
-    /// tangent and mirroring them gives the full assembly's upper triangle
-    /// to the bit, and its lower triangle to the round-off by which each
-    /// point's tangent is not symmetric (at most 1e-10 of its norm, checked
-    /// per material in `material::tests`): a Hencky body bent and squeezed
-    /// past 2% strain, GIMP on a grid cut at an offset. A block mirrored
-    /// untransposed, or from the wrong column, misses by the size of the
-    /// entries.
-    #[test]
-    fn the_mirrored_tangent_is_the_full_one() {
+    /// A Hencky body bent and squeezed past 2% strain, GIMP on a grid cut
+    /// at an offset, held at x = 0.1 (a grid line): `check` is given its
+    /// step, with every point's response at that trial state, and its
+    /// material tangent assembled in full and mirrored
+    /// ([`assembly::stiffness`]).
+    fn bent_body(check: impl FnOnce(&StepEquilibrium, Vec<f64>, Vec<f64>)) {
         let case = serde_json::json!({
             "version": 1,
             "analysis": { "load_steps": 1 },
@@ -506,20 +503,68 @@ mod tests {
             );
             k
         };
-        let (full, mirrored) = (assemble(false), assemble(true));
-        let largest = full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let mut lower = 0;
-        for col in 0..conn.n_dofs() {
-            for i in eq.pattern.col_ptr[col]..eq.pattern.col_ptr[col + 1] {
-                if eq.pattern.row_idx[i] <= col {
-                    assert_eq!(full[i], mirrored[i], "({}, {col})", eq.pattern.row_idx[i]);
-                } else {
-                    lower += 1;
-                    let miss = (full[i] - mirrored[i]).abs() / largest;
-                    assert!(miss < 1e-12, "({}, {col}): {miss:e}", eq.pattern.row_idx[i]);
+        check(&eq, assemble(false), assemble(true));
+    }
+
+    /// Assembling only the blocks on and above the diagonal of a symmetric
+    /// tangent and mirroring them gives the full assembly's upper triangle
+    /// to the bit, and its lower triangle to the round-off by which each
+    /// point's tangent is not symmetric (`material::tests` allows 1e-10 of
+    /// its norm; Hencky's is round-off: on the bent body the largest miss
+    /// is 1.4e-16 of the largest entry, and 1e-12 leaves room). A block
+    /// mirrored untransposed, or from the wrong column, misses by the size
+    /// of the entries.
+    #[test]
+    fn the_mirrored_tangent_is_the_full_one() {
+        bent_body(|eq, full, mirrored| {
+            let largest = full.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let (mut lower, mut worst) = (0, 0.0f64);
+            for col in 0..eq.conn.n_dofs() {
+                for i in eq.pattern.col_ptr[col]..eq.pattern.col_ptr[col + 1] {
+                    if eq.pattern.row_idx[i] <= col {
+                        assert_eq!(full[i], mirrored[i], "({}, {col})", eq.pattern.row_idx[i]);
+                    } else {
+                        lower += 1;
+                        worst = worst.max((full[i] - mirrored[i]).abs() / largest);
+                    }
                 }
             }
-        }
-        assert!(lower > full.len() / 3, "{lower} of {}", full.len());
+            eprintln!("lower triangle: largest miss {worst:e} of the largest entry");
+            assert!(worst < 1e-12, "{worst:e}");
+            assert!(lower > full.len() / 3, "{lower} of {}", full.len());
+        });
+    }
+
+    /// Constraining the held DOFs leaves what the definition says: their
+    /// rows and columns zero but for a diagonal equal to the mean magnitude
+    /// of the free DOFs' diagonal entries, every other entry as it was
+    /// (entry by entry, on the bent body's tangent).
+    #[test]
+    fn held_dofs_become_a_scaled_identity() {
+        bent_body(|eq, full, _| {
+            let (n, fixed) = (eq.conn.n_dofs(), &eq.held.fixed);
+            assert!(fixed.iter().filter(|&&f| f).count() >= 4);
+            let place = |row: usize, col: usize| {
+                (eq.pattern.col_ptr[col]..eq.pattern.col_ptr[col + 1])
+                    .find(|&i| eq.pattern.row_idx[i] == row)
+                    .unwrap()
+            };
+            let free: Vec<usize> = (0..n).filter(|&d| !fixed[d]).collect();
+            let scale =
+                free.iter().map(|&d| full[place(d, d)].abs()).sum::<f64>() / free.len() as f64;
+            let mut k = full.clone();
+            assembly::constrain(&eq.pattern, &mut k, fixed);
+            for col in 0..n {
+                for i in eq.pattern.col_ptr[col]..eq.pattern.col_ptr[col + 1] {
+                    let row = eq.pattern.row_idx[i];
+                    let expected = match (fixed[row] || fixed[col], row == col) {
+                        (true, true) => scale,
+                        (true, false) => 0.0,
+                        (false, _) => full[i],
+                    };
+                    assert_eq!(k[i], expected, "({row}, {col})");
+                }
+            }
+        });
     }
 }

@@ -619,8 +619,6 @@ impl SparseSolver {
     }
 }
 
-/// Factorises `matrix` (its upper triangle) by Cholesky on `symbolic` into
-/// `factor`: whether it was positive definite, and the scratch's bytes.
 /// `values` (a symmetric matrix in `pattern`) in single precision for a
 /// kept factor, without the entries that are round-off of their own terms:
 /// those below `2^-48 sqrt(K_ii K_jj)`, the bound on any entry of a
@@ -664,6 +662,8 @@ fn single_precision(pattern: &Pattern, values: &[f64]) -> Vec<f32> {
 /// precision err by about `2^-52` of the largest times their count.
 const ROUND_OFF: f64 = 1.0 / (1u64 << 48) as f64;
 
+/// Factorises `matrix` (its upper triangle) by Cholesky on `symbolic` into
+/// `factor`: whether it was positive definite, and the scratch's bytes.
 pub(crate) fn factorise<T: ComplexField>(
     symbolic: &SymbolicCholesky<usize>,
     matrix: SparseColMatRef<'_, usize, T>,
@@ -780,8 +780,9 @@ pub(crate) mod tests {
     /// The single-precision copy for a kept factor drops exactly the
     /// entries below `2^-48 sqrt(K_ii K_jj)`, whatever the scale of their
     /// unknowns: a 4x4-node Laplacian (diagonal 4, so the cut is 2^-46)
-    /// with unknown 5 scaled by 1e-12 (its entries, -1e-12 and 4e-24, are
-    /// kept: a cut relative to the largest entry would drop them), an
+    /// with unknown 5 scaled by 1e-15 (its entries, -1e-15 and 4e-30, are
+    /// kept: a cut relative to the largest entry, or to the column's own
+    /// diagonal alone, would drop them), an
     /// entry at half the cut (dropped) and one at twice it (kept).
     #[test]
     fn round_off_entries_are_dropped_from_the_single_factor() {
@@ -790,7 +791,7 @@ pub(crate) mod tests {
             let rows = &pattern.row_idx[pattern.col_ptr[col]..pattern.col_ptr[col + 1]];
             pattern.col_ptr[col] + rows.binary_search(&row).unwrap()
         };
-        let d = |i: usize| if i == 5 { 1e-12 } else { 1.0 };
+        let d = |i: usize| if i == 5 { 1e-15 } else { 1.0 };
         for col in 0..16 {
             for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
                 values[k] *= d(pattern.row_idx[k]) * d(col);

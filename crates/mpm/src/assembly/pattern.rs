@@ -181,7 +181,7 @@ impl Pattern {
                         // pattern's own places). This task writes only
                         // column a's blocks below the diagonal, which no
                         // other task writes or reads; every task reads
-                        // only blocks on or above it, which none writes.
+                        // only blocks above it, which none writes.
                         unsafe {
                             *shared.0.add(at + r + c * stride) =
                                 *shared.0.add(above + c + r * stride_b);
