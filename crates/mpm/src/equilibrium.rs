@@ -84,6 +84,8 @@ pub struct StepEquilibrium<'a> {
     responses: Vec<Response>,
     /// The tangent's values, kept from iteration to iteration.
     k: Vec<f64>,
+    /// Whether `k` is the tangent at the last trial state.
+    assembled: bool,
     solver: SparseSolver,
     timings: StepTimings,
     memory: StepMemory,
@@ -159,6 +161,7 @@ impl<'a> StepEquilibrium<'a> {
             f_int: Vec::new(),
             responses: Vec::new(),
             k: Vec::new(),
+            assembled: false,
             solver,
             timings: StepTimings::default(),
             memory: StepMemory::default(),
@@ -208,6 +211,46 @@ impl<'a> StepEquilibrium<'a> {
             },
         }
     }
+
+    /// The tangent at the last trial state, into `k` (once a trial state:
+    /// a second correction there solves with it again).
+    fn assemble_tangent(&mut self) {
+        let t = Instant::now();
+        let mut k = std::mem::take(&mut self.k);
+        // Loads that move add their own unsymmetric part below; F-bar's
+        // points answer to a modified gradient.
+        let symmetric_points = self.fbar.is_none()
+            && self
+                .points
+                .materials
+                .iter()
+                .all(Material::symmetric_tangent);
+        assembly::stiffness(
+            self.conn,
+            &self.pattern,
+            self.points,
+            &self.responses,
+            symmetric_points,
+            &mut k,
+        );
+        if let Some(soft) = &self.soft {
+            soft.add_to(&self.pattern, &mut k);
+        }
+        if let Some(ghost) = &self.ghost {
+            ghost.add_to(&self.pattern, &mut k);
+        }
+        if let (Some(fbar), Some(trial)) = (&self.fbar, &self.fbar_trial) {
+            fbar.add_to(self.conn, self.points, trial, &self.pattern, &mut k);
+        }
+        self.band.add_stiffness(&self.pattern, &mut k);
+        for (row, col, value) in self.loading.stiffness(&self.u) {
+            self.pattern.add(&mut k, row, col, value);
+        }
+        assembly::constrain(&self.pattern, &mut k, &self.held.fixed);
+        self.k = k;
+        self.assembled = true;
+        self.timings.assembly += t.elapsed().as_secs_f64();
+    }
 }
 
 impl Equilibrium for StepEquilibrium<'_> {
@@ -219,6 +262,7 @@ impl Equilibrium for StepEquilibrium<'_> {
     /// then the internal force.
     fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
         let t = Instant::now();
+        self.assembled = false;
         self.u.clear();
         self.u.extend_from_slice(u);
         let (conn, mp) = (self.conn, self.points);
@@ -296,50 +340,29 @@ impl Equilibrium for StepEquilibrium<'_> {
         r: &[f64],
         accuracy: f64,
     ) -> Result<(Vec<f64>, Factorisation), String> {
-        let t = Instant::now();
-        let mut k = std::mem::take(&mut self.k);
-        // Loads that move add their own unsymmetric part below; F-bar's
-        // points answer to a modified gradient.
-        let symmetric_points = self.fbar.is_none()
-            && self
-                .points
-                .materials
-                .iter()
-                .all(Material::symmetric_tangent);
-        assembly::stiffness(
-            self.conn,
-            &self.pattern,
-            self.points,
-            &self.responses,
-            symmetric_points,
-            &mut k,
-        );
-        if let Some(soft) = &self.soft {
-            soft.add_to(&self.pattern, &mut k);
+        if !self.assembled {
+            self.assemble_tangent();
         }
-        if let Some(ghost) = &self.ghost {
-            ghost.add_to(&self.pattern, &mut k);
-        }
-        if let (Some(fbar), Some(trial)) = (&self.fbar, &self.fbar_trial) {
-            fbar.add_to(self.conn, self.points, trial, &self.pattern, &mut k);
-        }
-        self.band.add_stiffness(&self.pattern, &mut k);
         let symmetric = symmetric_tangent(&self.loading, self.fbar.as_ref(), self.points);
-        for (row, col, value) in self.loading.stiffness(&self.u) {
-            self.pattern.add(&mut k, row, col, value);
+        // The responses are spent once assembled (the next trial state
+        // writes its own). A factorisation is the step's high-water mark,
+        // so their storage is given back before one; the point loop then
+        // allocates afresh, once a factorisation.
+        if self.solver.factorises_next(symmetric) {
+            self.responses = Vec::new();
         }
-        assembly::constrain(&self.pattern, &mut k, &self.held.fixed);
-        self.timings.assembly += t.elapsed().as_secs_f64();
-        let solved = self.solver.solve(&self.pattern, &k, r, symmetric, accuracy);
+        let solved = self
+            .solver
+            .solve(&self.pattern, &self.k, r, symmetric, accuracy);
         self.memory = StepMemory {
             points: self.points.heap_bytes(),
             links: self.conn.heap_bytes(),
             pattern: self.pattern.heap_bytes(),
-            tangent: std::mem::size_of_val(k.as_slice()),
-            responses: std::mem::size_of_val(self.responses.as_slice()),
+            tangent: std::mem::size_of_val(self.k.as_slice()),
+            // Alive but during factorisations.
+            responses: std::mem::size_of::<Response>() * self.points.len(),
             solver: self.solver.memory(),
         };
-        self.k = k;
         let (du, kind, timing) = solved?;
         self.timings.factorisation += timing.factorise;
         self.timings.solve += timing.solve;

@@ -30,6 +30,7 @@ use faer::linalg::solvers::Solve;
 use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
     LltRef, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
+    simplicial, supernodal,
 };
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -311,6 +312,15 @@ impl SparseSolver {
         self
     }
 
+    /// Whether the next solve of a tangent (`symmetric` or not) begins
+    /// with a numeric factorisation: every LU and direct solve does, and a
+    /// kept-factor solve when it has no factor or was asked to refresh it
+    /// (it may also refactorise after a failed CG solve, which this does
+    /// not foresee).
+    pub fn factorises_next(&self, symmetric: bool) -> bool {
+        !symmetric || self.method == SymmetricMethod::Direct || self.kept.is_none() || self.refresh
+    }
+
     /// How the last CG solve with a kept factor ended (`None` before one).
     pub fn last_cg(&self) -> Option<krylov::CgOutcome> {
         self.last_cg
@@ -460,6 +470,7 @@ impl SparseSolver {
             );
             timing.solve += t.elapsed().as_secs_f64();
             self.last_cg = Some(outcome);
+
             if direct || outcome.converged {
                 CG_SOLVES.fetch_add(1, Atomic::Relaxed);
                 CG_ITERATIONS.fetch_add(outcome.iterations, Atomic::Relaxed);
@@ -495,21 +506,16 @@ impl SparseSolver {
             (_, true) => KeptFactor::Double(vec![0.0; len]),
             (_, false) => KeptFactor::Single(vec![0.0; len]),
         };
+        let matrix = SparseColMatRef::new(structure, values);
         let (kept, ok, scratch_bytes) = match kept {
             KeptFactor::Double(mut factor) => {
-                let matrix = SparseColMatRef::new(structure, values);
-                let (ok, bytes) = factorise(symbolic, matrix, &mut factor, par);
+                let (ok, bytes) = factorise(symbolic, matrix, exact, &mut factor, par);
                 (KeptFactor::Double(factor), ok, bytes)
             }
             KeptFactor::Single(mut factor) => {
-                let single = single_precision(pattern, values);
-                let matrix = SparseColMatRef::new(structure, &single);
-                let (ok, bytes) = factorise(symbolic, matrix, &mut factor, par);
-                (
-                    KeptFactor::Single(factor),
-                    ok,
-                    bytes + std::mem::size_of_val(single.as_slice()),
-                )
+                let entry = single_precision(matrix);
+                let (ok, bytes) = factorise(symbolic, matrix, entry, &mut factor, par);
+                (KeptFactor::Single(factor), ok, bytes)
             }
         };
         self.scratch_bytes = scratch_bytes;
@@ -595,12 +601,11 @@ impl SparseSolver {
                 Some((Kept::NotPositiveDefinite, _)) => {}
                 None => {
                     let symbolic = self.llt.as_ref().expect("just built");
-                    let scratch =
-                        symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
-                    self.scratch_bytes = scratch.size_bytes();
                     self.factor_bytes = symbolic.len_val() * std::mem::size_of::<f64>();
                     self.factorisations += 1;
-                    if let Some((x, timing)) = cholesky(symbolic, matrix, &b, par, t0) {
+                    let (solved, scratch_bytes) = cholesky(symbolic, matrix, &b, par, t0);
+                    self.scratch_bytes = scratch_bytes;
+                    if let Some((x, timing)) = solved {
                         LAST_FACTOR_ENTRIES.store(symbolic.len_val(), Atomic::Relaxed);
                         FRESH_SOLVES.fetch_add(1, Atomic::Relaxed);
                         return Ok((x, Factorisation::Cholesky, timing));
@@ -619,42 +624,32 @@ impl SparseSolver {
     }
 }
 
-/// `values` (a symmetric matrix in `pattern`) in single precision for a
-/// kept factor, without the entries that are round-off of their own terms:
-/// those below `2^-48 sqrt(K_ii K_jj)`, the bound on any entry of a
-/// positive semi-definite sum (`|K_ij| <= sqrt(K_ii K_jj)`), are set to
-/// zero. A tangent's cancelling terms leave such "zeros" (3.1M entries of
-/// the 1e6 column's first tangent are below 1e-20; 27k are subnormal in
-/// single precision), and their products fill the factor with subnormal
-/// numbers, on which x86 arithmetic is orders of magnitude slower: that
+/// How a kept single-precision factor takes `K`'s entries: in single
+/// precision, without those that are round-off of their own terms. Those
+/// below `2^-48 sqrt(K_ii K_jj)`, the bound on any entry of a positive
+/// semi-definite sum (`|K_ij| <= sqrt(K_ii K_jj)`), are set to zero. They
+/// stay in the pattern: a simplicial factorisation finds each row's fill
+/// from the entries present, and one left out would leave fill uncomputed.
+/// A tangent's cancelling terms leave such "zeros" (3.1M entries of the
+/// 1e6 column's first tangent are below 1e-20; 27k are subnormal in single
+/// precision), and their products fill the factor with subnormal numbers,
+/// on which x86 arithmetic is orders of magnitude slower: that
 /// factorisation took 6.4-8.4 s against 2.4-3.1 s for the next step's.
-fn single_precision(pattern: &Pattern, values: &[f64]) -> Vec<f32> {
-    let n = pattern.col_ptr.len() - 1;
-    let scale: Vec<f64> = (0..n)
+fn single_precision(matrix: SparseColMatRef<'_, usize, f64>) -> impl Fn(usize, usize, f64) -> f32 {
+    let scale: Vec<f64> = (0..matrix.ncols())
         .map(|col| {
-            let rows = &pattern.row_idx[pattern.col_ptr[col]..pattern.col_ptr[col + 1]];
+            let rows = matrix.row_idx_of_col_raw(col);
             rows.binary_search(&col)
-                .map_or(0.0, |k| values[pattern.col_ptr[col] + k].abs().sqrt())
+                .map_or(0.0, |k| matrix.val_of_col(col)[k].abs().sqrt())
         })
         .collect();
-    let mut single = Vec::with_capacity(values.len());
-    for col in 0..n {
-        let range = pattern.col_ptr[col]..pattern.col_ptr[col + 1];
-        let least = ROUND_OFF * scale[col];
-        single.extend(
-            pattern.row_idx[range.clone()]
-                .iter()
-                .zip(&values[range])
-                .map(|(&row, &v)| {
-                    if v.abs() < least * scale[row] {
-                        0.0
-                    } else {
-                        v as f32
-                    }
-                }),
-        );
+    move |row, col, v| {
+        if v.abs() < ROUND_OFF * scale[row] * scale[col] {
+            0.0
+        } else {
+            v as f32
+        }
     }
-    single
 }
 
 /// Below this fraction of `sqrt(K_ii K_jj)` an entry is taken for
@@ -662,42 +657,155 @@ fn single_precision(pattern: &Pattern, values: &[f64]) -> Vec<f32> {
 /// precision err by about `2^-52` of the largest times their count.
 const ROUND_OFF: f64 = 1.0 / (1u64 << 48) as f64;
 
-/// Factorises `matrix` (its upper triangle) by Cholesky on `symbolic` into
-/// `factor`: whether it was positive definite, and the scratch's bytes.
-pub(crate) fn factorise<T: ComplexField>(
+/// `K`'s entries as they are, for a factor in double precision.
+pub(crate) fn exact(_row: usize, _col: usize, v: f64) -> f64 {
+    v
+}
+
+/// The triangle of `P K P^T` a numeric factorisation reads (lower for
+/// supernodes, upper for a simplicial factor) in compressed columns, rows
+/// unsorted, made from `K`'s upper triangle with each entry `K_ij` taken as
+/// `entry(i, j, K_ij)`. faer's own path (`factorize_numeric_llt`) takes
+/// `K` in the factor's precision and copies every entry of both triangles
+/// with its index before permuting them; this copy holds the one triangle
+/// the factorisation reads, and is all it needs besides the factor and a
+/// small scratch (at 1e6 column points, 117 MB against 390 MB).
+struct PermutedTriangle<T> {
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    values: Vec<T>,
+}
+
+impl<T: Copy + Default> PermutedTriangle<T> {
+    fn new(
+        matrix: SparseColMatRef<'_, usize, f64>,
+        perm_inv: Option<&[usize]>,
+        lower: bool,
+        entry: &impl Fn(usize, usize, f64) -> T,
+    ) -> Self {
+        let n = matrix.ncols();
+        let new = |i: usize| perm_inv.map_or(i, |p| p[i]);
+        // Where K_ij (i <= j) goes: its column and row in P K P^T's triangle.
+        let place = |i: usize, j: usize| {
+            let (a, b) = (new(i), new(j));
+            if (a >= b) == lower { (b, a) } else { (a, b) }
+        };
+        let upper = |j: usize| {
+            matrix
+                .row_idx_of_col_raw(j)
+                .iter()
+                .zip(matrix.val_of_col(j))
+                .filter(move |&(&i, _)| i <= j)
+                .map(move |(&i, &v)| (i, entry(i, j, v)))
+        };
+        let mut next = vec![0usize; n + 1];
+        for j in 0..n {
+            for (i, _) in upper(j) {
+                next[place(i, j).0 + 1] += 1;
+            }
+        }
+        for c in 0..n {
+            next[c + 1] += next[c];
+        }
+        let col_ptr = next.clone();
+        let nnz = col_ptr[n];
+        let mut row_idx = vec![0; nnz];
+        let mut values = vec![T::default(); nnz];
+        for j in 0..n {
+            for (i, v) in upper(j) {
+                let (col, row) = place(i, j);
+                row_idx[next[col]] = row;
+                values[next[col]] = v;
+                next[col] += 1;
+            }
+        }
+        Self {
+            col_ptr,
+            row_idx,
+            values,
+        }
+    }
+
+    fn matrix(&self) -> SparseColMatRef<'_, usize, T> {
+        let n = self.col_ptr.len() - 1;
+        let structure =
+            SymbolicSparseColMatRef::new_unsorted_checked(n, n, &self.col_ptr, None, &self.row_idx);
+        SparseColMatRef::new(structure, &self.values)
+    }
+
+    fn bytes(&self) -> usize {
+        std::mem::size_of_val(self.col_ptr.as_slice())
+            + std::mem::size_of_val(self.row_idx.as_slice())
+            + std::mem::size_of_val(self.values.as_slice())
+    }
+}
+
+/// Factorises `K` (`matrix`, both triangles stored; the upper one is read,
+/// as faer's own path reads it) by Cholesky on `symbolic` into `factor`,
+/// each entry `K_ij` taken as `entry(i, j, K_ij)` (every entry is kept in
+/// the pattern, zero or not):
+/// whether it was positive definite, and the bytes needed besides the
+/// factor (the permuted triangle and faer's scratch).
+pub(crate) fn factorise<T: ComplexField + Copy + Default>(
     symbolic: &SymbolicCholesky<usize>,
-    matrix: SparseColMatRef<'_, usize, T>,
+    matrix: SparseColMatRef<'_, usize, f64>,
+    entry: impl Fn(usize, usize, f64) -> T,
     factor: &mut [T],
     par: Par,
 ) -> (bool, usize) {
-    let request = symbolic.factorize_numeric_llt_scratch::<T>(par, Default::default());
-    let mut scratch = MemBuffer::new(request);
-    let ok = symbolic
-        .factorize_numeric_llt(
-            factor,
-            matrix,
-            Side::Upper,
-            Default::default(),
-            par,
-            MemStack::new(&mut scratch),
-            Default::default(),
-        )
-        .is_ok();
-    (ok, request.size_bytes())
+    let perm_inv = symbolic.perm().map(|p| p.arrays().1);
+    let (ok, a_bytes, request) = match symbolic.raw() {
+        SymbolicCholeskyRaw::Supernodal(s) => {
+            let a = PermutedTriangle::new(matrix, perm_inv, true, &entry);
+            let request = supernodal::factorize_supernodal_numeric_llt_scratch::<usize, T>(
+                s,
+                par,
+                Default::default(),
+            );
+            let mut scratch = MemBuffer::new(request);
+            let info = supernodal::factorize_supernodal_numeric_llt(
+                factor,
+                a.matrix(),
+                Default::default(),
+                s,
+                par,
+                MemStack::new(&mut scratch),
+                Default::default(),
+            );
+            (info.is_ok(), a.bytes(), request)
+        }
+        SymbolicCholeskyRaw::Simplicial(s) => {
+            let a = PermutedTriangle::new(matrix, perm_inv, false, &entry);
+            let request =
+                simplicial::factorize_simplicial_numeric_llt_scratch::<usize, T>(symbolic.nrows());
+            let mut scratch = MemBuffer::new(request);
+            let info = simplicial::factorize_simplicial_numeric_llt(
+                factor,
+                a.matrix(),
+                Default::default(),
+                s,
+                MemStack::new(&mut scratch),
+            );
+            (info.is_ok(), a.bytes(), request)
+        }
+    };
+    (ok, a_bytes + request.size_bytes())
 }
 
 /// Factorises `matrix` (its upper triangle) by Cholesky on `symbolic` and
-/// solves for `b`; `None` when it is not positive definite.
+/// solves for `b` (`None` when it is not positive definite), with the
+/// bytes the factorisation needed besides the factor.
 fn cholesky(
     symbolic: &SymbolicCholesky<usize>,
     matrix: SparseColMatRef<'_, usize, f64>,
     b: &Mat<f64>,
     par: Par,
     started: std::time::Instant,
-) -> Option<(Vec<f64>, Timing)> {
+) -> (Option<(Vec<f64>, Timing)>, usize) {
     let mut values = vec![0.0; symbolic.len_val()];
-    if !factorise(symbolic, matrix, &mut values, par).0 {
-        return None;
+    let (ok, scratch_bytes) = factorise(symbolic, matrix, exact, &mut values, par);
+    if !ok {
+        return (None, scratch_bytes);
     }
     let factorise = started.elapsed().as_secs_f64();
     let t = std::time::Instant::now();
@@ -713,7 +821,7 @@ fn cholesky(
         factorise,
         solve: t.elapsed().as_secs_f64(),
     };
-    Some((column(&x), timing))
+    (Some((column(&x), timing)), scratch_bytes)
 }
 
 /// Solves with a finished factorisation; the factorisation's time is the
@@ -802,16 +910,153 @@ pub(crate) mod tests {
             values[place(row, col)] = v;
             values[place(col, row)] = v;
         }
-        let single = single_precision(&pattern, &values);
+        let structure =
+            SymbolicSparseColMatRef::new_checked(16, 16, &pattern.col_ptr, None, &pattern.row_idx);
+        let single = single_precision(SparseColMatRef::new(structure, &values));
         for col in 0..16 {
             for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
                 let row = pattern.row_idx[k];
                 let dropped = (row.min(col), row.max(col)) == (0, 1);
                 let expected = if dropped { 0.0 } else { values[k] as f32 };
-                assert_eq!(single[k], expected, "({row}, {col}): {}", values[k]);
-                assert!(dropped || single[k] != 0.0, "({row}, {col})");
+                assert_eq!(
+                    single(row, col, values[k]),
+                    expected,
+                    "({row}, {col}): {}",
+                    values[k]
+                );
+                assert!(dropped || expected != 0.0, "({row}, {col})");
             }
         }
+    }
+
+    /// The factor made from the one permuted triangle is faer's own
+    /// (`factorize_numeric_llt`, which permutes both triangles itself), to
+    /// the bit, in double precision and in single with the round-off cut
+    /// (against faer's factor of the single-precision copy the cut makes):
+    /// each entry of `K` lands in its place in the factor's storage
+    /// unchanged, in whatever order, and the elimination is the same. For
+    /// a supernodal and a simplicial factor, each by a custom order (the
+    /// grid's rows reversed) and by faer's minimum degree. The Laplacian's
+    /// lower triangle is perturbed, so that reading it instead of the upper
+    /// one would show; a few entries are round-off-small, so that the cut
+    /// sets some to zero (a simplicial factor missing them as entries
+    /// misses fill, and differs); the factor storage starts full of stale
+    /// values.
+    #[test]
+    fn the_permuted_triangle_gives_faers_own_factor() {
+        let m = 30;
+        let n = m * m;
+        let (pattern, mut values) = laplacian(m, 1e-2);
+        for col in 0..n {
+            for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
+                let row = pattern.row_idx[k];
+                if row > col {
+                    values[k] *= 1.0 + 1e-3;
+                }
+                if (row.min(col) * 7) % 23 == 0 && row != col {
+                    values[k] = -1e-16;
+                }
+            }
+        }
+        let structure =
+            SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &pattern.row_idx);
+        let matrix = SparseColMatRef::new(structure, &values[..]);
+        let cut = single_precision(matrix);
+        let single: Vec<f32> = (0..n)
+            .flat_map(|col| {
+                let range = pattern.col_ptr[col]..pattern.col_ptr[col + 1];
+                let (rows, values) = (&pattern.row_idx[range.clone()], &values[range]);
+                rows.iter().zip(values).map(move |(&row, &v)| (row, col, v))
+            })
+            .map(|(row, col, v)| cut(row, col, v))
+            .collect();
+        let zeros = single.iter().filter(|&&v| v == 0.0).count();
+        assert!(zeros >= 20, "{zeros} entries cut");
+        // Reversed rows of the grid: any order other than the natural one.
+        let order: Vec<usize> = (0..n).rev().collect();
+        let inverse: Vec<usize> = (0..n).rev().collect();
+        for supernodal in [true, false] {
+            for custom in [true, false] {
+                let ordering = if custom {
+                    SymmetricOrdering::Custom(PermRef::new_checked(&order, &inverse, n))
+                } else {
+                    SymmetricOrdering::Amd
+                };
+                let threshold = if supernodal {
+                    faer::sparse::linalg::SupernodalThreshold::FORCE_SUPERNODAL
+                } else {
+                    faer::sparse::linalg::SupernodalThreshold::FORCE_SIMPLICIAL
+                };
+                let params = faer::sparse::linalg::cholesky::CholeskySymbolicParams {
+                    supernodal_flop_ratio_threshold: threshold,
+                    ..Default::default()
+                };
+                let symbolic =
+                    factorize_symbolic_cholesky(structure, Side::Upper, ordering, params).unwrap();
+                let is_supernodal = matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_));
+                assert_eq!(is_supernodal, supernodal);
+                let case = format!("supernodal {supernodal}, custom order {custom}");
+                let ours = ours_against_faers(&symbolic, matrix, exact, matrix);
+                assert_eq!(ours, 0, "double, {case}");
+                let copy = SparseColMatRef::new(structure, &single[..]);
+                let ours = ours_against_faers(&symbolic, matrix, &cut, copy);
+                assert_eq!(ours, 0, "single, {case}");
+            }
+        }
+    }
+
+    /// Entries of the factor `factorise` makes of `matrix` by `entry` that
+    /// differ, to the bit, from faer's factor of `copy`.
+    fn ours_against_faers<T: ComplexField + Copy + Default + From<i8>>(
+        symbolic: &SymbolicCholesky<usize>,
+        matrix: SparseColMatRef<'_, usize, f64>,
+        entry: impl Fn(usize, usize, f64) -> T,
+        copy: SparseColMatRef<'_, usize, T>,
+    ) -> usize {
+        let mut ours = vec![T::from(7); symbolic.len_val()];
+        assert!(factorise(symbolic, matrix, entry, &mut ours, Par::Seq).0);
+        let mut faers = vec![T::default(); symbolic.len_val()];
+        let request = symbolic.factorize_numeric_llt_scratch::<T>(Par::Seq, Default::default());
+        let mut scratch = MemBuffer::new(request);
+        symbolic
+            .factorize_numeric_llt(
+                &mut faers,
+                copy,
+                Side::Upper,
+                Default::default(),
+                Par::Seq,
+                MemStack::new(&mut scratch),
+                Default::default(),
+            )
+            .unwrap();
+        let bits = |v: &T| format!("{v:?}");
+        ours.iter()
+            .zip(&faers)
+            .filter(|(a, b)| bits(a) != bits(b))
+            .count()
+    }
+
+    /// What a solver foresees of its next solve (the equilibrium gives the
+    /// points' spent responses back before a factorisation): a kept-factor
+    /// solver factorises at its first symmetric solve and not at the next,
+    /// whose stale factor serves; a direct one every time; LU (an
+    /// unsymmetric tangent) every time.
+    #[test]
+    fn a_solver_says_when_it_will_factorise() {
+        let m = 20;
+        let (pattern, values) = laplacian(m, 0.0);
+        let rhs = vec![1.0; m * m];
+        let mut kept = SparseSolver::new(m * m, None).with_method(SymmetricMethod::KeptFactorCg);
+        let mut direct = SparseSolver::new(m * m, None).with_method(SymmetricMethod::Direct);
+        assert!(kept.factorises_next(true) && direct.factorises_next(true));
+        for _ in 0..2 {
+            kept.solve(&pattern, &values, &rhs, true, 1e-10).unwrap();
+            direct.solve(&pattern, &values, &rhs, true, 1e-10).unwrap();
+        }
+        assert_eq!((kept.factorisations(), direct.factorisations()), (1, 2));
+        assert!(!kept.factorises_next(true));
+        assert!(kept.factorises_next(false));
+        assert!(direct.factorises_next(true));
     }
 
     fn relative_difference(a: &[f64], b: &[f64]) -> f64 {

@@ -558,8 +558,8 @@ mod tests {
     use faer::{Conj, Mat, Par, Side};
 
     use super::*;
-    use crate::linsolve::factorise;
     use crate::linsolve::tests::laplacian;
+    use crate::linsolve::{exact, factorise};
 
     /// The shifted 5-point Laplacian of a 48 x 48 grid (2,304 unknowns),
     /// ordered by faer's minimum degree, factorised into supernodes.
@@ -578,7 +578,7 @@ mod tests {
                 .unwrap();
         let mut factor = vec![0.0; symbolic.len_val()];
         let matrix = SparseColMatRef::new(structure, &values[..]);
-        assert!(factorise(&symbolic, matrix, &mut factor, Par::Seq).0);
+        assert!(factorise(&symbolic, matrix, exact, &mut factor, Par::Seq).0);
         let b = (0..n).map(|i| ((i * 37) % 101) as f64 - 50.0).collect();
         (symbolic, factor, b)
     }
