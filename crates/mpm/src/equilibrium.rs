@@ -544,7 +544,7 @@ mod tests {
             let (mut lower, mut worst) = (0, 0.0f64);
             for col in 0..eq.conn.n_dofs() {
                 for i in eq.pattern.col_ptr[col]..eq.pattern.col_ptr[col + 1] {
-                    if eq.pattern.row_idx[i] <= col {
+                    if eq.pattern.row_idx[i] as usize <= col {
                         assert_eq!(full[i], mirrored[i], "({}, {col})", eq.pattern.row_idx[i]);
                     } else {
                         lower += 1;
@@ -569,7 +569,7 @@ mod tests {
             assert!(fixed.iter().filter(|&&f| f).count() >= 4);
             let place = |row: usize, col: usize| {
                 (eq.pattern.col_ptr[col]..eq.pattern.col_ptr[col + 1])
-                    .find(|&i| eq.pattern.row_idx[i] == row)
+                    .find(|&i| eq.pattern.row_idx[i] as usize == row)
                     .unwrap()
             };
             let free: Vec<usize> = (0..n).filter(|&d| !fixed[d]).collect();
@@ -579,7 +579,7 @@ mod tests {
             assembly::constrain(&eq.pattern, &mut k, fixed);
             for col in 0..n {
                 for i in eq.pattern.col_ptr[col]..eq.pattern.col_ptr[col + 1] {
-                    let row = eq.pattern.row_idx[i];
+                    let row = eq.pattern.row_idx[i] as usize;
                     let expected = match (fixed[row] || fixed[col], row == col) {
                         (true, true) => scale,
                         (true, false) => 0.0,

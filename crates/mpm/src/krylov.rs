@@ -28,7 +28,7 @@ pub struct CgOutcome {
 /// among threads with no write conflicts.
 pub fn symmetric_product(
     col_ptr: &[usize],
-    row_idx: &[usize],
+    row_idx: &[u32],
     values: &[f64],
     x: &[f64],
     y: &mut [f64],
@@ -38,7 +38,7 @@ pub fn symmetric_product(
         .enumerate()
         .for_each(|(j, yj)| {
             *yj = (col_ptr[j]..col_ptr[j + 1])
-                .map(|k| values[k] * x[row_idx[k]])
+                .map(|k| values[k] * x[row_idx[k] as usize])
                 .sum();
         });
 }
@@ -136,7 +136,7 @@ mod tests {
         for j in 0..n {
             for (i, v) in [(j.wrapping_sub(1), -1.0), (j, 2.0), (j + 1, -1.0)] {
                 if i < n {
-                    row_idx.push(i);
+                    row_idx.push(i as u32);
                     values.push(v);
                 }
             }

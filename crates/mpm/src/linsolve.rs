@@ -491,7 +491,6 @@ impl SparseSolver {
         let Some(symbolic) = self.llt.as_ref() else {
             return false;
         };
-        let structure = self.structure(pattern);
         let len = symbolic.len_val();
         // The old factor's storage is reused when the precision is the same.
         let kept = match (self.kept.take(), self.double_kept) {
@@ -506,15 +505,15 @@ impl SparseSolver {
             (_, true) => KeptFactor::Double(vec![0.0; len]),
             (_, false) => KeptFactor::Single(vec![0.0; len]),
         };
-        let matrix = SparseColMatRef::new(structure, values);
+        let tangent = Tangent::new(pattern, values);
         let (kept, ok, scratch_bytes) = match kept {
             KeptFactor::Double(mut factor) => {
-                let (ok, bytes) = factorise(symbolic, matrix, exact, &mut factor, par);
+                let (ok, bytes) = factorise(symbolic, tangent, exact, &mut factor, par);
                 (KeptFactor::Double(factor), ok, bytes)
             }
             KeptFactor::Single(mut factor) => {
-                let entry = single_precision(matrix);
-                let (ok, bytes) = factorise(symbolic, matrix, entry, &mut factor, par);
+                let entry = single_precision(tangent);
+                let (ok, bytes) = factorise(symbolic, tangent, entry, &mut factor, par);
                 (KeptFactor::Single(factor), ok, bytes)
             }
         };
@@ -525,16 +524,6 @@ impl SparseSolver {
         LAST_FACTOR_ENTRIES.store(len, Atomic::Relaxed);
         self.kept = ok.then_some(kept);
         ok
-    }
-
-    fn structure<'a>(&self, pattern: &'a Pattern) -> SymbolicSparseColMatRef<'a, usize> {
-        SymbolicSparseColMatRef::new_checked(
-            self.n,
-            self.n,
-            &pattern.col_ptr,
-            None,
-            &pattern.row_idx,
-        )
     }
 
     /// Factorises `K` (values in the layout of `pattern`) and solves
@@ -548,11 +537,13 @@ impl SparseSolver {
         accuracy: f64,
     ) -> Result<(Vec<f64>, Factorisation, Timing), String> {
         let t0 = std::time::Instant::now();
-        let structure = self.structure(pattern);
-        let matrix = SparseColMatRef::new(structure, values);
+        let tangent = Tangent::new(pattern, values);
         let b = Mat::from_fn(self.n, 1, |i, _| rhs[i]);
         if symmetric {
             if self.llt.is_none() {
+                let (col_ptr, row_idx) = upper_triangle(pattern);
+                let structure =
+                    SymbolicSparseColMatRef::new_checked(self.n, self.n, &col_ptr, None, &row_idx);
                 let ordering = match &self.order {
                     Some((order, inverse)) => {
                         SymmetricOrdering::Custom(PermRef::new_checked(order, inverse, self.n))
@@ -603,7 +594,7 @@ impl SparseSolver {
                     let symbolic = self.llt.as_ref().expect("just built");
                     self.factor_bytes = symbolic.len_val() * std::mem::size_of::<f64>();
                     self.factorisations += 1;
-                    let (solved, scratch_bytes) = cholesky(symbolic, matrix, &b, par, t0);
+                    let (solved, scratch_bytes) = cholesky(symbolic, tangent, &b, par, t0);
                     self.scratch_bytes = scratch_bytes;
                     if let Some((x, timing)) = solved {
                         LAST_FACTOR_ENTRIES.store(symbolic.len_val(), Atomic::Relaxed);
@@ -613,6 +604,11 @@ impl SparseSolver {
                 }
             }
         }
+        // faer's LU takes `usize` row indices: a copy for the solve.
+        let row_idx: Vec<usize> = pattern.row_idx.iter().map(|&r| r as usize).collect();
+        let structure =
+            SymbolicSparseColMatRef::new_checked(self.n, self.n, &pattern.col_ptr, None, &row_idx);
+        let matrix = SparseColMatRef::new(structure, values);
         if self.lu.is_none() {
             self.lu = Some(SymbolicLu::try_new(structure).map_err(|e| format!("{e:?}"))?);
         }
@@ -635,13 +631,9 @@ impl SparseSolver {
 /// precision), and their products fill the factor with subnormal numbers,
 /// on which x86 arithmetic is orders of magnitude slower: that
 /// factorisation took 6.4-8.4 s against 2.4-3.1 s for the next step's.
-fn single_precision(matrix: SparseColMatRef<'_, usize, f64>) -> impl Fn(usize, usize, f64) -> f32 {
-    let scale: Vec<f64> = (0..matrix.ncols())
-        .map(|col| {
-            let rows = matrix.row_idx_of_col_raw(col);
-            rows.binary_search(&col)
-                .map_or(0.0, |k| matrix.val_of_col(col)[k].abs().sqrt())
-        })
+fn single_precision(tangent: Tangent<'_>) -> impl Fn(usize, usize, f64) -> f32 {
+    let scale: Vec<f64> = (0..tangent.n())
+        .map(|col| tangent.diagonal(col).abs().sqrt())
         .collect();
     move |row, col, v| {
         if v.abs() < ROUND_OFF * scale[row] * scale[col] {
@@ -662,6 +654,59 @@ pub(crate) fn exact(_row: usize, _col: usize, v: f64) -> f64 {
     v
 }
 
+/// A tangent's values in the compressed columns of its pattern.
+#[derive(Clone, Copy)]
+pub(crate) struct Tangent<'a> {
+    col_ptr: &'a [usize],
+    row_idx: &'a [u32],
+    values: &'a [f64],
+}
+
+impl<'a> Tangent<'a> {
+    pub(crate) fn new(pattern: &'a Pattern, values: &'a [f64]) -> Self {
+        assert_eq!(pattern.row_idx.len(), values.len());
+        Self {
+            col_ptr: &pattern.col_ptr,
+            row_idx: &pattern.row_idx,
+            values,
+        }
+    }
+
+    fn n(&self) -> usize {
+        self.col_ptr.len() - 1
+    }
+
+    /// Column `j`'s entries on and above the diagonal, `(row, value)`.
+    fn upper(&self, j: usize) -> impl Iterator<Item = (usize, f64)> + 'a {
+        let range = self.col_ptr[j]..self.col_ptr[j + 1];
+        let (rows, values) = (&self.row_idx[range.clone()], &self.values[range]);
+        rows.iter()
+            .zip(values)
+            .map(|(&i, &v)| (i as usize, v))
+            .filter(move |&(i, _)| i <= j)
+    }
+
+    /// `K_jj` (zero if the pattern has no such entry).
+    fn diagonal(&self, j: usize) -> f64 {
+        self.upper(j).find(|&(i, _)| i == j).map_or(0.0, |(_, v)| v)
+    }
+}
+
+/// The upper triangle of `pattern` with `usize` row indices, for faer's
+/// symbolic analysis (once a pattern; it reads the upper triangle only).
+fn upper_triangle(pattern: &Pattern) -> (Vec<usize>, Vec<usize>) {
+    let n = pattern.col_ptr.len() - 1;
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    let mut row_idx = Vec::with_capacity(pattern.row_idx.len() / 2 + n);
+    col_ptr.push(0);
+    for j in 0..n {
+        let rows = &pattern.row_idx[pattern.col_ptr[j]..pattern.col_ptr[j + 1]];
+        row_idx.extend(rows.iter().map(|&i| i as usize).filter(|&i| i <= j));
+        col_ptr.push(row_idx.len());
+    }
+    (col_ptr, row_idx)
+}
+
 /// The triangle of `P K P^T` a numeric factorisation reads (lower for
 /// supernodes, upper for a simplicial factor) in compressed columns, rows
 /// unsorted, made from `K`'s upper triangle with each entry `K_ij` taken as
@@ -678,26 +723,19 @@ struct PermutedTriangle<T> {
 
 impl<T: Copy + Default> PermutedTriangle<T> {
     fn new(
-        matrix: SparseColMatRef<'_, usize, f64>,
+        tangent: Tangent<'_>,
         perm_inv: Option<&[usize]>,
         lower: bool,
         entry: &impl Fn(usize, usize, f64) -> T,
     ) -> Self {
-        let n = matrix.ncols();
+        let n = tangent.n();
         let new = |i: usize| perm_inv.map_or(i, |p| p[i]);
         // Where K_ij (i <= j) goes: its column and row in P K P^T's triangle.
         let place = |i: usize, j: usize| {
             let (a, b) = (new(i), new(j));
             if (a >= b) == lower { (b, a) } else { (a, b) }
         };
-        let upper = |j: usize| {
-            matrix
-                .row_idx_of_col_raw(j)
-                .iter()
-                .zip(matrix.val_of_col(j))
-                .filter(move |&(&i, _)| i <= j)
-                .map(move |(&i, &v)| (i, entry(i, j, v)))
-        };
+        let upper = |j: usize| tangent.upper(j).map(move |(i, v)| (i, entry(i, j, v)));
         let mut next = vec![0usize; n + 1];
         for j in 0..n {
             for (i, _) in upper(j) {
@@ -740,7 +778,7 @@ impl<T: Copy + Default> PermutedTriangle<T> {
     }
 }
 
-/// Factorises `K` (`matrix`, both triangles stored; the upper one is read,
+/// Factorises `K` (`tangent`, both triangles stored; the upper one is read,
 /// as faer's own path reads it) by Cholesky on `symbolic` into `factor`,
 /// each entry `K_ij` taken as `entry(i, j, K_ij)` (every entry is kept in
 /// the pattern, zero or not):
@@ -748,7 +786,7 @@ impl<T: Copy + Default> PermutedTriangle<T> {
 /// factor (the permuted triangle and faer's scratch).
 pub(crate) fn factorise<T: ComplexField + Copy + Default>(
     symbolic: &SymbolicCholesky<usize>,
-    matrix: SparseColMatRef<'_, usize, f64>,
+    tangent: Tangent<'_>,
     entry: impl Fn(usize, usize, f64) -> T,
     factor: &mut [T],
     par: Par,
@@ -756,7 +794,7 @@ pub(crate) fn factorise<T: ComplexField + Copy + Default>(
     let perm_inv = symbolic.perm().map(|p| p.arrays().1);
     let (ok, a_bytes, request) = match symbolic.raw() {
         SymbolicCholeskyRaw::Supernodal(s) => {
-            let a = PermutedTriangle::new(matrix, perm_inv, true, &entry);
+            let a = PermutedTriangle::new(tangent, perm_inv, true, &entry);
             let request = supernodal::factorize_supernodal_numeric_llt_scratch::<usize, T>(
                 s,
                 par,
@@ -775,7 +813,7 @@ pub(crate) fn factorise<T: ComplexField + Copy + Default>(
             (info.is_ok(), a.bytes(), request)
         }
         SymbolicCholeskyRaw::Simplicial(s) => {
-            let a = PermutedTriangle::new(matrix, perm_inv, false, &entry);
+            let a = PermutedTriangle::new(tangent, perm_inv, false, &entry);
             let request =
                 simplicial::factorize_simplicial_numeric_llt_scratch::<usize, T>(symbolic.nrows());
             let mut scratch = MemBuffer::new(request);
@@ -792,18 +830,18 @@ pub(crate) fn factorise<T: ComplexField + Copy + Default>(
     (ok, a_bytes + request.size_bytes())
 }
 
-/// Factorises `matrix` (its upper triangle) by Cholesky on `symbolic` and
+/// Factorises `tangent` (its upper triangle) by Cholesky on `symbolic` and
 /// solves for `b` (`None` when it is not positive definite), with the
 /// bytes the factorisation needed besides the factor.
 fn cholesky(
     symbolic: &SymbolicCholesky<usize>,
-    matrix: SparseColMatRef<'_, usize, f64>,
+    tangent: Tangent<'_>,
     b: &Mat<f64>,
     par: Par,
     started: std::time::Instant,
 ) -> (Option<(Vec<f64>, Timing)>, usize) {
     let mut values = vec![0.0; symbolic.len_val()];
-    let (ok, scratch_bytes) = factorise(symbolic, matrix, exact, &mut values, par);
+    let (ok, scratch_bytes) = factorise(symbolic, tangent, exact, &mut values, par);
     if !ok {
         return (None, scratch_bytes);
     }
@@ -877,12 +915,17 @@ pub(crate) mod tests {
             }
             entries.sort_by_key(|e| e.0);
             for (i, v) in entries {
-                row_idx.push(i);
+                row_idx.push(i as u32);
                 values.push(v);
             }
             col_ptr.push(row_idx.len());
         }
         (Pattern::from_columns(col_ptr, row_idx), values)
+    }
+
+    /// `pattern`'s row indices widened for faer's own functions.
+    pub(crate) fn wide_rows(pattern: &Pattern) -> Vec<usize> {
+        pattern.row_idx.iter().map(|&i| i as usize).collect()
     }
 
     /// The single-precision copy for a kept factor drops exactly the
@@ -897,12 +940,13 @@ pub(crate) mod tests {
         let (pattern, mut values) = laplacian(4, 0.0);
         let place = |row: usize, col: usize| {
             let rows = &pattern.row_idx[pattern.col_ptr[col]..pattern.col_ptr[col + 1]];
+            let row = row as u32;
             pattern.col_ptr[col] + rows.binary_search(&row).unwrap()
         };
         let d = |i: usize| if i == 5 { 1e-15 } else { 1.0 };
         for col in 0..16 {
             for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
-                values[k] *= d(pattern.row_idx[k]) * d(col);
+                values[k] *= d(pattern.row_idx[k] as usize) * d(col);
             }
         }
         let cut = 4.0 * ROUND_OFF;
@@ -910,12 +954,10 @@ pub(crate) mod tests {
             values[place(row, col)] = v;
             values[place(col, row)] = v;
         }
-        let structure =
-            SymbolicSparseColMatRef::new_checked(16, 16, &pattern.col_ptr, None, &pattern.row_idx);
-        let single = single_precision(SparseColMatRef::new(structure, &values));
+        let single = single_precision(Tangent::new(&pattern, &values));
         for col in 0..16 {
             for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
-                let row = pattern.row_idx[k];
+                let row = pattern.row_idx[k] as usize;
                 let dropped = (row.min(col), row.max(col)) == (0, 1);
                 let expected = if dropped { 0.0 } else { values[k] as f32 };
                 assert_eq!(
@@ -949,7 +991,7 @@ pub(crate) mod tests {
         let (pattern, mut values) = laplacian(m, 1e-2);
         for col in 0..n {
             for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
-                let row = pattern.row_idx[k];
+                let row = pattern.row_idx[k] as usize;
                 if row > col {
                     values[k] *= 1.0 + 1e-3;
                 }
@@ -958,14 +1000,15 @@ pub(crate) mod tests {
                 }
             }
         }
-        let structure =
-            SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &pattern.row_idx);
+        let rows = wide_rows(&pattern);
+        let structure = SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &rows);
         let matrix = SparseColMatRef::new(structure, &values[..]);
-        let cut = single_precision(matrix);
+        let tangent = Tangent::new(&pattern, &values);
+        let cut = single_precision(tangent);
         let single: Vec<f32> = (0..n)
             .flat_map(|col| {
                 let range = pattern.col_ptr[col]..pattern.col_ptr[col + 1];
-                let (rows, values) = (&pattern.row_idx[range.clone()], &values[range]);
+                let (rows, values) = (&rows[range.clone()], &values[range]);
                 rows.iter().zip(values).map(move |(&row, &v)| (row, col, v))
             })
             .map(|(row, col, v)| cut(row, col, v))
@@ -996,25 +1039,25 @@ pub(crate) mod tests {
                 let is_supernodal = matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_));
                 assert_eq!(is_supernodal, supernodal);
                 let case = format!("supernodal {supernodal}, custom order {custom}");
-                let ours = ours_against_faers(&symbolic, matrix, exact, matrix);
+                let ours = ours_against_faers(&symbolic, tangent, exact, matrix);
                 assert_eq!(ours, 0, "double, {case}");
                 let copy = SparseColMatRef::new(structure, &single[..]);
-                let ours = ours_against_faers(&symbolic, matrix, &cut, copy);
+                let ours = ours_against_faers(&symbolic, tangent, &cut, copy);
                 assert_eq!(ours, 0, "single, {case}");
             }
         }
     }
 
-    /// Entries of the factor `factorise` makes of `matrix` by `entry` that
+    /// Entries of the factor `factorise` makes of `tangent` by `entry` that
     /// differ, to the bit, from faer's factor of `copy`.
     fn ours_against_faers<T: ComplexField + Copy + Default + From<i8>>(
         symbolic: &SymbolicCholesky<usize>,
-        matrix: SparseColMatRef<'_, usize, f64>,
+        tangent: Tangent<'_>,
         entry: impl Fn(usize, usize, f64) -> T,
         copy: SparseColMatRef<'_, usize, T>,
     ) -> usize {
         let mut ours = vec![T::from(7); symbolic.len_val()];
-        assert!(factorise(symbolic, matrix, entry, &mut ours, Par::Seq).0);
+        assert!(factorise(symbolic, tangent, entry, &mut ours, Par::Seq).0);
         let mut faers = vec![T::default(); symbolic.len_val()];
         let request = symbolic.factorize_numeric_llt_scratch::<T>(Par::Seq, Default::default());
         let mut scratch = MemBuffer::new(request);

@@ -51,7 +51,7 @@ fn reach(coords: &[[i64; 2]], pattern: &Pattern) -> i64 {
     for (node, c) in coords.iter().enumerate() {
         let column = 2 * node;
         for &row in &pattern.row_idx[pattern.col_ptr[column]..pattern.col_ptr[column + 1]] {
-            let d = coords[row / 2];
+            let d = coords[row as usize / 2];
             reach = reach.max((d[0] - c[0]).abs().max((d[1] - c[1]).abs()));
         }
     }
@@ -123,10 +123,10 @@ mod tests {
         let mut row_idx = Vec::new();
         for &key in &keys {
             let (i, j) = node_indices(key);
-            let mut rows: Vec<usize> = (-1..=1)
+            let mut rows: Vec<u32> = (-1..=1)
                 .flat_map(|di| (-1..=1).map(move |dj| (i + di, j + dj)))
                 .filter_map(|(a, b)| index(a, b))
-                .flat_map(|n| [2 * n, 2 * n + 1])
+                .flat_map(|n| [2 * n as u32, 2 * n as u32 + 1])
                 .collect();
             rows.sort_unstable();
             for _ in 0..2 {

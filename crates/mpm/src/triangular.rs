@@ -558,8 +558,8 @@ mod tests {
     use faer::{Conj, Mat, Par, Side};
 
     use super::*;
-    use crate::linsolve::tests::laplacian;
-    use crate::linsolve::{exact, factorise};
+    use crate::linsolve::tests::{laplacian, wide_rows};
+    use crate::linsolve::{Tangent, exact, factorise};
 
     /// The shifted 5-point Laplacian of a 48 x 48 grid (2,304 unknowns),
     /// ordered by faer's minimum degree, factorised into supernodes.
@@ -567,8 +567,8 @@ mod tests {
         let m = 48;
         let (pattern, values) = laplacian(m, 1e-3);
         let n = m * m;
-        let structure =
-            SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &pattern.row_idx);
+        let rows = wide_rows(&pattern);
+        let structure = SymbolicSparseColMatRef::new_checked(n, n, &pattern.col_ptr, None, &rows);
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: threshold,
             ..Default::default()
@@ -577,8 +577,16 @@ mod tests {
             factorize_symbolic_cholesky(structure, Side::Upper, SymmetricOrdering::Amd, params)
                 .unwrap();
         let mut factor = vec![0.0; symbolic.len_val()];
-        let matrix = SparseColMatRef::new(structure, &values[..]);
-        assert!(factorise(&symbolic, matrix, exact, &mut factor, Par::Seq).0);
+        assert!(
+            factorise(
+                &symbolic,
+                Tangent::new(&pattern, &values),
+                exact,
+                &mut factor,
+                Par::Seq
+            )
+            .0
+        );
         let b = (0..n).map(|i| ((i * 37) % 101) as f64 - 50.0).collect();
         (symbolic, factor, b)
     }
