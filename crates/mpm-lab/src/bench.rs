@@ -288,9 +288,11 @@ fn memory_by_component(largest: &[(&str, Row)]) -> String {
          of each scene above (`StepMemory`): the points' state; their links to the active nodes (node, shape \
          function value and gradient) with the node keys; the stiffness pattern (node adjacency, node-to-link \
          incidence, compressed columns' pointers and row indices); the tangent's values; every point's \
-         trial stress, tangent and history; the Cholesky factor's values and structure; the numeric \
-         factorisation's scratch (freed after each; with a kept factor, the tangent's single-precision copy \
-         too). Peak is the process's high-water resident set.\n\n\
+         trial stress, tangent and history (given back while a factorisation runs); the Cholesky factor's \
+         values and structure; the numeric factorisation's scratch (freed after each: the permuted triangle \
+         of the tangent it reads, in the factor's precision, and faer's workspace). The sum counts the \
+         responses and the scratch, which are never alive together. Peak is the process's high-water \
+         resident set.\n\n\
          | scene | points | points' state | links | pattern | tangent | responses | factor values | factor structure | factorisation scratch | sum | peak |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );

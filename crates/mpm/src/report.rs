@@ -39,7 +39,9 @@ impl std::ops::AddAssign<&StepTimings> for StepTimings {
 }
 
 /// Heap bytes of a load step's largest data, by component, at the end of
-/// its last Newton iteration (the step's peak is near their sum).
+/// its last Newton iteration. The responses are given back while a
+/// factorisation runs, and the factorisation's scratch lives only then:
+/// the step's peak is near their sum less the smaller of the two.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct StepMemory {
     /// The material points' state: positions, volumes, deformation,

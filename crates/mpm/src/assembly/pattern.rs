@@ -5,7 +5,8 @@ use rayon::prelude::*;
 
 use crate::grid::Connectivity;
 
-/// Sparsity of the stiffness matrix, in faer's compressed-column form.
+/// Sparsity of the stiffness matrix, in compressed columns (faer's form,
+/// with 32-bit row indices).
 #[derive(Debug, Clone, Default)]
 pub struct Pattern {
     /// Neighbours of node `b` are `neighbours[first[b]..first[b + 1]]`, sorted.
@@ -48,6 +49,10 @@ impl Pattern {
     /// (couplings that do not come from points, e.g. boundary loads).
     pub fn build(conn: &Connectivity, groups: &[Vec<u32>]) -> Self {
         let n_nodes = conn.n_nodes();
+        assert!(
+            2 * n_nodes <= u32::MAX as usize,
+            "DOFs beyond 32-bit row indices"
+        );
         let mut node_groups: Vec<Vec<u32>> =
             vec![Vec::new(); if groups.is_empty() { 0 } else { n_nodes }];
         for (g, members) in groups.iter().enumerate() {
