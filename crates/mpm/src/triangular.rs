@@ -550,11 +550,11 @@ struct Piece<'x> {
 #[cfg(test)]
 mod tests {
     use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::sparse::SymbolicSparseColMatRef;
     use faer::sparse::linalg::SupernodalThreshold;
     use faer::sparse::linalg::cholesky::{
         CholeskySymbolicParams, LltRef, SymmetricOrdering, factorize_symbolic_cholesky,
     };
-    use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
     use faer::{Conj, Mat, Par, Side};
 
     use super::*;
