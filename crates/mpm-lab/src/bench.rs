@@ -275,7 +275,7 @@ fn return_map_cost() -> Result<String, LabError> {
 /// The environment variable a `bench-row` child reads its fill ordering
 /// from: `minimum_degree` or `nested_dissection` (the default).
 const ORDERING_VARIABLE: &str = "MPM_BENCH_FILL_ORDERING";
-/// `direct` or `kept_factor_cg`: how the child solves symmetric tangents
+/// `direct`, `kept_factor_cg` or `multigrid`: how the child solves symmetric tangents
 /// whatever their size ([`set_symmetric_method`]).
 const METHOD_VARIABLE: &str = "MPM_BENCH_SYMMETRIC_METHOD";
 
@@ -290,11 +290,12 @@ fn memory_by_component(largest: &[(&str, Row)]) -> String {
          incidence, compressed columns' pointers and row indices); the tangent's values; every point's \
          trial stress, tangent and history (given back while a factorisation runs); the Cholesky factor's \
          values and structure; the numeric factorisation's scratch (freed after each: the permuted triangle \
-         of the tangent it reads, in the factor's precision, and faer's workspace). The sum counts the \
+         of the tangent it reads, in the factor's precision, and faer's workspace); the multigrid hierarchy \
+         (with the default method above 2,000,000 DOFs). The sum counts the \
          responses and the scratch, which are never alive together. Peak is the process's high-water \
          resident set.\n\n\
-         | scene | points | points' state | links | pattern | tangent | responses | factor values | factor structure | factorisation scratch | sum | peak |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+         | scene | points | points' state | links | pattern | tangent | responses | factor values | factor structure | factorisation scratch | multigrid | sum | peak |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for (name, row) in largest {
         let m = &row.memory;
@@ -303,7 +304,7 @@ fn memory_by_component(largest: &[(&str, Row)]) -> String {
             format!("{:.0}", mib * 1024.0 * 1024.0 / row.points as f64)
         });
         text.push_str(&format!(
-            "| {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {peak} |\n",
+            "| {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {peak} |\n",
             row.points,
             per(m.points),
             per(m.links),
@@ -313,6 +314,7 @@ fn memory_by_component(largest: &[(&str, Row)]) -> String {
             per(m.solver.factor_values),
             per(m.solver.factor_structure),
             per(m.solver.scratch),
+            per(m.solver.multigrid),
             per(m.total()),
         ));
     }
@@ -320,15 +322,19 @@ fn memory_by_component(largest: &[(&str, Row)]) -> String {
 }
 
 /// Symmetric tangents solved by factorising every one (direct) against CG
-/// preconditioned by a kept factor, on both scenes from 1e4 points up.
+/// preconditioned by a kept factor and by multigrid, on both scenes from
+/// 1e4 points up.
 fn symmetric_methods(max_points: usize) -> Result<String, LabError> {
     let mut text = String::from(
-        "\n## Symmetric solves: direct against CG with a kept factor\n\n\
+        "\n## Symmetric solves: direct, CG with a kept factor, CG with multigrid\n\n\
          Both scenes' tangents are symmetric. Direct: every Newton iteration's tangent factorised in double \
          precision. Kept factor: CG to the accuracy Newton's forcing term asks for (`crates/mpm/src/newton.rs`, \
          1e-3 to 3e-7), preconditioned by the single-precision factor of an earlier tangent of the pattern, \
          refreshed when CG with it reduced the residual by less than 0.15 an iteration \
-         (`crates/mpm/src/krylov.rs`, `linsolve.rs`). The default switches from direct to the kept factor at 40,000 DOFs. \
+         (`crates/mpm/src/krylov.rs`, `linsolve.rs`). Multigrid: CG to the same accuracy, preconditioned by a \
+         smoothed-aggregation V-cycle (`crates/mpm/src/multigrid.rs`) built on an earlier tangent of the pattern \
+         (its 'factorisations' are hierarchies built). The default switches from direct to the kept factor at \
+         40,000 DOFs and to multigrid at 2,000,000. \
          First two load steps; fresh factorisations, CG solves and CG iterations over both.\n\n\
          | scene | points | active DOFs | method | s / step | factorisation s / step | solve s / step | Newton iterations | factorisations | CG solves | CG iterations | peak MiB |\n\
          |---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
@@ -336,7 +342,7 @@ fn symmetric_methods(max_points: usize) -> Result<String, LabError> {
     for (index, scene) in SCENES.iter().enumerate() {
         let mut target = 10_000;
         while target <= max_points {
-            for method in ["direct", "kept_factor_cg"] {
+            for method in ["direct", "kept_factor_cg", "multigrid"] {
                 let row = measure_in_child_with(index, target, &[(METHOD_VARIABLE, method)])?;
                 let steps = row.steps as f64;
                 let line = format!(
@@ -344,10 +350,10 @@ fn symmetric_methods(max_points: usize) -> Result<String, LabError> {
                     scene.name,
                     row.points,
                     row.dofs,
-                    if method == "direct" {
-                        "direct"
-                    } else {
-                        "kept factor + CG"
+                    match method {
+                        "direct" => "direct",
+                        "kept_factor_cg" => "kept factor + CG",
+                        _ => "multigrid + CG",
                     },
                     row.timings.total / steps,
                     row.timings.factorisation / steps,
@@ -500,10 +506,11 @@ pub fn bench_row(scene: usize, target: usize) -> Result<(), LabError> {
     match std::env::var(METHOD_VARIABLE).as_deref() {
         Ok("direct") => set_symmetric_method(Some(SymmetricMethod::Direct)),
         Ok("kept_factor_cg") => set_symmetric_method(Some(SymmetricMethod::KeptFactorCg)),
+        Ok("multigrid") => set_symmetric_method(Some(SymmetricMethod::Multigrid)),
         Err(_) => set_symmetric_method(None),
         Ok(other) => {
             return Err(LabError::Input(format!(
-                "{METHOD_VARIABLE}={other}: not direct or kept_factor_cg"
+                "{METHOD_VARIABLE}={other}: not direct, kept_factor_cg or multigrid"
             )));
         }
     }

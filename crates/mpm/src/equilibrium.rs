@@ -13,8 +13,8 @@ use crate::assembly::{self, FbarCells, FbarTrial, GhostFaces, NodeAdjacency, Pat
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
 use crate::configuration::Configuration;
-use crate::grid::{Connectivity, Link};
-use crate::linsolve::{Factorisation, SparseSolver};
+use crate::grid::{Connectivity, Link, node_coordinates};
+use crate::linsolve::{Factorisation, SparseSolver, SymmetricMethod, symmetric_method};
 use crate::material::{Material, Response};
 use crate::newton::{Equilibrium, InvertedPoint};
 use crate::ordering;
@@ -135,11 +135,24 @@ impl<'a> StepEquilibrium<'a> {
             previous => {
                 // Freed before the new order and factor are made.
                 drop(previous);
-                // Cholesky's elimination order, for the tangents that are
-                // symmetric; LU orders its own columns.
-                let order = symmetric_tangent(&loading, fbar.as_ref(), start.points)
+                // Cholesky's elimination order, or the multigrid's grid,
+                // for the tangents that are symmetric; LU orders its own
+                // columns.
+                let symmetric = symmetric_tangent(&loading, fbar.as_ref(), start.points);
+                let multigrid = symmetric_method(conn.n_dofs()) == SymmetricMethod::Multigrid;
+                let order = (symmetric && !multigrid)
                     .then(|| ordering::nested_dissection(&conn.nodes, &pattern));
-                SparseSolver::new(conn.n_dofs(), order)
+                let solver = SparseSolver::new(conn.n_dofs(), order);
+                if symmetric && multigrid {
+                    solver.with_grid(
+                        conn.nodes
+                            .iter()
+                            .map(|&key| node_coordinates(key))
+                            .collect(),
+                    )
+                } else {
+                    solver
+                }
             }
         };
         Self {
@@ -345,9 +358,10 @@ impl Equilibrium for StepEquilibrium<'_> {
         }
         let symmetric = symmetric_tangent(&self.loading, self.fbar.as_ref(), self.points);
         // The responses are spent once assembled (the next trial state
-        // writes its own). A factorisation is the step's high-water mark,
-        // so their storage is given back before one; the point loop then
-        // allocates afresh, once a factorisation.
+        // writes its own). A factorisation (or a multigrid hierarchy's
+        // setup) is the step's high-water mark, so their storage is given
+        // back before one; the point loop then allocates afresh, once a
+        // factorisation.
         if self.solver.factorises_next(symmetric) {
             self.responses = Vec::new();
         }

@@ -26,10 +26,12 @@ pub struct CgOutcome {
 /// `y = K x` for a symmetric `K` stored with both triangles in compressed
 /// columns: `y_j` is column `j` dotted with `x`, so the columns are shared
 /// among threads with no write conflicts.
-pub fn symmetric_product(
+/// The same loop makes `y = A x` for any `A` in compressed rows (the
+/// multigrid's prolongators, whose values are single precision).
+pub fn symmetric_product<T: Copy + Into<f64> + Sync>(
     col_ptr: &[usize],
     row_idx: &[u32],
-    values: &[f64],
+    values: &[T],
     x: &[f64],
     y: &mut [f64],
 ) {
@@ -38,7 +40,7 @@ pub fn symmetric_product(
         .enumerate()
         .for_each(|(j, yj)| {
             *yj = (col_ptr[j]..col_ptr[j + 1])
-                .map(|k| values[k] * x[row_idx[k] as usize])
+                .map(|k| values[k].into() * x[row_idx[k] as usize])
                 .sum();
         });
 }

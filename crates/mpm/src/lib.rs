@@ -31,6 +31,7 @@ pub mod krylov;
 pub mod linsolve;
 pub mod material;
 pub mod model;
+pub mod multigrid;
 pub mod newton;
 pub mod observer;
 pub mod ordering;

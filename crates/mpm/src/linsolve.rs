@@ -21,7 +21,10 @@
 //! kept single-precision factor of an earlier tangent of the pattern
 //! ([`crate::krylov`]), which is refreshed when CG with it reduced the
 //! residual by less than [`REFRESH_RATE`] an iteration, and is kept in
-//! double precision if a fresh single one fails to serve.
+//! double precision if a fresh single one fails to serve. From
+//! [`MULTIGRID_FROM_DOFS`] up, CG is preconditioned instead by a multigrid
+//! V-cycle ([`crate::multigrid`]), whose memory grows linearly with the
+//! unknowns; if no hierarchy serves a tangent, the kept factor does.
 
 use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering as Atomic};
 
@@ -39,6 +42,7 @@ use faer::{Conj, Mat, MatMut, Par, Side};
 
 use crate::assembly::Pattern;
 use crate::krylov;
+use crate::multigrid::{self, Hierarchy};
 use crate::triangular::SubtreeSchedule;
 
 /// The fill-reducing ordering of a Cholesky factorisation (LU orders its
@@ -85,12 +89,14 @@ pub fn fill_ordering() -> FillOrdering {
     }
 }
 
-/// Which factorisation produced a solution.
+/// What produced a solution: a factorisation (of the tangent, or an
+/// earlier one preconditioning CG), or CG preconditioned by multigrid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Factorisation {
     Cholesky,
     Lu,
+    Multigrid,
 }
 
 /// From this many unknowns up, Cholesky factorises on rayon's threads:
@@ -130,8 +136,14 @@ pub struct SparseSolver {
     /// Numeric factorisations this solver made.
     factorisations: usize,
     /// Whether the next symmetric solve factorises afresh (the last CG
-    /// solve with a stale factor converged slower than [`REFRESH_RATE`]).
+    /// solve with a stale factor converged slower than [`REFRESH_RATE`]),
+    /// or builds a fresh multigrid hierarchy.
     refresh: bool,
+    /// The grid coordinates of the nodes whose DOFs are `2k` and `2k + 1`,
+    /// for [`SymmetricMethod::Multigrid`]'s aggregates.
+    nodes: Option<Vec<[i64; 2]>>,
+    /// The multigrid hierarchy of an earlier tangent of this pattern.
+    hierarchy: Option<Hierarchy>,
 }
 
 /// The smallest relative residual (CG's recurrence's) CG is asked to reach
@@ -173,6 +185,16 @@ fn contraction(outcome: &krylov::CgOutcome) -> f64 {
     }
 }
 
+/// CG iterations allowed with a fresh multigrid hierarchy before it is
+/// judged not to serve (it converges by about 0.3 an iteration on the
+/// plate of `multigrid.rs`' tests, 1e-12 in 25; the GIMP column's solves
+/// take 7 to 14), and with a stale one before a fresh one is built.
+const MULTIGRID_MAX_ITERATIONS: usize = 100;
+const MULTIGRID_MAX_ITERATIONS_STALE: usize = 40;
+/// A CG solve with a stale hierarchy that reduced the residual by less
+/// than this an iteration asks for a fresh one at the next solve.
+const MULTIGRID_REFRESH_RATE: f64 = 0.5;
+
 /// How symmetric tangents are solved.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SymmetricMethod {
@@ -181,6 +203,13 @@ pub enum SymmetricMethod {
     /// CG preconditioned by a kept factor of an earlier tangent of the
     /// pattern ([`crate::krylov`]), refreshed when CG slows down.
     KeptFactorCg,
+    /// CG preconditioned by a smoothed-aggregation multigrid V-cycle
+    /// ([`crate::multigrid`]) built on an earlier tangent of the pattern,
+    /// rebuilt when CG slows down: no factor, memory linear in the
+    /// unknowns. It needs the nodes' grid coordinates
+    /// ([`SparseSolver::with_grid`]); without them, or when its hierarchy
+    /// fails, the solver takes the kept factor.
+    Multigrid,
 }
 
 /// From this many unknowns up, symmetric tangents are solved by
@@ -193,7 +222,21 @@ pub enum SymmetricMethod {
 /// solve's.
 const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
 
-/// 0: by size; 1: direct; 2: kept factor (benchmarks compare them).
+/// From this many unknowns up, symmetric tangents are solved by
+/// [`SymmetricMethod::Multigrid`], whose memory grows linearly where the
+/// kept factor's grows faster (620 bytes a point at 0.5M DOFs, 818 at
+/// 4.8M on the GIMP column). Measured (`mpm bench-row`, 2 cores, first
+/// two load steps, BENCHMARKS.md): at 0.48M column DOFs multigrid took
+/// about 1.5 times the kept factor's time for 16% less peak memory; at
+/// 4.8M, 13.5 GiB against 20.1-20.9, in a similar time
+/// (CG's iterations grow slowly with size: 77, 79 and 94 over the
+/// first two steps at 1e5, 1e6 and 1e7 points; the factorisation grows
+/// as DOFs^1.3). Between them the kept factor's advantage in time
+/// shrinks as its memory grows; this splits the difference.
+const MULTIGRID_FROM_DOFS: usize = 2_000_000;
+
+/// 0: by size; 1: direct; 2: kept factor; 3: multigrid (benchmarks
+/// compare them).
 static METHOD: AtomicU8 = AtomicU8::new(0);
 static FRESH_SOLVES: AtomicUsize = AtomicUsize::new(0);
 static CG_SOLVES: AtomicUsize = AtomicUsize::new(0);
@@ -206,6 +249,7 @@ pub fn set_symmetric_method(method: Option<SymmetricMethod>) {
         None => 0,
         Some(SymmetricMethod::Direct) => 1,
         Some(SymmetricMethod::KeptFactorCg) => 2,
+        Some(SymmetricMethod::Multigrid) => 3,
     };
     METHOD.store(code, Atomic::Relaxed);
 }
@@ -215,6 +259,8 @@ pub fn symmetric_method(n: usize) -> SymmetricMethod {
     match METHOD.load(Atomic::Relaxed) {
         1 => SymmetricMethod::Direct,
         2 => SymmetricMethod::KeptFactorCg,
+        3 => SymmetricMethod::Multigrid,
+        _ if n >= MULTIGRID_FROM_DOFS => SymmetricMethod::Multigrid,
         _ if n >= KEPT_FACTOR_FROM_DOFS => SymmetricMethod::KeptFactorCg,
         _ => SymmetricMethod::Direct,
     }
@@ -262,6 +308,10 @@ pub struct SolverMemory {
     pub factor_structure: usize,
     /// Scratch of the numeric factorisation (freed after each).
     pub scratch: usize,
+    /// The multigrid hierarchy: its coarse operators, prolongators,
+    /// smoothers' diagonals, work vectors and dense coarsest factor.
+    #[serde(default)]
+    pub multigrid: usize,
 }
 
 impl SparseSolver {
@@ -295,7 +345,16 @@ impl SparseSolver {
             kept: None,
             double_kept: false,
             refresh: false,
+            nodes: None,
+            hierarchy: None,
         }
+    }
+
+    /// This solver, told the grid coordinates of the nodes whose DOFs are
+    /// `2k` and `2k + 1` (the multigrid's aggregates are blocks of them).
+    pub fn with_grid(mut self, nodes: Vec<[i64; 2]>) -> Self {
+        self.nodes = Some(nodes);
+        self
     }
 
     /// This solver with its symmetric tangents solved by `method`.
@@ -313,12 +372,17 @@ impl SparseSolver {
     }
 
     /// Whether the next solve of a tangent (`symmetric` or not) begins
-    /// with a numeric factorisation: every LU and direct solve does, and a
-    /// kept-factor solve when it has no factor or was asked to refresh it
-    /// (it may also refactorise after a failed CG solve, which this does
-    /// not foresee).
+    /// with a numeric factorisation or a multigrid setup: every LU and
+    /// direct solve does, and a kept-factor or multigrid solve when it has
+    /// no factor (hierarchy) or was asked to refresh it (it may also
+    /// refactorise after a failed CG solve, which this does not foresee).
     pub fn factorises_next(&self, symmetric: bool) -> bool {
-        !symmetric || self.method == SymmetricMethod::Direct || self.kept.is_none() || self.refresh
+        match self.method {
+            _ if !symmetric => true,
+            SymmetricMethod::Direct => true,
+            SymmetricMethod::KeptFactorCg => self.kept.is_none() || self.refresh,
+            SymmetricMethod::Multigrid => self.hierarchy.is_none() || self.refresh,
+        }
     }
 
     /// How the last CG solve with a kept factor ended (`None` before one).
@@ -363,6 +427,7 @@ impl SparseSolver {
             factor_values: self.factor_bytes,
             factor_structure: structure,
             scratch: self.scratch_bytes,
+            multigrid: self.hierarchy.as_ref().map_or(0, Hierarchy::bytes),
         }
     }
 
@@ -485,6 +550,70 @@ impl SparseSolver {
         }
     }
 
+    /// Solves the symmetric `K x = rhs` by CG preconditioned by a multigrid
+    /// V-cycle, to the relative residual `accuracy` (at least
+    /// [`CG_FLOOR`]). The hierarchy is built afresh when there is none,
+    /// when CG with a stale one converged slower than
+    /// [`MULTIGRID_REFRESH_RATE`] last time, or when CG fails with a stale
+    /// one. `None` when the solver has no grid, or a fresh hierarchy
+    /// cannot be built or does not converge (a tangent that is not
+    /// positive definite).
+    fn cg_with_multigrid(
+        &mut self,
+        pattern: &Pattern,
+        values: &[f64],
+        rhs: &[f64],
+        accuracy: f64,
+    ) -> Option<(Vec<f64>, Timing)> {
+        let op = multigrid::Operator {
+            ptr: &pattern.col_ptr,
+            col: &pattern.row_idx,
+            val: values,
+        };
+        let mut timing = Timing::default();
+        loop {
+            let fresh = self.hierarchy.is_none() || self.refresh;
+            if fresh {
+                let t = std::time::Instant::now();
+                self.refresh = false;
+                self.hierarchy = None;
+                self.hierarchy = Some(Hierarchy::new(op, self.nodes.as_deref()?).ok()?);
+                self.factorisations += 1;
+                FRESH_SOLVES.fetch_add(1, Atomic::Relaxed);
+                timing.factorise += t.elapsed().as_secs_f64();
+            }
+            let hierarchy = self.hierarchy.as_mut()?;
+            let t = std::time::Instant::now();
+            if !fresh {
+                hierarchy.fit_finest(op);
+            }
+            let (x, outcome) = krylov::preconditioned_cg(
+                |x, y| krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, values, x, y),
+                |z| hierarchy.apply(op, z),
+                rhs,
+                accuracy.max(CG_FLOOR),
+                if fresh {
+                    MULTIGRID_MAX_ITERATIONS
+                } else {
+                    MULTIGRID_MAX_ITERATIONS_STALE
+                },
+            );
+            timing.solve += t.elapsed().as_secs_f64();
+            self.last_cg = Some(outcome);
+            if outcome.converged {
+                CG_SOLVES.fetch_add(1, Atomic::Relaxed);
+                CG_ITERATIONS.fetch_add(outcome.iterations, Atomic::Relaxed);
+                self.refresh = !fresh && contraction(&outcome) > MULTIGRID_REFRESH_RATE;
+                return Some((x, timing));
+            }
+            if fresh {
+                self.hierarchy = None;
+                return None;
+            }
+            self.refresh = true;
+        }
+    }
+
     /// Factorises `K` into the kept factor, in the precision the solver
     /// keeps; false (keeping none) when it is not positive definite in it.
     fn factorise_kept(&mut self, pattern: &Pattern, values: &[f64], par: Par) -> bool {
@@ -538,6 +667,14 @@ impl SparseSolver {
     ) -> Result<(Vec<f64>, Factorisation, Timing), String> {
         let t0 = std::time::Instant::now();
         let tangent = Tangent::new(pattern, values);
+        if symmetric && self.method == SymmetricMethod::Multigrid {
+            if let Some((x, timing)) = self.cg_with_multigrid(pattern, values, rhs, accuracy) {
+                return Ok((x, Factorisation::Multigrid, timing));
+            }
+            // No hierarchy serves this tangent: the kept factor does.
+            self.method = SymmetricMethod::KeptFactorCg;
+            self.hierarchy = None;
+        }
         let b = Mat::from_fn(self.n, 1, |i, _| rhs[i]);
         if symmetric {
             if self.llt.is_none() {
@@ -581,7 +718,7 @@ impl SparseSolver {
                         analysis,
                     ))
                 }
-                SymmetricMethod::Direct => None,
+                SymmetricMethod::Direct | SymmetricMethod::Multigrid => None,
             };
             match kept {
                 Some((Kept::Solved(x, mut timing), analysis)) => {

@@ -14,7 +14,7 @@
 //! spanning several cells) costs fill, never correctness.
 
 use crate::assembly::Pattern;
-use crate::grid::{NodeKey, node_indices};
+use crate::grid::{NodeKey, node_coordinates};
 
 /// Node sets this small are eliminated as a band (measured on the GIMP
 /// column: 16 nodes gave 11-15% less fill than 64 or 256 at 1e5 points).
@@ -27,13 +27,7 @@ const MAX_REACH: i64 = 4;
 /// The elimination order of the DOFs of `nodes` (two a node, interleaved as
 /// in `pattern`): `order[k]` is the DOF eliminated k-th.
 pub fn nested_dissection(nodes: &[NodeKey], pattern: &Pattern) -> Vec<usize> {
-    let coords: Vec<[i64; 2]> = nodes
-        .iter()
-        .map(|&key| {
-            let (i, j) = node_indices(key);
-            [i, j]
-        })
-        .collect();
+    let coords: Vec<[i64; 2]> = nodes.iter().map(|&key| node_coordinates(key)).collect();
     let reach = reach(&coords, pattern);
     let mut set: Vec<u32> = (0..nodes.len() as u32).collect();
     let mut node_order = Vec::with_capacity(nodes.len());
@@ -109,7 +103,7 @@ fn dissect(set: &mut [u32], coords: &[[i64; 2]], reach: i64, order: &mut Vec<u32
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grid::node_key;
+    use crate::grid::{node_indices, node_key};
 
     /// A grid of `nx` x `ny` nodes, each coupled to the nodes within one
     /// cell (the bilinear basis), as a pattern.

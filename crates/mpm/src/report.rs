@@ -71,6 +71,7 @@ impl StepMemory {
             + self.solver.factor_values
             + self.solver.factor_structure
             + self.solver.scratch
+            + self.solver.multigrid
     }
 }
 

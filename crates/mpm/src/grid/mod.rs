@@ -30,6 +30,12 @@ pub fn node_indices(key: NodeKey) -> (i64, i64) {
     ((key >> 32) as i64 - BIAS, (key & 0xffff_ffff) as i64 - BIAS)
 }
 
+/// [`node_indices`] as an array.
+pub fn node_coordinates(key: NodeKey) -> [i64; 2] {
+    let (i, j) = node_indices(key);
+    [i, j]
+}
+
 /// Cell size and the position of node (0, 0).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grid {
