@@ -187,7 +187,7 @@ fn contraction(outcome: &krylov::CgOutcome) -> f64 {
 
 /// CG iterations allowed with a fresh multigrid hierarchy before it is
 /// judged not to serve (it converges by about 0.3 an iteration on the
-/// plate of `multigrid.rs`' tests, 1e-12 in 25; the GIMP column's solves
+/// plate of `multigrid.rs`' tests, 1e-10 in 20; the GIMP column's solves
 /// take 7 to 14), and with a stale one before a fresh one is built.
 const MULTIGRID_MAX_ITERATIONS: usize = 100;
 const MULTIGRID_MAX_ITERATIONS_STALE: usize = 40;
