@@ -14,10 +14,9 @@ use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
 use crate::configuration::Configuration;
 use crate::grid::{Connectivity, Link, node_coordinates};
-use crate::linsolve::{Factorisation, SparseSolver, SymmetricMethod, symmetric_method};
+use crate::linsolve::{Factorisation, SparseSolver};
 use crate::material::{Material, Response};
 use crate::newton::{Equilibrium, InvertedPoint};
-use crate::ordering;
 use crate::particles::MaterialPoints;
 use crate::report::{StepMemory, StepTimings};
 use crate::supports::HeldDofs;
@@ -135,15 +134,12 @@ impl<'a> StepEquilibrium<'a> {
             previous => {
                 // Freed before the new order and factor are made.
                 drop(previous);
-                // Cholesky's elimination order, or the multigrid's grid,
-                // for the tangents that are symmetric; LU orders its own
-                // columns.
-                let symmetric = symmetric_tangent(&loading, fbar.as_ref(), start.points);
-                let multigrid = symmetric_method(conn.n_dofs()) == SymmetricMethod::Multigrid;
-                let order = (symmetric && !multigrid)
-                    .then(|| ordering::nested_dissection(&conn.nodes, &pattern));
-                let solver = SparseSolver::new(conn.n_dofs(), order);
-                if symmetric && multigrid {
+                // The nodes' grid coordinates, for the tangents that are
+                // symmetric: Cholesky's nested-dissection order and the
+                // multigrid's aggregates are made from them. LU orders its
+                // own columns.
+                let solver = SparseSolver::new(conn.n_dofs(), None);
+                if symmetric_tangent(&loading, fbar.as_ref(), start.points) {
                     solver.with_grid(
                         conn.nodes
                             .iter()

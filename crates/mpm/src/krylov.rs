@@ -107,6 +107,10 @@ pub fn preconditioned_cg(
         z.copy_from_slice(&r);
         precondition(&mut z);
         let rz_next = dot(&r, &z);
+        if rz_next.is_nan() || rz_next <= 0.0 {
+            // The preconditioner is not positive definite along r.
+            break;
+        }
         let beta = rz_next / rz;
         rz = rz_next;
         p.par_iter_mut()

@@ -43,6 +43,7 @@ use faer::{Conj, Mat, MatMut, Par, Side};
 use crate::assembly::Pattern;
 use crate::krylov;
 use crate::multigrid::{self, Hierarchy};
+use crate::ordering;
 use crate::triangular::SubtreeSchedule;
 
 /// The fill-reducing ordering of a Cholesky factorisation (LU orders its
@@ -187,8 +188,9 @@ fn contraction(outcome: &krylov::CgOutcome) -> f64 {
 
 /// CG iterations allowed with a fresh multigrid hierarchy before it is
 /// judged not to serve (it converges by about 0.3 an iteration on the
-/// plate of `multigrid.rs`' tests, 1e-10 in 20; the GIMP column's solves
-/// take 7 to 14), and with a stale one before a fresh one is built.
+/// plate of `multigrid.rs`' tests, 1e-10 in about 20; the GIMP column's
+/// solves take 7 to 14), and with a stale one before a fresh one is
+/// built.
 const MULTIGRID_MAX_ITERATIONS: usize = 100;
 const MULTIGRID_MAX_ITERATIONS_STALE: usize = 40;
 /// A CG solve with a stale hierarchy that reduced the residual by less
@@ -225,14 +227,14 @@ const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
 /// From this many unknowns up, symmetric tangents are solved by
 /// [`SymmetricMethod::Multigrid`], whose memory grows linearly where the
 /// kept factor's grows faster (620 bytes a point at 0.5M DOFs, 818 at
-/// 4.8M on the GIMP column). Measured (`mpm bench-row`, 2 cores, first
-/// two load steps, BENCHMARKS.md): at 0.48M column DOFs multigrid took
-/// about 1.5 times the kept factor's time for 16% less peak memory; at
-/// 4.8M, 13.5 GiB against 20.1-20.9, in a similar time
-/// (CG's iterations grow slowly with size: 77, 79 and 94 over the
-/// first two steps at 1e5, 1e6 and 1e7 points; the factorisation grows
-/// as DOFs^1.3). Between them the kept factor's advantage in time
-/// shrinks as its memory grows; this splits the difference.
+/// 4.8M on the GIMP column). Measured (`mpm bench`, `mpm bench-row`, 2
+/// cores, first two load steps, BENCHMARKS.md): at 0.48M column DOFs
+/// multigrid took 11.8 s a step against the kept factor's 10.6 s, for 20%
+/// less peak memory (1,511 against 1,887 MiB); at 4.8M, 141 s against 158
+/// s and 13.5 GiB against 20.1. CG's iterations grow slowly with size (71,
+/// 88 and 97 over the first two steps at 1e5, 1e6 and 1e7 points) where
+/// the factorisation grows as DOFs^1.3; the crossing lies between, and
+/// this splits the difference.
 const MULTIGRID_FROM_DOFS: usize = 2_000_000;
 
 /// 0: by size; 1: direct; 2: kept factor; 3: multigrid (benchmarks
@@ -323,13 +325,7 @@ impl SparseSolver {
         ANALYSED.fetch_add(1, Atomic::Relaxed);
         let order = order
             .filter(|_| fill_ordering() == FillOrdering::NestedDissection)
-            .map(|order| {
-                let mut inverse = vec![0; n];
-                for (k, &dof) in order.iter().enumerate() {
-                    inverse[dof] = k;
-                }
-                (order, inverse)
-            });
+            .map(with_inverse);
         Self {
             n,
             order,
@@ -351,7 +347,9 @@ impl SparseSolver {
     }
 
     /// This solver, told the grid coordinates of the nodes whose DOFs are
-    /// `2k` and `2k + 1` (the multigrid's aggregates are blocks of them).
+    /// `2k` and `2k + 1`: the multigrid's aggregates are blocks of them,
+    /// and Cholesky's nested-dissection order, when the solver was given
+    /// none, is made from them when first needed.
     pub fn with_grid(mut self, nodes: Vec<[i64; 2]>) -> Self {
         self.nodes = Some(nodes);
         self
@@ -671,13 +669,22 @@ impl SparseSolver {
             if let Some((x, timing)) = self.cg_with_multigrid(pattern, values, rhs, accuracy) {
                 return Ok((x, Factorisation::Multigrid, timing));
             }
-            // No hierarchy serves this tangent: the kept factor does.
+            // No hierarchy serves this tangent (no grid, aggregation that
+            // stalls, or a tangent that is not positive definite): the
+            // kept factor does, in nested-dissection order, for the rest
+            // of the pattern.
             self.method = SymmetricMethod::KeptFactorCg;
             self.hierarchy = None;
         }
         let b = Mat::from_fn(self.n, 1, |i, _| rhs[i]);
         if symmetric {
             if self.llt.is_none() {
+                if self.order.is_none() && fill_ordering() == FillOrdering::NestedDissection {
+                    self.order = self
+                        .nodes
+                        .as_deref()
+                        .map(|nodes| with_inverse(ordering::nested_dissection(nodes, pattern)));
+                }
                 let (col_ptr, row_idx) = upper_triangle(pattern);
                 let structure =
                     SymbolicSparseColMatRef::new_checked(self.n, self.n, &col_ptr, None, &row_idx);
@@ -755,6 +762,16 @@ impl SparseSolver {
         let (x, timing) = timed_solve(&lu, &b, t0);
         Ok((x, Factorisation::Lu, timing))
     }
+}
+
+/// An elimination order (`order[k]` the DOF eliminated k-th) with its
+/// inverse.
+fn with_inverse(order: Vec<usize>) -> (Vec<usize>, Vec<usize>) {
+    let mut inverse = vec![0; order.len()];
+    for (k, &dof) in order.iter().enumerate() {
+        inverse[dof] = k;
+    }
+    (order, inverse)
 }
 
 /// How a kept single-precision factor takes `K`'s entries: in single
@@ -1271,6 +1288,27 @@ pub(crate) mod tests {
     /// matrix and then with it stale: 0.01 added to the diagonal moves the
     /// lowest eigenvalue (0.0117) by 85%, so CG needs several iterations,
     /// but far fewer than its limit of 30, and does not refactorise.
+    /// A solver asked for multigrid without the grid its aggregates need
+    /// solves by the kept factor instead, and says so: the answer is the
+    /// direct one, reported as Cholesky's.
+    #[test]
+    fn multigrid_without_a_grid_falls_back_to_the_kept_factor() {
+        let (pattern, values) = laplacian(30, 1e-3);
+        let n = pattern.col_ptr.len() - 1;
+        let b: Vec<f64> = (0..n).map(|i| ((i * 13) % 7) as f64 - 3.0).collect();
+        let mut solver = SparseSolver::new(n, None).with_method(SymmetricMethod::Multigrid);
+        let (x, kind, _) = solver.solve(&pattern, &values, &b, true, 1e-12).unwrap();
+        assert_eq!(kind, Factorisation::Cholesky);
+        assert_eq!(solver.factorisations(), 1);
+        let mut direct = SparseSolver::new(n, None).with_method(SymmetricMethod::Direct);
+        let (y, _, _) = direct.solve(&pattern, &values, &b, true, 1e-12).unwrap();
+        assert!(
+            relative_difference(&x, &y) < 1e-9,
+            "{}",
+            relative_difference(&x, &y)
+        );
+    }
+
     #[test]
     fn a_kept_factor_answers_as_a_fresh_one() {
         let m = 40;

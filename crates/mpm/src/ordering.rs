@@ -14,7 +14,6 @@
 //! spanning several cells) costs fill, never correctness.
 
 use crate::assembly::Pattern;
-use crate::grid::{NodeKey, node_coordinates};
 
 /// Node sets this small are eliminated as a band (measured on the GIMP
 /// column: 16 nodes gave 11-15% less fill than 64 or 256 at 1e5 points).
@@ -24,14 +23,14 @@ const LEAF: usize = 16;
 /// (rare, from loads along the boundary) are left to fill.
 const MAX_REACH: i64 = 4;
 
-/// The elimination order of the DOFs of `nodes` (two a node, interleaved as
-/// in `pattern`): `order[k]` is the DOF eliminated k-th.
-pub fn nested_dissection(nodes: &[NodeKey], pattern: &Pattern) -> Vec<usize> {
-    let coords: Vec<[i64; 2]> = nodes.iter().map(|&key| node_coordinates(key)).collect();
-    let reach = reach(&coords, pattern);
-    let mut set: Vec<u32> = (0..nodes.len() as u32).collect();
-    let mut node_order = Vec::with_capacity(nodes.len());
-    dissect(&mut set, &coords, reach, &mut node_order);
+/// The elimination order of the DOFs of the nodes at grid coordinates
+/// `coords` (two a node, interleaved as in `pattern`): `order[k]` is the
+/// DOF eliminated k-th.
+pub fn nested_dissection(coords: &[[i64; 2]], pattern: &Pattern) -> Vec<usize> {
+    let reach = reach(coords, pattern);
+    let mut set: Vec<u32> = (0..coords.len() as u32).collect();
+    let mut node_order = Vec::with_capacity(coords.len());
+    dissect(&mut set, coords, reach, &mut node_order);
     node_order
         .into_iter()
         .flat_map(|node| [2 * node as usize, 2 * node as usize + 1])
@@ -103,7 +102,11 @@ fn dissect(set: &mut [u32], coords: &[[i64; 2]], reach: i64, order: &mut Vec<u32
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grid::{node_indices, node_key};
+    use crate::grid::{NodeKey, node_coordinates, node_indices, node_key};
+
+    fn coordinates(keys: &[NodeKey]) -> Vec<[i64; 2]> {
+        keys.iter().map(|&key| node_coordinates(key)).collect()
+    }
 
     /// A grid of `nx` x `ny` nodes, each coupled to the nodes within one
     /// cell (the bilinear basis), as a pattern.
@@ -134,7 +137,7 @@ mod tests {
     #[test]
     fn the_order_is_a_permutation_of_the_dofs() {
         let (keys, pattern) = grid(37, 23);
-        let mut order = nested_dissection(&keys, &pattern);
+        let mut order = nested_dissection(&coordinates(&keys), &pattern);
         assert_eq!(order.len(), 2 * keys.len());
         order.sort_unstable();
         assert!(order.iter().enumerate().all(|(k, &d)| k == d));
@@ -145,7 +148,7 @@ mod tests {
         // 40 x 10 nodes, one-cell reach: the first cut is the grid line
         // x = 20 (10 nodes), eliminated last.
         let (keys, pattern) = grid(40, 10);
-        let order = nested_dissection(&keys, &pattern);
+        let order = nested_dissection(&coordinates(&keys), &pattern);
         let last: Vec<i64> = order[order.len() - 20..]
             .iter()
             .step_by(2)
