@@ -19,7 +19,8 @@
 //!   the coarse level's near-null space. A DOF a support holds (its row
 //!   is the diagonal alone) is left out of every column.
 //! - **Smoothed prolongation** `P = (I - w D^-1 A) T`, `w = 4 / (3 l)`,
-//!   `l` an estimate of the largest eigenvalue of `D^-1 A`.
+//!   `l` the smoother's bound on the largest eigenvalue of `D^-1 A` (an
+//!   estimate with a margin, at most Gershgorin's bound).
 //! - **Galerkin coarse operators** `A_c = P^T A P`, down to a level small
 //!   enough for a dense Cholesky factorisation.
 //! - **Smoothing** by a Chebyshev polynomial in `D^-1 A` (Adams, Brezina,
@@ -295,7 +296,8 @@ pub struct Hierarchy {
 pub enum SetupError {
     /// Aggregation stopped shrinking the problem before a dense level.
     NoCoarsening { unknowns: usize },
-    /// The coarsest operator is not positive definite.
+    /// An operator with no positive diagonal (or a NaN), or a coarsest
+    /// operator that is not positive definite.
     NotPositiveDefinite,
 }
 
