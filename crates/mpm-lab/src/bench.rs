@@ -286,13 +286,13 @@ fn memory_by_component(largest: &[(&str, Row)]) -> String {
         "\n## Memory per point\n\n\
          Heap bytes per material point by component at the end of the second load step of the largest row \
          of each scene above (`StepMemory`): the points' state; their links to the active nodes (node, shape \
-         function value and gradient) with the node keys; the stiffness pattern (node adjacency, node-to-link \
-         incidence, compressed columns' pointers and row indices); the tangent's values; every point's \
-         trial stress, tangent and history (given back while a factorisation runs); the Cholesky factor's \
-         values and structure; the numeric factorisation's scratch (freed after each: the permuted triangle \
-         of the tangent it reads, in the factor's precision, and faer's workspace); the multigrid hierarchy \
-         (with the default method above 2,000,000 DOFs). The sum counts the \
-         responses and the scratch, which are never alive together. Peak is the process's high-water \
+         function value and gradient) with the node keys; the stiffness pattern (node adjacency, the points in \
+         tiles for the assembly, compressed columns' pointers and row indices); the tangent's values; what \
+         the point loop keeps between iterations (F-bar's cell terms only: the responses are made again where \
+         they are used); the Cholesky factor's values and structure; the numeric factorisation's scratch \
+         (freed after each: the permuted triangle of the tangent it reads, in the factor's precision, and \
+         faer's workspace); the multigrid hierarchy (the default from 150,000 DOFs). Peak is the process's \
+         high-water \
          resident set.\n\n\
          | scene | points | points' state | links | pattern | tangent | responses | factor values | factor structure | factorisation scratch | multigrid | sum | peak |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
@@ -334,7 +334,7 @@ fn symmetric_methods(max_points: usize) -> Result<String, LabError> {
          (`crates/mpm/src/krylov.rs`, `linsolve.rs`). Multigrid: CG to the same accuracy, preconditioned by a \
          smoothed-aggregation V-cycle (`crates/mpm/src/multigrid.rs`) built on an earlier tangent of the pattern \
          (its 'factorisations' are hierarchies built). The default switches from direct to the kept factor at \
-         40,000 DOFs and to multigrid at 2,000,000. \
+         40,000 DOFs and to multigrid at 150,000. \
          First two load steps; fresh factorisations, CG solves and CG iterations over both.\n\n\
          | scene | points | active DOFs | method | s / step | factorisation s / step | solve s / step | Newton iterations | factorisations | CG solves | CG iterations | peak MiB |\n\
          |---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",

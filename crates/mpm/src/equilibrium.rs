@@ -1,7 +1,13 @@
 //! The equilibrium of one load step as Newton sees it: the out-of-balance
-//! force of a trial increment (the point loop: every point's trial stress
-//! and tangent, in parallel, then the internal force), the force scale it
-//! is measured against, and the consistent tangent's correction.
+//! force of a trial increment (the point loop: every point's trial stress,
+//! in parallel, summed into the internal force), the force scale it is
+//! measured against, and the consistent tangent's correction.
+//!
+//! The points' responses at the trial increment are made where they are
+//! used (the internal force, the tangent, the commit) and not kept: at a
+//! million points, kept, they were 240 bytes a point, alive with the
+//! tangent at its assembly. Making them again costs one more evaluation
+//! of the material a tangent, and one at the commit.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -15,7 +21,7 @@ use crate::boundary::loading::BoundaryLoading;
 use crate::configuration::Configuration;
 use crate::grid::{Connectivity, Link, node_coordinates};
 use crate::linsolve::{Factorisation, SparseSolver};
-use crate::material::{Material, Response};
+use crate::material::{CauchyStress, History, Material, Response};
 use crate::newton::{Equilibrium, InvertedPoint};
 use crate::particles::MaterialPoints;
 use crate::report::{StepMemory, StepTimings};
@@ -62,7 +68,7 @@ pub struct StepEquilibrium<'a> {
     soft: Option<SoftCells>,
     ghost: Option<GhostFaces>,
     fbar: Option<FbarCells>,
-    /// F-bar's coupling terms at the last trial state.
+    /// F-bar's cell averages and coupling terms at the last trial state.
     fbar_trial: Option<FbarTrial>,
     /// Boundary loads, evaluated on the trial boundary.
     loading: BoundaryLoading<'a>,
@@ -80,7 +86,6 @@ pub struct StepEquilibrium<'a> {
     /// The last trial increment.
     u: Vec<f64>,
     f_int: Vec<f64>,
-    responses: Vec<Response>,
     /// The tangent's values, kept from iteration to iteration.
     k: Vec<f64>,
     /// Whether `k` is the tangent at the last trial state.
@@ -98,14 +103,22 @@ pub struct AnalysedPattern {
     pub(crate) solver: SparseSolver,
 }
 
-/// What a converged step leaves: the points' responses and the band terms
+/// What a converged step leaves: the points' states and the band terms
 /// to commit, what it cost, and its analysed pattern.
 pub struct ConvergedStep {
-    pub responses: Vec<Response>,
+    pub states: Vec<PointState>,
     pub band: BandTerms,
     pub timings: StepTimings,
     pub memory: StepMemory,
     pub analysed: AnalysedPattern,
+}
+
+/// What a point commits when its step converges: its response's history
+/// and Cauchy stress.
+#[derive(Debug, Clone, Copy)]
+pub struct PointState {
+    pub history: History,
+    pub cauchy: CauchyStress,
 }
 
 impl<'a> StepEquilibrium<'a> {
@@ -168,7 +181,6 @@ impl<'a> StepEquilibrium<'a> {
             f_ext_fixed: f_ext,
             u: Vec::new(),
             f_int: Vec::new(),
-            responses: Vec::new(),
             k: Vec::new(),
             assembled: false,
             solver,
@@ -207,17 +219,51 @@ impl<'a> StepEquilibrium<'a> {
         [0, 1].map(|c| self.f_ext.iter().skip(c).step_by(2).sum())
     }
 
-    /// What the step commits once converged, and what it hands on.
-    pub fn into_converged(self) -> ConvergedStep {
+    /// What the step commits once converged (the points' states at the
+    /// last trial increment, Newton's converged one), and what it hands on.
+    pub fn into_converged(mut self) -> ConvergedStep {
+        // The tangent and the compressed columns are done with: given back
+        // before the states are made.
+        self.k = Vec::new();
+        let adjacency = self.pattern.adjacency();
+        self.pattern = Pattern::default();
+        let responses = self.trial_responses();
+        let states = (0..self.points.len())
+            .into_par_iter()
+            .map(|p| {
+                let r = responses.at(p);
+                PointState {
+                    history: r.history,
+                    cauchy: r.cauchy,
+                }
+            })
+            .collect();
         ConvergedStep {
-            responses: self.responses,
+            states,
             band: self.band,
             timings: self.timings,
             memory: self.memory,
             analysed: AnalysedPattern {
-                adjacency: self.pattern.adjacency(),
+                adjacency,
                 solver: self.solver,
             },
+        }
+    }
+
+    /// The points' responses at the last trial increment (which the point
+    /// loop found admissible, if the tangent or a commit asks for them).
+    fn trial_responses(&self) -> TrialResponses<'_> {
+        TrialResponses {
+            conn: self.conn,
+            points: self.points,
+            u: &self.u,
+            fbar: self.fbar.as_ref().map(|fbar| {
+                let trial = self
+                    .fbar_trial
+                    .as_ref()
+                    .expect("F-bar's averages are made with each trial state");
+                (fbar, trial.averages.as_slice())
+            }),
         }
     }
 
@@ -234,11 +280,12 @@ impl<'a> StepEquilibrium<'a> {
                 .materials
                 .iter()
                 .all(Material::symmetric_tangent);
+        let responses = self.trial_responses();
         assembly::stiffness(
             self.conn,
             &self.pattern,
             self.points,
-            &self.responses,
+            |p| responses.at(p).tangent,
             symmetric_points,
             &mut k,
         );
@@ -267,47 +314,48 @@ impl Equilibrium for StepEquilibrium<'_> {
         self.conn.n_dofs()
     }
 
-    /// The point loop: trial stress and tangent of every point, in parallel,
-    /// then the internal force.
+    /// The point loop: the trial stress of every point, in parallel,
+    /// summed into the internal force.
     fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
         let t = Instant::now();
         self.assembled = false;
+        self.fbar_trial = None;
         self.u.clear();
         self.u.extend_from_slice(u);
         let (conn, mp) = (self.conn, self.points);
         if let Some(fbar) = &self.fbar {
-            let (responses, trial) = fbar_responses(fbar, conn, mp, u)?;
-            self.responses = responses;
-            self.fbar_trial = Some(trial);
-        } else {
-            // Written over the last trial's responses (a collected
-            // `Result` would gather them in pieces and copy them again);
-            // an inverted point answers its start's response meanwhile, and
-            // the lowest-numbered one is reported.
-            let inverted = AtomicUsize::new(usize::MAX);
-            (0..mp.len())
+            let averages = fbar_averages(fbar, conn, mp, u);
+            let (stresses, shares): (Vec<Matrix2<f64>>, Vec<_>) = (0..mp.len())
                 .into_par_iter()
                 .map(|p| {
-                    let (_, grad_u) = increment(conn.point_links(p), u);
-                    let j_start = mp.deformation[p].determinant();
-                    let jacobian = j_start * (Matrix2::identity() + grad_u).determinant();
-                    let material = &mp.materials[mp.material[p] as usize];
-                    if jacobian.is_nan() || jacobian <= 0.0 {
-                        inverted.fetch_min(p, Ordering::Relaxed);
-                        return material.respond(&mp.history[p], &Matrix2::zeros(), j_start);
-                    }
-                    material.respond(&mp.history[p], &grad_u, j_start)
+                    fbar_response(fbar, &averages, conn, mp, u, p)
+                        .map(|(response, share)| (response.p, share))
                 })
-                .collect_into_vec(&mut self.responses);
+                .collect::<Result<Vec<_>, _>>()?
+                .into_iter()
+                .unzip();
+            self.f_int = assembly::internal_force(conn, mp, |p| stresses[p]);
+            self.fbar_trial = Some(FbarTrial::new(averages, shares));
+        } else {
+            // An inverted point adds nothing meanwhile, and the
+            // lowest-numbered one is reported.
+            let responses = self.trial_responses();
+            let inverted = AtomicUsize::new(usize::MAX);
+            let f_int = assembly::internal_force(conn, mp, |p| match responses.checked(p) {
+                Ok(response) => response.p,
+                Err(_) => {
+                    inverted.fetch_min(p, Ordering::Relaxed);
+                    Matrix2::zeros()
+                }
+            });
             let point = inverted.into_inner();
-            if point != usize::MAX {
-                let (_, grad_u) = increment(conn.point_links(point), u);
-                let jacobian = mp.deformation[point].determinant()
-                    * (Matrix2::identity() + grad_u).determinant();
-                return Err(InvertedPoint { point, jacobian });
+            if point != usize::MAX
+                && let Err(inverted) = responses.checked(point)
+            {
+                return Err(inverted);
             }
+            self.f_int = f_int;
         }
-        self.f_int = assembly::internal_force(conn, mp, &self.responses);
         // Forces are measured against the material's own internal force
         // (which includes the reactions), the loads, and what prescribed
         // displacements ask of the material (`BandTerms::load_norm`); the
@@ -353,14 +401,6 @@ impl Equilibrium for StepEquilibrium<'_> {
             self.assemble_tangent();
         }
         let symmetric = symmetric_tangent(&self.loading, self.fbar.as_ref(), self.points);
-        // The responses are spent once assembled (the next trial state
-        // writes its own). A factorisation (or a multigrid hierarchy's
-        // setup) is the step's high-water mark, so their storage is given
-        // back before one; the point loop then allocates afresh, once a
-        // factorisation.
-        if self.solver.factorises_next(symmetric) {
-            self.responses = Vec::new();
-        }
         let solved = self
             .solver
             .solve(&self.pattern, &self.k, r, symmetric, accuracy);
@@ -369,8 +409,7 @@ impl Equilibrium for StepEquilibrium<'_> {
             links: self.conn.heap_bytes(),
             pattern: self.pattern.heap_bytes(),
             tangent: std::mem::size_of_val(self.k.as_slice()),
-            // Alive but during factorisations.
-            responses: std::mem::size_of::<Response>() * self.points.len(),
+            responses: self.fbar_trial.as_ref().map_or(0, FbarTrial::heap_bytes),
             solver: self.solver.memory(),
         };
         let (du, kind, timing) = solved?;
@@ -396,73 +435,125 @@ fn symmetric_tangent(
     loading.is_empty() && fbar.is_none() && points.materials.iter().all(Material::symmetric_tangent)
 }
 
-/// The point loop with F-bar: every point's `dJ`, its cell's average, then
-/// each point's response to its `dF_bar` (see [`crate::assembly::fbar`]).
-fn fbar_responses(
+/// Every point's response at a trial increment `u`, made on request.
+struct TrialResponses<'s> {
+    conn: &'s Connectivity,
+    points: &'s MaterialPoints,
+    u: &'s [f64],
+    /// F-bar's cells, with their averages at `u`.
+    fbar: Option<(&'s FbarCells, &'s [f64])>,
+}
+
+impl TrialResponses<'_> {
+    /// Point `p`'s response, or the point if `u` inverts it.
+    fn checked(&self, p: usize) -> Result<Response, InvertedPoint> {
+        let (conn, mp) = (self.conn, self.points);
+        if let Some((fbar, averages)) = self.fbar {
+            return fbar_response(fbar, averages, conn, mp, self.u, p)
+                .map(|(response, _)| response);
+        }
+        let (_, grad_u) = increment(conn.point_links(p), self.u);
+        let j_start = mp.deformation[p].determinant();
+        let jacobian = j_start * (Matrix2::identity() + grad_u).determinant();
+        if jacobian.is_nan() || jacobian <= 0.0 {
+            return Err(InvertedPoint { point: p, jacobian });
+        }
+        Ok(mp.materials[mp.material[p] as usize].respond(&mp.history[p], &grad_u, j_start))
+    }
+
+    /// Point `p`'s response at a trial state the point loop found
+    /// admissible: the only ones Newton assembles a tangent at or converges
+    /// to. (A point inverted would answer its start's response.)
+    fn at(&self, p: usize) -> Response {
+        self.checked(p).unwrap_or_else(|_| {
+            let mp = self.points;
+            let j_start = mp.deformation[p].determinant();
+            mp.materials[mp.material[p] as usize].respond(
+                &mp.history[p],
+                &Matrix2::zeros(),
+                j_start,
+            )
+        })
+    }
+}
+
+/// Whether point `p` has the small-strain model, which F-bar averages by
+/// its own volumetric strain.
+fn small_strain(mp: &MaterialPoints, p: usize) -> bool {
+    matches!(
+        mp.materials[mp.material[p] as usize],
+        Material::LinearElastic(_)
+    )
+}
+
+/// Point `p`'s volume change for F-bar's average, from its displacement
+/// gradient `g`: as `dJ - 1 = tr g + det g`, so the volumetric strains of
+/// small increments stay exact to round-off, which matters where the bulk
+/// modulus is thousands of times the shear modulus. The small-strain model
+/// averages its own volumetric strain, `tr g`.
+fn fbar_growth(mp: &MaterialPoints, p: usize, g: &Matrix2<f64>) -> f64 {
+    g.trace()
+        + if small_strain(mp, p) {
+            0.0
+        } else {
+            g.determinant()
+        }
+}
+
+/// F-bar's first pass at `u`: every cell's average volume change (see
+/// [`crate::assembly::fbar`]).
+fn fbar_averages(
     fbar: &FbarCells,
     conn: &Connectivity,
     mp: &MaterialPoints,
     u: &[f64],
-) -> Result<(Vec<Response>, FbarTrial), InvertedPoint> {
-    let grads: Vec<Matrix2<f64>> = (0..mp.len())
-        .into_par_iter()
-        .map(|p| increment(conn.point_links(p), u).1)
-        .collect();
-    let small_strain = |p: usize| {
-        matches!(
-            mp.materials[mp.material[p] as usize],
-            Material::LinearElastic(_)
-        )
-    };
-    // Volume changes as dJ - 1 = tr g + det g: the volumetric strains of
-    // small increments stay exact to round-off, which matters where the
-    // bulk modulus is thousands of times the shear modulus. The small-strain
-    // model averages its own volumetric strain, tr g.
+) -> Vec<f64> {
     let growth: Vec<f64> = (0..mp.len())
-        .map(|p| {
-            let g = &grads[p];
-            g.trace()
-                + if small_strain(p) {
-                    0.0
-                } else {
-                    g.determinant()
-                }
-        })
-        .collect();
-    let averages = fbar.averages(&growth);
-    let (responses, shares): (Vec<Response>, Vec<_>) = (0..mp.len())
         .into_par_iter()
-        .map(|p| {
-            let j_start = mp.deformation[p].determinant();
-            let (a, b) = (growth[p], fbar.of(&averages, p));
-            let g = &grads[p];
-            let (dj, dj_bar) = (1.0 + g.trace() + g.determinant(), 1.0 + b);
-            for jacobian in [j_start * dj, j_start * dj_bar] {
-                if jacobian.is_nan() || jacobian <= 0.0 {
-                    return Err(InvertedPoint { point: p, jacobian });
-                }
-            }
-            let material = &mp.materials[mp.material[p] as usize];
-            if small_strain(p) {
-                // B-bar, F-bar's linearisation: the volumetric strain
-                // replaced by the cell's, g_bar = g + (b - a) / 2 I.
-                let grad_bar = g + Matrix2::identity() * ((b - a) / 2.0);
-                let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
-                let share = fbar.adjust_small_strain(p, &mut response);
-                return Ok((response, share));
-            }
-            let df = Matrix2::identity() + g;
-            let alpha = (dj_bar / dj).sqrt();
-            // alpha dF - I, with alpha - 1 = (b - a) / (dJ (alpha + 1)).
-            let grad_bar = Matrix2::identity() * ((b - a) / (dj * (alpha + 1.0))) + g * alpha;
-            let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
-            let share = fbar.adjust(p, &mut response, &df, dj, dj_bar);
-            Ok((response, share))
-        })
-        .collect::<Result<Vec<_>, _>>()?
-        .into_iter()
-        .unzip();
-    Ok((responses, FbarTrial::new(shares)))
+        .map(|p| fbar_growth(mp, p, &increment(conn.point_links(p), u).1))
+        .collect();
+    fbar.averages(&growth)
+}
+
+/// A point's share of F-bar's coupling term ([`FbarCells::adjust`]).
+type FbarShare = (Matrix2<f64>, Matrix2<f64>);
+
+/// Point `p`'s response to its `dF_bar` at `u`, given its cell's
+/// `averages`, with its share of the coupling term; or the point, if `u`
+/// or its cell's average inverts it.
+fn fbar_response(
+    fbar: &FbarCells,
+    averages: &[f64],
+    conn: &Connectivity,
+    mp: &MaterialPoints,
+    u: &[f64],
+    p: usize,
+) -> Result<(Response, FbarShare), InvertedPoint> {
+    let g = &increment(conn.point_links(p), u).1;
+    let j_start = mp.deformation[p].determinant();
+    let (a, b) = (fbar_growth(mp, p, g), fbar.of(averages, p));
+    let (dj, dj_bar) = (1.0 + g.trace() + g.determinant(), 1.0 + b);
+    for jacobian in [j_start * dj, j_start * dj_bar] {
+        if jacobian.is_nan() || jacobian <= 0.0 {
+            return Err(InvertedPoint { point: p, jacobian });
+        }
+    }
+    let material = &mp.materials[mp.material[p] as usize];
+    if small_strain(mp, p) {
+        // B-bar, F-bar's linearisation: the volumetric strain replaced by
+        // the cell's, g_bar = g + (b - a) / 2 I.
+        let grad_bar = g + Matrix2::identity() * ((b - a) / 2.0);
+        let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
+        let share = fbar.adjust_small_strain(p, &mut response);
+        return Ok((response, share));
+    }
+    let df = Matrix2::identity() + g;
+    let alpha = (dj_bar / dj).sqrt();
+    // alpha dF - I, with alpha - 1 = (b - a) / (dJ (alpha + 1)).
+    let grad_bar = Matrix2::identity() * ((b - a) / (dj * (alpha + 1.0))) + g * alpha;
+    let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
+    let share = fbar.adjust(p, &mut response, &df, dj, dj_bar);
+    Ok((response, share))
 }
 
 /// Displacement `sum_a N_a u_a` and displacement gradient
@@ -530,7 +621,7 @@ mod tests {
                 eq.conn,
                 &eq.pattern,
                 eq.points,
-                &eq.responses,
+                |p| eq.trial_responses().at(p).tangent,
                 symmetric,
                 &mut k,
             );

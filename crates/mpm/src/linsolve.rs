@@ -227,15 +227,18 @@ const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
 /// From this many unknowns up, symmetric tangents are solved by
 /// [`SymmetricMethod::Multigrid`], whose memory grows linearly where the
 /// kept factor's grows faster (620 bytes a point at 0.5M DOFs, 818 at
-/// 4.8M on the GIMP column). Measured (`mpm bench`, `mpm bench-row`, 2
-/// cores, first two load steps, BENCHMARKS.md): at 0.48M column DOFs
-/// multigrid took 11.8 s a step against the kept factor's 10.6 s, for 20%
-/// less peak memory (1,511 against 1,887 MiB); at 4.8M, 141 s against 158
-/// s and 13.5 GiB against 20.1. CG's iterations grow slowly with size (71,
-/// 88 and 97 over the first two steps at 1e5, 1e6 and 1e7 points) where
-/// the factorisation grows as DOFs^1.3; the crossing lies between, and
-/// this splits the difference.
-const MULTIGRID_FROM_DOFS: usize = 2_000_000;
+/// 4.8M on the GIMP column), and which alone brings 1e6 GIMP column
+/// points under 1 GiB. Measured (`mpm bench-row`, 2 cores, first two load
+/// steps, alternating runs; BENCHMARKS.md, docs/scale.md): on the seventh
+/// session's host multigrid was faster from 0.14M DOFs (0.14M column:
+/// 1.08-1.15 s a step against 1.11-1.19; 0.15M cantilever: 0.75-0.81
+/// against 0.92-1.18; 0.48M column: 4.5-4.6 against 6.2-6.6), and slower
+/// at 0.05M (the size table's 0.90 against 0.78 s); on the sixth
+/// session's host it was 10% slower at 0.48M and 10% faster at 4.8M. CG's
+/// iterations grow slowly with size (71, 64 and 97 over the first two
+/// steps at 1e5, 1e6 and 1e7 points) where the factorisation grows as
+/// DOFs^1.3.
+const MULTIGRID_FROM_DOFS: usize = 150_000;
 
 /// 0: by size; 1: direct; 2: kept factor; 3: multigrid (benchmarks
 /// compare them).
@@ -367,20 +370,6 @@ impl SparseSolver {
         REUSED.fetch_add(1, Atomic::Relaxed);
         self.reuses += 1;
         self
-    }
-
-    /// Whether the next solve of a tangent (`symmetric` or not) begins
-    /// with a numeric factorisation or a multigrid setup: every LU and
-    /// direct solve does, and a kept-factor or multigrid solve when it has
-    /// no factor (hierarchy) or was asked to refresh it (it may also
-    /// refactorise after a failed CG solve, which this does not foresee).
-    pub fn factorises_next(&self, symmetric: bool) -> bool {
-        match self.method {
-            _ if !symmetric => true,
-            SymmetricMethod::Direct => true,
-            SymmetricMethod::KeptFactorCg => self.kept.is_none() || self.refresh,
-            SymmetricMethod::Multigrid => self.hierarchy.is_none() || self.refresh,
-        }
     }
 
     /// How the last CG solve with a kept factor ended (`None` before one).
@@ -1252,30 +1241,6 @@ pub(crate) mod tests {
     /// solver factorises at its first symmetric solve and not at the next,
     /// whose stale factor serves; a direct one every time; LU (an
     /// unsymmetric tangent) every time.
-    #[test]
-    fn a_solver_says_when_it_will_factorise() {
-        let m = 20;
-        let rhs = vec![1.0; m * m];
-        let mut kept = SparseSolver::new(m * m, None).with_method(SymmetricMethod::KeptFactorCg);
-        let mut direct = SparseSolver::new(m * m, None).with_method(SymmetricMethod::Direct);
-        let mut predicted = Vec::new();
-        for shift in [0.0, 0.0, 0.3, 0.3, 0.3] {
-            let (pattern, values) = laplacian(m, shift);
-            for solver in [&mut kept, &mut direct] {
-                let (said, before) = (solver.factorises_next(true), solver.factorisations());
-                solver.solve(&pattern, &values, &rhs, true, 1e-10).unwrap();
-                assert_eq!(said, solver.factorisations() > before, "shift {shift}");
-                predicted.push(said);
-            }
-        }
-        // The kept factor: fresh, kept, stale and slow (a refresh asked
-        // for), refreshed, kept.
-        let kept_said: Vec<bool> = predicted.iter().step_by(2).copied().collect();
-        assert_eq!(kept_said, [true, false, false, true, false]);
-        assert!(predicted.iter().skip(1).step_by(2).all(|&said| said));
-        assert!(kept.factorises_next(false));
-    }
-
     fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
         let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
         norm(&mut a.iter().zip(b).map(|(x, y)| x - y)) / norm(&mut b.iter().copied())

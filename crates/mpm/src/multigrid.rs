@@ -42,6 +42,10 @@ const BLOCK: i64 = 3;
 /// A level with at most this many unknowns is solved by a dense Cholesky
 /// factorisation (1,500^3 / 3 flops, about 0.1 s, and 18 MB at most).
 const COARSEST: usize = 1500;
+/// Coarse rows a band of the Galerkin product ([`galerkin`]) makes at a
+/// time: 5 bands on the first coarse level at 1e6 GIMP column points,
+/// one below 16k coarse unknowns.
+const GALERKIN_BAND: usize = 16_384;
 /// Levels below the finest, at most; aggregation by 3 x 3 blocks divides
 /// the unknowns by about 6 per level, so 12 reach a dense level from any
 /// size this machine can hold.
@@ -169,6 +173,34 @@ impl<T: Entry> Rows<T> {
 
     fn n_rows(&self) -> usize {
         self.ptr.len() - 1
+    }
+
+    /// The rows of `parts`, one after another. The first part's storage
+    /// is grown in place (a large block is remapped, not copied), and each
+    /// other part given back once copied.
+    fn concatenate(parts: Vec<Self>) -> Self {
+        let mut parts = parts.into_iter();
+        let Some(mut whole) = parts.next() else {
+            return Self {
+                ptr: vec![0],
+                col: Vec::new(),
+                val: Vec::new(),
+            };
+        };
+        let rest: Vec<Self> = parts.collect();
+        let (rows, nnz) = rest.iter().fold((0, 0), |(r, n), part| {
+            (r + part.n_rows(), n + part.col.len())
+        });
+        whole.ptr.reserve_exact(rows);
+        whole.col.reserve_exact(nnz);
+        whole.val.reserve_exact(nnz);
+        for part in rest {
+            let offset = whole.col.len();
+            whole.ptr.extend(part.ptr[1..].iter().map(|k| k + offset));
+            whole.col.extend_from_slice(&part.col);
+            whole.val.extend_from_slice(&part.val);
+        }
+        whole
     }
 
     fn row(&self, i: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
@@ -337,7 +369,7 @@ impl Hierarchy {
                 return Err(SetupError::NoCoarsening { unknowns: n });
             }
             let p = smoothed_prolongator(op, &inv_diag, 4.0 / (3.0 * top), &tentative);
-            let coarse = galerkin(op, &p, n_coarse);
+            let coarse = galerkin(op, &p, n_coarse, GALERKIN_BAND);
             modes = tentative.coarse_modes;
             dof_start = tentative.coarse_dof_start;
             coords = coarse_coords;
@@ -744,44 +776,69 @@ fn smoothed_prolongator(
     })
 }
 
-/// `A_c = P^T A P`, through `A P` (rows of the fine level) and `P`'s
-/// transpose.
-fn galerkin(op: Operator<'_>, p: &Rows<f32>, n_coarse: usize) -> Rows<f64> {
-    let ap: Rows<f64> = Rows::build(op.n(), n_coarse, |i, acc| {
-        for (k, a) in op.row(i) {
-            for (c, v) in p.row(k) {
-                acc.add(c, a * v);
+/// `A_c = P^T A P`, band by band of coarse rows: a band's rows are
+/// `P^T (A P)` over the rows of `A P` its columns of `P` reach, made for
+/// the band alone, as are its rows of `P^T`. Made whole, `A P` and `P^T`
+/// were the setup's largest transients (about 230 and 80 bytes a point at
+/// 1e6 GIMP column points, with the tangent and the finest prolongator
+/// alive); a band's are [`GALERKIN_BAND`] coarse rows' worth, and the rows
+/// of `A P` two bands share (the aggregates are numbered row by row of the
+/// grid, so a band is a strip) are made twice.
+/// `band` is the coarse rows of a band ([`GALERKIN_BAND`]).
+fn galerkin(op: Operator<'_>, p: &Rows<f32>, n_coarse: usize, band: usize) -> Rows<f64> {
+    // Each band's rows of `A P`, numbered by `local` (fine row -> row of
+    // the band's `A P`).
+    let mut local = vec![u32::MAX; op.n()];
+    let mut bands: Vec<Rows<f64>> = Vec::new();
+    for start in (0..n_coarse).step_by(band) {
+        let end = (start + band).min(n_coarse);
+        // The band's rows of P^T: (fine row, value) by coarse column, from
+        // each row of P's entries in the band (its columns are sorted).
+        let mut entries: Vec<(u32, u32, f32)> = (0..p.n_rows())
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let (cols, vals) = (
+                    &p.col[p.ptr[i]..p.ptr[i + 1]],
+                    &p.val[p.ptr[i]..p.ptr[i + 1]],
+                );
+                let first = cols.partition_point(|&c| (c as usize) < start);
+                let last = cols.partition_point(|&c| (c as usize) < end);
+                (first..last).map(move |k| (cols[k], i as u32, vals[k]))
+            })
+            .collect();
+        entries.par_sort_unstable_by_key(|&(c, i, _)| (c, i));
+        let mut ptr = vec![0usize; end - start + 1];
+        for &(c, ..) in &entries {
+            ptr[c as usize - start + 1] += 1;
+        }
+        for r in 0..end - start {
+            ptr[r + 1] += ptr[r];
+        }
+        let (fine, value): (Vec<u32>, Vec<f32>) =
+            entries.into_iter().map(|(_, i, v)| (i, v)).unzip();
+        let mut reached = fine.clone();
+        reached.par_sort_unstable();
+        reached.dedup();
+        for (l, &i) in reached.iter().enumerate() {
+            local[i as usize] = l as u32;
+        }
+        let ap: Rows<f64> = Rows::build(reached.len(), n_coarse, |l, acc| {
+            for (k, a) in op.row(reached[l] as usize) {
+                for (c, v) in p.row(k) {
+                    acc.add(c, a * v);
+                }
             }
-        }
-    });
-    // P^T's rows: (fine row, value) by coarse column.
-    let mut ptr = vec![0usize; n_coarse + 1];
-    for &c in &p.col {
-        ptr[c as usize + 1] += 1;
-    }
-    for c in 0..n_coarse {
-        ptr[c + 1] += ptr[c];
-    }
-    let mut next = ptr.clone();
-    let mut fine = vec![0u32; p.col.len()];
-    let mut value = vec![0f32; p.col.len()];
-    for i in 0..p.n_rows() {
-        for k in p.ptr[i]..p.ptr[i + 1] {
-            let c = p.col[k] as usize;
-            fine[next[c]] = i as u32;
-            value[next[c]] = p.val[k];
-            next[c] += 1;
-        }
-    }
-    drop(next);
-    Rows::build(n_coarse, n_coarse, |c, acc| {
-        for k in ptr[c]..ptr[c + 1] {
-            let (i, pv) = (fine[k] as usize, f64::from(value[k]));
-            for (j, v) in ap.row(i) {
-                acc.add(j, pv * v);
+        });
+        bands.push(Rows::build(end - start, n_coarse, |r, acc| {
+            for k in ptr[r]..ptr[r + 1] {
+                let (l, pv) = (local[fine[k] as usize] as usize, f64::from(value[k]));
+                for (j, v) in ap.row(l) {
+                    acc.add(j, pv * v);
+                }
             }
-        }
-    })
+        }));
+    }
+    Rows::concatenate(bands)
 }
 
 #[cfg(test)]
@@ -1010,7 +1067,9 @@ mod tests {
     /// `A_c = P^T A P` against the product of dense matrices.
     #[test]
     fn the_coarse_operator_is_the_galerkin_product() {
-        // 2,178 rows: more than one of `Rows::build`'s chunks.
+        // 2,178 rows: more than one of `Rows::build`'s chunks. The product
+        // is made whole, and in bands of 100 coarse rows (the last one
+        // short), which must agree to the bit.
         let plate = Plate::new(32);
         let op = plate.operator();
         let n = op.n();
@@ -1020,7 +1079,17 @@ mod tests {
         let t = Tentative::new(&aggregate_of, coarse.len(), &dof_start, &modes);
         let (inv_diag, top) = smoother(op, &mut power_start(n), POWER_ITERATIONS);
         let p = smoothed_prolongator(op, &inv_diag, 4.0 / (3.0 * top), &t);
-        let a_c = galerkin(op, &p, t.n_coarse);
+        let a_c = galerkin(op, &p, t.n_coarse, t.n_coarse);
+        let banded = galerkin(op, &p, t.n_coarse, 100);
+        assert!(
+            t.n_coarse > 300 && !t.n_coarse.is_multiple_of(100),
+            "{}",
+            t.n_coarse
+        );
+        assert_eq!(
+            (&banded.ptr, &banded.col, &banded.val),
+            (&a_c.ptr, &a_c.col, &a_c.val)
+        );
         let dense = |rows: &mut dyn Iterator<Item = (usize, usize, f64)>, r, c| {
             let mut m = Mat::<f64>::zeros(r, c);
             for (i, j, v) in rows {

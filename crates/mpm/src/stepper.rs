@@ -26,9 +26,9 @@ use crate::boundary::BoundaryLoop;
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::{BoundaryLoading, LoadedStretch};
 use crate::configuration::Configuration;
-use crate::equilibrium::{AnalysedPattern, StepEquilibrium, StepTerms, increment};
+use crate::equilibrium::{AnalysedPattern, PointState, StepEquilibrium, StepTerms, increment};
 use crate::grid::{Basis, Connectivity, Grid, NodeKey};
-use crate::material::{Elastic, Response};
+use crate::material::Elastic;
 use crate::newton::{self, NewtonSettings, SolveError};
 use crate::observer::{Observer, StepState};
 use crate::particles::MaterialPoints;
@@ -318,8 +318,8 @@ impl Simulation {
         let active_dofs = eq.n_free_dofs();
         let converged = eq.into_converged();
         self.analysed = Some(converged.analysed);
-        let (responses, band) = (converged.responses, converged.band);
-        self.update_points(&conn, &u, &responses);
+        let (states, band) = (converged.states, converged.band);
+        self.update_points(&conn, &u, &states);
         self.probes.advect(&self.grid, self.basis, &conn, &u);
         self.advance_anchors(&band, &conn, &u);
         let timings = StepTimings {
@@ -469,7 +469,7 @@ impl Simulation {
     }
 
     /// Moves each point with the grid displacement and commits its state.
-    fn update_points(&mut self, conn: &Connectivity, u: &[f64], responses: &[Response]) {
+    fn update_points(&mut self, conn: &Connectivity, u: &[f64], states: &[PointState]) {
         let mp = &mut self.points;
         (
             &mut mp.position,
@@ -486,9 +486,9 @@ impl Simulation {
                 x[0] += dx[0];
                 x[1] += dx[1];
                 *f = df * *f;
-                *yielding = responses[p].history.plastic_strain > history.plastic_strain;
-                *history = responses[p].history;
-                *stress = responses[p].cauchy;
+                *yielding = states[p].history.plastic_strain > history.plastic_strain;
+                *history = states[p].history;
+                *stress = states[p].cauchy;
             });
     }
 

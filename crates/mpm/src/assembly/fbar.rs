@@ -65,8 +65,11 @@ pub struct FbarCells {
     nodes: Vec<Vec<u32>>,
 }
 
-/// What the coupling term of the tangent needs from the trial state.
+/// What the trial state's responses and the coupling term of the tangent
+/// need from the trial state.
 pub struct FbarTrial {
+    /// Per cell, `dJ_bar - 1` ([`FbarCells::averages`]).
+    pub averages: Vec<f64>,
     /// Per point, `B_p / dJ_bar`.
     b: Vec<Matrix2<f64>>,
     /// Per point, `w_q dJ_q dF_q^-T`.
@@ -265,8 +268,16 @@ impl FbarCells {
 type CellBlock = (usize, Vec<[f64; 2]>, Vec<[f64; 2]>);
 
 impl FbarTrial {
-    pub fn new(shares: Vec<(Matrix2<f64>, Matrix2<f64>)>) -> Self {
+    pub fn new(averages: Vec<f64>, shares: Vec<(Matrix2<f64>, Matrix2<f64>)>) -> Self {
         let (b, v) = shares.into_iter().unzip();
-        Self { b, v }
+        Self { averages, b, v }
+    }
+
+    /// Bytes held on the heap.
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        size_of_val(self.averages.as_slice())
+            + size_of_val(self.b.as_slice())
+            + size_of_val(self.v.as_slice())
     }
 }

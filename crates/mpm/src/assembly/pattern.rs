@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use crate::grid::Connectivity;
+use crate::grid::{Connectivity, node_indices};
 
 /// Sparsity of the stiffness matrix, in compressed columns (faer's form,
 /// with 32-bit row indices).
@@ -12,11 +12,8 @@ pub struct Pattern {
     /// Neighbours of node `b` are `neighbours[first[b]..first[b + 1]]`, sorted.
     first: Vec<usize>,
     neighbours: Vec<u32>,
-    /// The links that touch node `b` are `incident[touching[b]..touching[b + 1]]`,
-    /// each as (point, index into `Connectivity::links`): the stiffness
-    /// assembly fills node `b`'s columns from them alone.
-    touching: Vec<usize>,
-    incident: Vec<(u32, u32)>,
+    /// The points in tiles of the grid, the stiffness assembly's schedule.
+    pub(crate) tiles: PointTiles,
     pub col_ptr: Vec<usize>,
     /// 32-bit, as the node lists are: half the bytes of faer's `usize`
     /// (95 bytes a point at 1e6 GIMP points) for every product with the
@@ -60,7 +57,8 @@ impl Pattern {
                 node_groups[a as usize].push(g as u32);
             }
         }
-        // Node -> links incidence, in compressed form.
+        // Node -> links incidence, in compressed form (for the neighbour
+        // lists alone).
         let mut touching = vec![0usize; n_nodes + 1];
         for l in &conn.links {
             touching[l.node as usize + 1] += 1;
@@ -127,42 +125,14 @@ impl Pattern {
                 col_ptr.push(row_idx.len());
             }
         }
+        drop((touching, incident));
         Self {
             first,
             neighbours,
-            touching,
-            incident,
+            tiles: PointTiles::build(conn),
             col_ptr,
             row_idx,
         }
-    }
-
-    /// The links that touch node `b`: (point, index into
-    /// `Connectivity::links`).
-    #[inline]
-    pub(crate) fn incident(&self, b: usize) -> &[(u32, u32)] {
-        &self.incident[self.touching[b]..self.touching[b + 1]]
-    }
-
-    /// `values` cut into each node's two columns, in node order.
-    pub(crate) fn node_columns_mut<'v>(&self, mut values: &'v mut [f64]) -> Vec<&'v mut [f64]> {
-        let n_nodes = self.first.len().saturating_sub(1);
-        let mut columns = Vec::with_capacity(n_nodes);
-        for b in 0..n_nodes {
-            let (column, rest) = values.split_at_mut(self.col_ptr[2 * b + 2] - self.col_ptr[2 * b]);
-            columns.push(column);
-            values = rest;
-        }
-        columns
-    }
-
-    /// Offset of row node `a`'s 2x2 block within column node `b`'s columns
-    /// (as cut by [`Pattern::node_columns_mut`]); entry `(r, c)` is at
-    /// `offset + r + c * 2 * degree(b)`.
-    #[inline]
-    pub(crate) fn block_in_column(&self, a: u32, b: u32) -> usize {
-        let nb = &self.neighbours[self.first[b as usize]..self.first[b as usize + 1]];
-        2 * nb.binary_search(&a).expect("linked nodes are neighbours")
     }
 
     /// Fills every 2x2 block below the diagonal from its mirror above it,
@@ -218,8 +188,7 @@ impl Pattern {
         use std::mem::size_of_val;
         size_of_val(self.first.as_slice())
             + size_of_val(self.neighbours.as_slice())
-            + size_of_val(self.touching.as_slice())
-            + size_of_val(self.incident.as_slice())
+            + self.tiles.heap_bytes()
             + size_of_val(self.col_ptr.as_slice())
             + size_of_val(self.row_idx.as_slice())
     }
@@ -257,10 +226,121 @@ impl Pattern {
     }
 }
 
-/// The values of a matrix in a [`Pattern`], shared by the tasks of
-/// [`Pattern::mirror_upper`], which write disjoint places.
-struct SharedValues(*mut f64);
+/// The values of a matrix in a [`Pattern`], shared by tasks that write
+/// disjoint places ([`Pattern::mirror_upper`], the stiffness assembly's
+/// tiles of one colour).
+pub(crate) struct SharedValues(pub(crate) *mut f64);
 unsafe impl Sync for SharedValues {}
+
+/// The points of a step in tiles of the grid, for an assembly that writes
+/// from many points at once without accumulators of its own.
+///
+/// A point's tile is the square of `side` x `side` nodes that holds its
+/// lowest linked node in each direction, and a tile's colour is the parity
+/// of its two indices. A point's nodes lie within `span` nodes of its
+/// lowest ones in each direction (2 for the bilinear basis, 3 for GIMP, 4
+/// for cubic B-splines), so the nodes of a tile's points lie within
+/// `side + span - 1` nodes of the tile's corner; two tiles of one colour
+/// are `2 side` nodes apart, so with `side >= span - 1` their points share
+/// no node, and no entry of the tangent. The tiles of one colour can then
+/// be summed into in parallel, colour after colour.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PointTiles {
+    /// The points, tile by tile (in each, in their own order).
+    points: Vec<u32>,
+    /// Tile `t`'s points are `points[start[t]..start[t + 1]]`.
+    start: Vec<usize>,
+    /// Colour `c`'s tiles are `colour_start[c]..colour_start[c + 1]`.
+    colour_start: [usize; 5],
+}
+
+/// A tile's side in nodes when the points' span is smaller: a few hundred
+/// points a tile at four points a cell (enough work a task, and some
+/// thousand tiles at a million points to balance over the threads).
+const MIN_TILE_SIDE: i64 = 8;
+
+impl PointTiles {
+    fn build(conn: &Connectivity) -> Self {
+        let coordinates: Vec<(i64, i64)> = conn
+            .nodes
+            .par_iter()
+            .map(|&key| node_indices(key))
+            .collect();
+        // Each point's lowest node and its span (points that link to no
+        // node have none and add nothing).
+        let lowest = |p: usize| {
+            let links = conn.point_links(p);
+            let ends = links.iter().fold(
+                ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN)),
+                |((i0, j0), (i1, j1)), l| {
+                    let (i, j) = coordinates[l.node as usize];
+                    ((i0.min(i), j0.min(j)), (i1.max(i), j1.max(j)))
+                },
+            );
+            (!links.is_empty()).then_some(ends)
+        };
+        let span = (0..conn.n_points())
+            .into_par_iter()
+            .filter_map(lowest)
+            .map(|((i0, j0), (i1, j1))| (i1 - i0 + 1).max(j1 - j0 + 1))
+            .max()
+            .unwrap_or(1);
+        let side = (span - 1).max(MIN_TILE_SIDE);
+        let tile = |p: usize| {
+            let ((i0, j0), _) = lowest(p)?;
+            Some((i0.div_euclid(side), j0.div_euclid(side)))
+        };
+        let (ti_min, tj_min) = (0..conn.n_points())
+            .into_par_iter()
+            .filter_map(tile)
+            .reduce(|| (i64::MAX, i64::MAX), |a, b| (a.0.min(b.0), a.1.min(b.1)));
+        // Sorted by colour, then tile, then point: (colour, tile row and
+        // column from the lowest, in 30 bits each) over the point.
+        let mut keyed: Vec<(u64, u32)> = (0..conn.n_points())
+            .into_par_iter()
+            .filter_map(|p| {
+                let (ti, tj) = tile(p)?;
+                let colour = (ti.rem_euclid(2) + 2 * tj.rem_euclid(2)) as u64;
+                let (di, dj) = ((ti - ti_min) as u64, (tj - tj_min) as u64);
+                assert!(di < 1 << 30 && dj < 1 << 30, "a grid of 8e9 nodes a side");
+                Some((colour << 60 | di << 30 | dj, p as u32))
+            })
+            .collect();
+        keyed.par_sort_unstable();
+        let mut start = Vec::new();
+        let mut colour_start = [0; 5];
+        for (k, &(key, _)) in keyed.iter().enumerate() {
+            if k == 0 || keyed[k - 1].0 != key {
+                start.push(k);
+                // Colours without tiles start where the next one does.
+                for c in &mut colour_start[(key >> 60) as usize + 1..] {
+                    *c = start.len();
+                }
+            }
+        }
+        colour_start[4] = start.len();
+        start.push(keyed.len());
+        Self {
+            points: keyed.into_iter().map(|(_, p)| p).collect(),
+            start,
+            colour_start,
+        }
+    }
+
+    /// The tiles of colour `colour` (of 4).
+    pub(crate) fn of_colour(&self, colour: usize) -> std::ops::Range<usize> {
+        self.colour_start[colour]..self.colour_start[colour + 1]
+    }
+
+    /// The points of tile `t`.
+    pub(crate) fn points(&self, t: usize) -> &[u32] {
+        &self.points[self.start[t]..self.start[t + 1]]
+    }
+
+    fn heap_bytes(&self) -> usize {
+        std::mem::size_of_val(self.points.as_slice()) + std::mem::size_of_val(self.start.as_slice())
+    }
+}
 
 /// Replaces the rows and columns of fixed DOFs by a scaled identity, so the
 /// solve returns zero increments there. Only the fixed DOFs' columns and
@@ -293,5 +373,68 @@ pub fn constrain(pattern: &Pattern, values: &mut [f64], fixed: &[bool]) {
             values[base + c + stride] = 0.0;
         }
         values[diagonal(dof)] = scale;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::HashMap;
+
+    use super::Pattern;
+    use crate::case::Case;
+    use crate::stepper::Simulation;
+
+    /// The assembly's schedule: every point that links to a node is in one
+    /// tile, and no node is linked from two tiles of one colour, for the
+    /// widest basis (cubic B-splines, 5 x 5 nodes a point) as for GIMP, on
+    /// a body over 6 x 6 tiles cut off-grid (a tile side of 8 nodes
+    /// against a span of 5 needs `side >= span - 1`; with a side of 3 the
+    /// cubic case fails, checked).
+    #[test]
+    fn tiles_of_one_colour_share_no_node() {
+        for basis in ["gimp", "bspline3"] {
+            let case = serde_json::json!({
+                "version": 1,
+                "analysis": { "load_steps": 1 },
+                "grid": { "cell_size": 0.5, "origin": [0.1, 0.13] },
+                "basis": basis,
+                "bodies": [{
+                    "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [24.0, 24.0] } },
+                    "points": { "count": [96, 96] },
+                    "material": { "model": "hencky", "youngs_modulus": 1e6, "poisson_ratio": 0.3, "density": 1.0 }
+                }],
+                "supports": [ { "on": { "y": 0.0 }, "fix": "xy", "method": "ibm" } ]
+            });
+            let sim = Simulation::new(&Case::from_json(&case.to_string()).unwrap()).unwrap();
+            let conn = sim.reset_grid();
+            let tiles = Pattern::build(&conn, &[]).tiles;
+            let mut seen = vec![0; conn.n_points()];
+            let mut tiles_of_colour = [0; 4];
+            for colour in 0..4 {
+                let mut owner: HashMap<u32, usize> = HashMap::new();
+                for t in tiles.of_colour(colour) {
+                    tiles_of_colour[colour] += 1;
+                    for &p in tiles.points(t) {
+                        seen[p as usize] += 1;
+                        for l in conn.point_links(p as usize) {
+                            let first = *owner.entry(l.node).or_insert(t);
+                            assert_eq!(
+                                first, t,
+                                "{basis}: node {} in tiles {first} and {t}",
+                                l.node
+                            );
+                        }
+                    }
+                }
+            }
+            assert!(
+                seen.iter().all(|&n| n == 1),
+                "{basis}: a point not in one tile"
+            );
+            assert!(
+                tiles_of_colour.iter().all(|&n| n >= 9),
+                "{basis}: {tiles_of_colour:?}"
+            );
+        }
     }
 }
