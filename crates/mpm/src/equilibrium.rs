@@ -231,7 +231,7 @@ impl<'a> StepEquilibrium<'a> {
         let states = (0..self.points.len())
             .into_par_iter()
             .map(|p| {
-                let r = responses.at(p);
+                let r = responses.at(p, false);
                 PointState {
                     history: r.history,
                     cauchy: r.cauchy,
@@ -285,7 +285,7 @@ impl<'a> StepEquilibrium<'a> {
             self.conn,
             &self.pattern,
             self.points,
-            |p| responses.at(p).tangent,
+            |p| responses.at(p, true).tangent,
             symmetric_points,
             &mut k,
         );
@@ -341,7 +341,7 @@ impl Equilibrium for StepEquilibrium<'_> {
             // lowest-numbered one is reported.
             let responses = self.trial_responses();
             let inverted = AtomicUsize::new(usize::MAX);
-            let f_int = assembly::internal_force(conn, mp, |p| match responses.checked(p) {
+            let f_int = assembly::internal_force(conn, mp, |p| match responses.checked(p, false) {
                 Ok(response) => response.p,
                 Err(_) => {
                     inverted.fetch_min(p, Ordering::Relaxed);
@@ -350,7 +350,7 @@ impl Equilibrium for StepEquilibrium<'_> {
             });
             let point = inverted.into_inner();
             if point != usize::MAX
-                && let Err(inverted) = responses.checked(point)
+                && let Err(inverted) = responses.checked(point, false)
             {
                 return Err(inverted);
             }
@@ -445,8 +445,10 @@ struct TrialResponses<'s> {
 }
 
 impl TrialResponses<'_> {
-    /// Point `p`'s response, or the point if `u` inverts it.
-    fn checked(&self, p: usize) -> Result<Response, InvertedPoint> {
+    /// Point `p`'s response, or the point if `u` inverts it. Without
+    /// `want_tangent` its tangent may be left zero
+    /// ([`Material::respond_without_tangent`]; F-bar's point needs it).
+    fn checked(&self, p: usize, want_tangent: bool) -> Result<Response, InvertedPoint> {
         let (conn, mp) = (self.conn, self.points);
         if let Some((fbar, averages)) = self.fbar {
             return fbar_response(fbar, averages, conn, mp, self.u, p)
@@ -458,14 +460,19 @@ impl TrialResponses<'_> {
         if jacobian.is_nan() || jacobian <= 0.0 {
             return Err(InvertedPoint { point: p, jacobian });
         }
-        Ok(mp.materials[mp.material[p] as usize].respond(&mp.history[p], &grad_u, j_start))
+        let material = &mp.materials[mp.material[p] as usize];
+        Ok(if want_tangent {
+            material.respond(&mp.history[p], &grad_u, j_start)
+        } else {
+            material.respond_without_tangent(&mp.history[p], &grad_u, j_start)
+        })
     }
 
     /// Point `p`'s response at a trial state the point loop found
     /// admissible: the only ones Newton assembles a tangent at or converges
     /// to. (A point inverted would answer its start's response.)
-    fn at(&self, p: usize) -> Response {
-        self.checked(p).unwrap_or_else(|_| {
+    fn at(&self, p: usize, want_tangent: bool) -> Response {
+        self.checked(p, want_tangent).unwrap_or_else(|_| {
             let mp = self.points;
             let j_start = mp.deformation[p].determinant();
             mp.materials[mp.material[p] as usize].respond(
@@ -621,7 +628,7 @@ mod tests {
                 eq.conn,
                 &eq.pattern,
                 eq.points,
-                |p| eq.trial_responses().at(p).tangent,
+                |p| eq.trial_responses().at(p, true).tangent,
                 symmetric,
                 &mut k,
             );

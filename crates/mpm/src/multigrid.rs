@@ -118,57 +118,41 @@ struct Rows<T> {
 
 impl<T: Entry> Rows<T> {
     /// Builds `n_rows` rows over `n_cols` columns, row `i`'s entries the
-    /// sums `fill(i, acc)` adds into `acc`, on rayon's threads. Each row
-    /// is made twice, once to count and once to store, so that nothing
-    /// is held twice.
+    /// sums `fill(i, acc)` adds into `acc`, on rayon's threads: pieces of
+    /// [`CHUNK`] rows, each made once, then put end to end
+    /// ([`Rows::concatenate`], which gives each piece back as it copies
+    /// it, so the rows are held about once).
     fn build(n_rows: usize, n_cols: usize, fill: impl Fn(usize, &mut Accumulator) + Sync) -> Self {
-        const CHUNK: usize = 2048;
-        let lengths: Vec<usize> = (0..n_rows)
+        let pieces = n_rows.div_ceil(CHUNK);
+        // A few runs of pieces a thread, each run with one accumulator (a
+        // dense row of `n_cols`).
+        let run = pieces.div_ceil(4 * rayon::current_num_threads()).max(1);
+        let pieces: Vec<Self> = (0..pieces)
             .into_par_iter()
-            .with_min_len(CHUNK)
+            .with_min_len(run)
             .map_init(
                 || Accumulator::new(n_cols),
-                |acc, i| {
-                    fill(i, acc);
-                    acc.clear()
+                |acc, piece| {
+                    let rows = piece * CHUNK..((piece + 1) * CHUNK).min(n_rows);
+                    let mut made = Self {
+                        ptr: Vec::with_capacity(rows.len() + 1),
+                        col: Vec::new(),
+                        val: Vec::new(),
+                    };
+                    made.ptr.push(0);
+                    for i in rows {
+                        fill(i, acc);
+                        for (c, v) in acc.drain() {
+                            made.col.push(c);
+                            made.val.push(T::from_f64(v));
+                        }
+                        made.ptr.push(made.col.len());
+                    }
+                    made
                 },
             )
             .collect();
-        let mut ptr = Vec::with_capacity(n_rows + 1);
-        ptr.push(0);
-        for len in &lengths {
-            ptr.push(ptr.last().copied().unwrap_or(0) + len);
-        }
-        drop(lengths);
-        let nnz = ptr[n_rows];
-        let mut col = vec![0u32; nnz];
-        let mut val = vec![T::default(); nnz];
-        // Disjoint slices of the storage, one a chunk of rows.
-        let mut pieces = Vec::new();
-        let (mut col_rest, mut val_rest) = (col.as_mut_slice(), val.as_mut_slice());
-        for start in (0..n_rows).step_by(CHUNK) {
-            let end = (start + CHUNK).min(n_rows);
-            let len = ptr[end] - ptr[start];
-            let (c, c_rest) = col_rest.split_at_mut(len);
-            let (v, v_rest) = val_rest.split_at_mut(len);
-            pieces.push((start..end, c, v));
-            (col_rest, val_rest) = (c_rest, v_rest);
-        }
-        pieces.into_par_iter().for_each_init(
-            || Accumulator::new(n_cols),
-            |acc, (rows, col, val)| {
-                let mut k = 0;
-                for i in rows {
-                    fill(i, acc);
-                    for (c, v) in acc.drain() {
-                        col[k] = c;
-                        val[k] = T::from_f64(v);
-                        k += 1;
-                    }
-                }
-            },
-        );
-        Self { ptr, col, val }
+        Self::concatenate(pieces)
     }
 
     fn n_rows(&self) -> usize {
@@ -242,6 +226,9 @@ impl Entry for f64 {
     }
 }
 
+/// Rows a piece of [`Rows::build`] makes.
+const CHUNK: usize = 2048;
+
 /// One row's sums, by column, over a dense array stamped by row.
 struct Accumulator {
     value: Vec<f64>,
@@ -266,16 +253,6 @@ impl Accumulator {
             self.value[col] = v;
             self.cols.push(col as u32);
         }
-    }
-
-    /// The row's number of entries; the accumulator is empty after.
-    fn clear(&mut self) -> usize {
-        for &c in &self.cols {
-            self.seen[c as usize] = false;
-        }
-        let count = self.cols.len();
-        self.cols.clear();
-        count
     }
 
     /// The row's entries in column order; the accumulator is empty after.
@@ -793,32 +770,40 @@ fn galerkin(op: Operator<'_>, p: &Rows<f32>, n_coarse: usize, band: usize) -> Ro
     for start in (0..n_coarse).step_by(band) {
         let end = (start + band).min(n_coarse);
         // The band's rows of P^T: (fine row, value) by coarse column, from
-        // each row of P's entries in the band (its columns are sorted).
-        let mut entries: Vec<(u32, u32, f32)> = (0..p.n_rows())
-            .into_par_iter()
-            .flat_map_iter(|i| {
-                let (cols, vals) = (
-                    &p.col[p.ptr[i]..p.ptr[i + 1]],
-                    &p.val[p.ptr[i]..p.ptr[i + 1]],
-                );
-                let first = cols.partition_point(|&c| (c as usize) < start);
-                let last = cols.partition_point(|&c| (c as usize) < end);
-                (first..last).map(move |k| (cols[k], i as u32, vals[k]))
-            })
-            .collect();
-        entries.par_sort_unstable_by_key(|&(c, i, _)| (c, i));
+        // the rows of P that reach the band (in order; each row's columns
+        // are sorted, so its entries in the band are a run).
+        let in_band = |i: usize| {
+            let cols = &p.col[p.ptr[i]..p.ptr[i + 1]];
+            let first = cols.partition_point(|&c| (c as usize) < start);
+            let last = cols.partition_point(|&c| (c as usize) < end);
+            p.ptr[i] + first..p.ptr[i] + last
+        };
+        let mut reached: Vec<u32> = Vec::new();
         let mut ptr = vec![0usize; end - start + 1];
-        for &(c, ..) in &entries {
-            ptr[c as usize - start + 1] += 1;
+        for i in 0..p.n_rows() {
+            let run = in_band(i);
+            if !run.is_empty() {
+                reached.push(i as u32);
+            }
+            for &c in &p.col[run] {
+                ptr[c as usize - start + 1] += 1;
+            }
         }
         for r in 0..end - start {
             ptr[r + 1] += ptr[r];
         }
-        let (fine, value): (Vec<u32>, Vec<f32>) =
-            entries.into_iter().map(|(_, i, v)| (i, v)).unzip();
-        let mut reached = fine.clone();
-        reached.par_sort_unstable();
-        reached.dedup();
+        let mut next = ptr.clone();
+        let mut fine = vec![0u32; ptr[end - start]];
+        let mut value = vec![0f32; ptr[end - start]];
+        for &i in &reached {
+            for k in in_band(i as usize) {
+                let r = p.col[k] as usize - start;
+                fine[next[r]] = i;
+                value[next[r]] = p.val[k];
+                next[r] += 1;
+            }
+        }
+        drop(next);
         for (l, &i) in reached.iter().enumerate() {
             local[i as usize] = l as u32;
         }
@@ -1067,7 +1052,7 @@ mod tests {
     /// `A_c = P^T A P` against the product of dense matrices.
     #[test]
     fn the_coarse_operator_is_the_galerkin_product() {
-        // 2,178 rows: more than one of `Rows::build`'s chunks. The product
+        // 2,178 rows: more than one of `Rows::build`'s pieces. The product
         // is made whole, and in bands of 100 coarse rows (the last one
         // short), which must agree to the bit.
         let plate = Plate::new(32);

@@ -72,6 +72,7 @@ pub(super) fn drucker_prager(
     state: &History,
     df: &Matrix2<f64>,
     j_start: f64,
+    want_tangent: bool,
 ) -> Response {
     let Elastic { lambda, mu } = m.elastic;
     let bulk = lambda + 2.0 * mu / 3.0;
@@ -101,7 +102,7 @@ pub(super) fn drucker_prager(
             to_apex(m, &elastic, volumetric, norm)
         }
     };
-    respond(state, df, j_start, &trial, &returned)
+    respond(state, df, j_start, &trial, &returned, want_tangent)
 }
 
 /// The return to the cone's smooth part by `dgamma`.
@@ -198,7 +199,13 @@ mod tests {
             let Elastic { lambda, mu } = m.elastic;
             let bulk = lambda + 2.0 * mu / 3.0;
             let l: f64 = 1.002;
-            let r = drucker_prager(&m, &virgin(), &Matrix2::new(l, 0.0, 0.0, 1.0 / l), 1.0);
+            let r = drucker_prager(
+                &m,
+                &virgin(),
+                &Matrix2::new(l, 0.0, 0.0, 1.0 / l),
+                1.0,
+                true,
+            );
             let j_trial = 2.0 * mu * l.ln();
             let dgamma = (j_trial - m.xi * m.cohesion) / (mu + bulk * m.eta * m.eta_flow);
             assert!(dgamma > 0.0, "the stretch yields");
@@ -217,7 +224,7 @@ mod tests {
                 "on the cone"
             );
             let release = Matrix2::new(0.9999, 0.0, 0.0, 1.0 / 0.9999);
-            let u = drucker_prager(&m, &r.history, &release, 1.0);
+            let u = drucker_prager(&m, &r.history, &release, 1.0, true);
             assert_eq!(u.history.plastic_strain, r.history.plastic_strain);
             let (j_after, p_after) = invariants(&u);
             assert!(
@@ -238,8 +245,8 @@ mod tests {
             hardening: 0.0,
         };
         let df = Matrix2::new(1.003, 0.001, -0.0004, 0.998);
-        let a = drucker_prager(&m, &virgin(), &df, 1.0);
-        let b = von_mises(&vm, &virgin(), &df, 1.0);
+        let a = drucker_prager(&m, &virgin(), &df, 1.0, true);
+        let b = von_mises(&vm, &virgin(), &df, 1.0, true);
         assert!(a.history.plastic_strain > 0.0);
         assert!((a.p - b.p).norm() < 1e-9 * m.cohesion);
         assert!((a.tangent - b.tangent).norm() < 1e-9 * b.tangent.norm());
@@ -261,7 +268,7 @@ mod tests {
                     zz: (2.0 * e_zz).exp(),
                     ..virgin()
                 };
-                let r = drucker_prager(&m, &state, &df, 1.0);
+                let r = drucker_prager(&m, &state, &df, 1.0, true);
                 (e_zz - 0.5 * r.history.zz.ln(), r)
             };
             let (mut lo, mut hi) = (-0.008, 0.005);
@@ -297,7 +304,13 @@ mod tests {
     #[test]
     fn an_expansion_past_the_apex_returns_to_it() {
         let m = soil(20.0, 20.0);
-        let r = drucker_prager(&m, &virgin(), &Matrix2::new(1.01, 0.0, 0.0, 1.01), 1.0);
+        let r = drucker_prager(
+            &m,
+            &virgin(),
+            &Matrix2::new(1.01, 0.0, 0.0, 1.01),
+            1.0,
+            true,
+        );
         let apex = m.xi * m.cohesion / m.eta;
         // Cauchy = Kirchhoff / J.
         let j = 1.01f64 * 1.01;
@@ -334,18 +347,21 @@ mod tests {
                 &virgin(),
                 &Matrix2::new(1.002, 0.0, 0.0, 1.0 / 1.002),
                 1.0,
+                true,
             )
             .history;
             let state = if name == "elastic" { virgin() } else { state };
-            let plastic =
-                drucker_prager(&m, &state, &df, 1.0).history.plastic_strain > state.plastic_strain;
+            let plastic = drucker_prager(&m, &state, &df, 1.0, true)
+                .history
+                .plastic_strain
+                > state.plastic_strain;
             assert_eq!(
                 plastic,
                 name != "elastic",
                 "{name}: the case is what it says"
             );
             crate::material::assert_tangent_is_the_derivative(
-                |df| drucker_prager(&m, &state, df, 1.0),
+                |df| drucker_prager(&m, &state, df, 1.0, true),
                 &df,
                 1e-9,
                 1e-6,

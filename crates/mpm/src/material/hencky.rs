@@ -12,12 +12,19 @@ use super::{CauchyStress, Elastic, History, Response};
 /// `db = E b_n dF^T + dF b_n E^T`, `de = L[db] / 2` with `L` the derivative
 /// of the matrix logarithm, `dtau = lambda tr(de) I + 2 mu de`,
 /// `dP = dtau dF^-T - tau dF^-T E^T dF^-T`.
-pub(super) fn hencky(c: &Elastic, b_n: &Matrix2<f64>, df: &Matrix2<f64>, j_start: f64) -> Response {
+/// Without `want_tangent`, the tangent is left zero.
+pub(super) fn hencky(
+    c: &Elastic,
+    b_n: &Matrix2<f64>,
+    df: &Matrix2<f64>,
+    j_start: f64,
+    want_tangent: bool,
+) -> Response {
     let b = df * b_n * df.transpose();
     let eig = SymEigen2::new(&b);
     let e = eig.map(|l| 0.5 * l.ln());
     let (tau, tau_zz) = c.stress(&e);
-    let (p, tangent) = piola_and_tangent(b_n, df, &eig, &tau, |de| c.stress(de).0);
+    let (p, tangent) = piola_and_tangent(b_n, df, &eig, &tau, |de| c.stress(de).0, want_tangent);
     let j = j_start * df.determinant();
     Response {
         p,
@@ -36,25 +43,31 @@ pub(super) fn hencky(c: &Elastic, b_n: &Matrix2<f64>, df: &Matrix2<f64>, j_start
 /// `b = dF b_n dF^T` (eigen-decomposed in `eig`): for each unit direction
 /// `E` of `dF`, `db = E b_n dF^T + dF b_n E^T`, `de = L[db] / 2` with `L`
 /// the derivative of the matrix logarithm, `dtau(de)` the model's, and
-/// `dP = dtau dF^-T - tau dF^-T E^T dF^-T`.
+/// `dP = dtau dF^-T - tau dF^-T E^T dF^-T`. Without `want_tangent`, the
+/// tangent is left zero.
 pub(super) fn piola_and_tangent(
     b_n: &Matrix2<f64>,
     df: &Matrix2<f64>,
     eig: &SymEigen2,
     tau: &Matrix2<f64>,
     dtau: impl Fn(&Matrix2<f64>) -> Matrix2<f64>,
+    want_tangent: bool,
 ) -> (Matrix2<f64>, Matrix4<f64>) {
     let df_inv_t = df
         .try_inverse()
         .map(|m| m.transpose())
         .unwrap_or_else(|| Matrix2::from_element(f64::NAN));
     let mut tangent = Matrix4::zeros();
+    if !want_tangent {
+        return (tau * df_inv_t, tangent);
+    }
+    let weights = eig.log_derivative_weights();
     for j in 0..2 {
         for jj in 0..2 {
             let mut dir = Matrix2::zeros();
             dir[(j, jj)] = 1.0;
             let db = dir * b_n * df.transpose() + df * b_n * dir.transpose();
-            let de = eig.log_derivative(&db) * 0.5;
+            let de = eig.log_derivative(&weights, &db) * 0.5;
             let dp = dtau(&de) * df_inv_t - tau * df_inv_t * dir.transpose() * df_inv_t;
             for i in 0..2 {
                 for ii in 0..2 {
@@ -95,11 +108,11 @@ impl SymEigen2 {
             .sum()
     }
 
-    /// Directional derivative of `ln(b)` along a symmetric `db`:
-    /// `sum_ab f_ab (n_a . db n_b) n_a n_b^T` with `f_aa = 1/l_a` and
-    /// `f_ab = (ln l_a - ln l_b)/(l_a - l_b)` (its limit `1/l_a` when the
-    /// eigenvalues coincide).
-    pub(super) fn log_derivative(&self, db: &Matrix2<f64>) -> Matrix2<f64> {
+    /// The weights `f_ab` of [`SymEigen2::log_derivative`]: `f_aa = 1/l_a`
+    /// and `f_ab = (ln l_a - ln l_b)/(l_a - l_b)` (its limit `1/l_a` when
+    /// the eigenvalues coincide), made once for the tangent's four
+    /// directions.
+    pub(super) fn log_derivative_weights(&self) -> [[f64; 2]; 2] {
         let [l0, l1] = self.values;
         let gap = l0 - l1;
         let f01 = if gap.abs() > 1e-8 * l0.abs() {
@@ -110,7 +123,13 @@ impl SymEigen2 {
             let m = 0.5 * (l0 + l1);
             1.0 / m + gap * gap / (12.0 * m * m * m)
         };
-        let f = [[1.0 / l0, f01], [f01, 1.0 / l1]];
+        [[1.0 / l0, f01], [f01, 1.0 / l1]]
+    }
+
+    /// Directional derivative of `ln(b)` along a symmetric `db`:
+    /// `sum_ab f_ab (n_a . db n_b) n_a n_b^T`, `f` the
+    /// [`SymEigen2::log_derivative_weights`].
+    pub(super) fn log_derivative(&self, f: &[[f64; 2]; 2], db: &Matrix2<f64>) -> Matrix2<f64> {
         let mut out = Matrix2::zeros();
         for a in 0..2 {
             for b in 0..2 {

@@ -117,6 +117,7 @@ pub(super) fn mohr_coulomb(
     state: &History,
     df: &Matrix2<f64>,
     j_start: f64,
+    want_tangent: bool,
 ) -> Response {
     let Elastic { lambda, mu } = m.elastic;
     let trial = Trial::new(state, df);
@@ -177,7 +178,7 @@ pub(super) fn mohr_coulomb(
         unit: [0.0; 3],
         moduli: Moduli::Principal(moduli),
     };
-    respond(state, df, j_start, &trial, &returned)
+    respond(state, df, j_start, &trial, &returned, want_tangent)
 }
 
 #[cfg(test)]
@@ -221,7 +222,7 @@ mod tests {
             let m = soil(phi, 0.0);
             let a: f64 = 0.002;
             let (state, df) = trial([a, -a, 0.0]);
-            let r = mohr_coulomb(&m, &state, &df, 1.0);
+            let r = mohr_coulomb(&m, &state, &df, 1.0, true);
             let s = principal(&r, &df);
             let expected = m.cohesion * phi.to_radians().cos();
             let tol = 1e-9 * m.cohesion;
@@ -274,7 +275,7 @@ mod tests {
             let d = m.moduli();
             for (name, e, active_planes) in cases {
                 let (state, df) = trial(e);
-                let r = mohr_coulomb(&m, &state, &df, 1.0);
+                let r = mohr_coulomb(&m, &state, &df, 1.0, true);
                 let s = principal(&r, &df);
                 let tol = 1e-7 * m.cohesion;
                 let values = yield_values(&m, &s);
@@ -337,7 +338,7 @@ mod tests {
                 }
                 let (state, df) = trial(e);
                 crate::material::assert_tangent_is_the_derivative(
-                    |df| mohr_coulomb(&m, &state, df, 1.0),
+                    |df| mohr_coulomb(&m, &state, df, 1.0, true),
                     &(df + shear),
                     1e-9,
                     1e-6,

@@ -96,13 +96,15 @@ pub(super) struct Returned {
 
 /// The response of a returned trial state: `P`, its tangent, the history
 /// to keep (the exponential map of the elastic strains) and the Cauchy
-/// stress on `J = j_start det(dF)`.
+/// stress on `J = j_start det(dF)`; without `want_tangent`, the tangent is
+/// left zero.
 pub(super) fn respond(
     state: &History,
     df: &Matrix2<f64>,
     j_start: f64,
     trial: &Trial,
     ret: &Returned,
+    want_tangent: bool,
 ) -> Response {
     let eig = &trial.eig;
     let in_plane = |v: [f64; 3]| -> Matrix2<f64> {
@@ -153,7 +155,7 @@ pub(super) fn respond(
             }
         }
     };
-    let (p, tangent) = piola_and_tangent(&state.tensor, df, eig, &tau_plane, dtau);
+    let (p, tangent) = piola_and_tangent(&state.tensor, df, eig, &tau_plane, dtau, want_tangent);
     let j = j_start * df.determinant();
     Response {
         p,

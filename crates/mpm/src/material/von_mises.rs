@@ -46,6 +46,7 @@ pub(super) fn von_mises(
     state: &History,
     df: &Matrix2<f64>,
     j_start: f64,
+    want_tangent: bool,
 ) -> Response {
     let Elastic { lambda, mu } = m.elastic;
     let kappa = lambda + 2.0 * mu / 3.0;
@@ -76,7 +77,7 @@ pub(super) fn von_mises(
         unit,
         moduli: Moduli::Invariant(moduli),
     };
-    respond(state, df, j_start, &trial, &returned)
+    respond(state, df, j_start, &trial, &returned, want_tangent)
 }
 
 #[cfg(test)]
@@ -108,7 +109,7 @@ mod tests {
             let mu = m.elastic.mu;
             let l: f64 = 1.01;
             let df = Matrix2::new(l, 0.0, 0.0, 1.0 / l);
-            let r = von_mises(&m, &History::elastic(Matrix2::identity()), &df, 1.0);
+            let r = von_mises(&m, &History::elastic(Matrix2::identity()), &df, 1.0, true);
             let next = r.history;
             let q_trial = 2.0 * 3f64.sqrt() * mu * l.ln();
             let alpha = (q_trial - m.yield_stress) / (3.0 * mu + hardening);
@@ -150,13 +151,14 @@ mod tests {
             &History::elastic(Matrix2::identity()),
             &Matrix2::new(total, 0.0, 0.0, 1.0 / total),
             1.0,
+            true,
         );
         let mut state = History::elastic(Matrix2::identity());
         let step = total.powf(0.1);
         let df = Matrix2::new(step, 0.0, 0.0, 1.0 / step);
         let mut last = None;
         for _ in 0..10 {
-            let r = von_mises(&m, &state, &df, 1.0);
+            let r = von_mises(&m, &state, &df, 1.0, true);
             state = r.history;
             last = Some(r);
         }
@@ -167,7 +169,7 @@ mod tests {
         assert!((state.plastic_strain - one.history.plastic_strain).abs() < 1e-12);
         let back: f64 = 1.0001;
         let release = Matrix2::new(1.0 / back, 0.0, 0.0, back);
-        let u = von_mises(&m, &state, &release, 1.0);
+        let u = von_mises(&m, &state, &release, 1.0, true);
         assert_eq!(u.history.plastic_strain, state.plastic_strain);
         let drop =
             (r.cauchy.plane[0] - r.cauchy.plane[1]) - (u.cauchy.plane[0] - u.cauchy.plane[1]);
@@ -196,6 +198,7 @@ mod tests {
                 &History::elastic(Matrix2::identity()),
                 &Matrix2::new(1.01, 0.0, 0.0, 1.0 / 1.01),
                 1.0,
+                true,
             )
             .history;
             let (state, df) = if plastic {
@@ -206,14 +209,14 @@ mod tests {
                     Matrix2::new(1.0002, 0.0001, -0.0001, 0.9999),
                 )
             };
-            let r = von_mises(&m, &state, &df, 1.0);
+            let r = von_mises(&m, &state, &df, 1.0, true);
             assert_eq!(
                 r.history.plastic_strain > state.plastic_strain,
                 plastic,
                 "the case is what it says"
             );
             crate::material::assert_tangent_is_the_derivative(
-                |df| von_mises(&m, &state, df, 1.0),
+                |df| von_mises(&m, &state, df, 1.0, true),
                 &df,
                 1e-8,
                 1e-6,
