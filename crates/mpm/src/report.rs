@@ -39,9 +39,9 @@ impl std::ops::AddAssign<&StepTimings> for StepTimings {
 }
 
 /// Heap bytes of a load step's largest data, by component, at the end of
-/// its last Newton iteration. The responses are given back while a
-/// factorisation runs, and the factorisation's scratch lives only then:
-/// the step's peak is near their sum less the smaller of the two.
+/// its last Newton iteration. The factorisation's scratch lives only while
+/// a factorisation runs; the rest is alive together at the tangent's
+/// assembly and solve.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, serde::Deserialize)]
 pub struct StepMemory {
     /// The material points' state: positions, volumes, deformation,
@@ -50,12 +50,14 @@ pub struct StepMemory {
     /// Point-node links (node, shape function value and gradient) and the
     /// active nodes' keys.
     pub links: usize,
-    /// The stiffness pattern: node adjacency, node-to-link incidence and
-    /// the compressed columns' pointers and row indices.
+    /// The stiffness pattern: node adjacency, the points in tiles for the
+    /// assembly, and the compressed columns' pointers and row indices.
     pub pattern: usize,
     /// The tangent's values.
     pub tangent: usize,
-    /// Every point's trial stress, tangent and history.
+    /// What the point loop keeps between Newton iterations: F-bar's cell
+    /// averages and coupling terms (the points' responses are made again
+    /// where they are used, not kept).
     pub responses: usize,
     /// The factorisation.
     pub solver: SolverMemory,
