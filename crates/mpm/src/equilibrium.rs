@@ -23,6 +23,7 @@ use crate::grid::{Connectivity, Link, node_coordinates};
 use crate::linsolve::{Factorisation, SparseSolver};
 use crate::material::{CauchyStress, History, Material, Response};
 use crate::newton::{Equilibrium, InvertedPoint};
+use crate::parallel;
 use crate::particles::MaterialPoints;
 use crate::report::{StepMemory, StepTimings};
 use crate::supports::HeldDofs;
@@ -230,6 +231,7 @@ impl<'a> StepEquilibrium<'a> {
         let responses = self.trial_responses();
         let states = (0..self.points.len())
             .into_par_iter()
+            .with_min_len(parallel::POINT_RESPONSES)
             .map(|p| {
                 let r = responses.at(p, false);
                 PointState {
@@ -327,6 +329,7 @@ impl Equilibrium for StepEquilibrium<'_> {
             let averages = fbar_averages(fbar, conn, mp, u);
             let (stresses, shares): (Vec<Matrix2<f64>>, Vec<_>) = (0..mp.len())
                 .into_par_iter()
+                .with_min_len(parallel::POINT_RESPONSES)
                 .map(|p| {
                     fbar_response(fbar, &averages, conn, mp, u, p)
                         .map(|(response, share)| (response.p, share))
@@ -517,6 +520,7 @@ fn fbar_averages(
 ) -> Vec<f64> {
     let growth: Vec<f64> = (0..mp.len())
         .into_par_iter()
+        .with_min_len(parallel::BOOKKEEPING)
         .map(|p| fbar_growth(mp, p, &increment(conn.point_links(p), u).1))
         .collect();
     fbar.averages(&growth)

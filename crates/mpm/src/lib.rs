@@ -35,6 +35,7 @@ pub mod multigrid;
 pub mod newton;
 pub mod observer;
 pub mod ordering;
+pub mod parallel;
 pub mod particles;
 pub mod probes;
 pub mod reference_edge;

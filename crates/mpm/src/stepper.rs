@@ -31,6 +31,7 @@ use crate::grid::{Basis, Connectivity, Grid, NodeKey};
 use crate::material::Elastic;
 use crate::newton::{self, NewtonSettings, SolveError};
 use crate::observer::{Observer, StepState};
+use crate::parallel;
 use crate::particles::MaterialPoints;
 use crate::probes::Probes;
 use crate::report::{RunReport, StepReport, StepTimings};
@@ -480,6 +481,7 @@ impl Simulation {
         )
             .into_par_iter()
             .enumerate()
+            .with_min_len(parallel::BOOKKEEPING)
             .for_each(|(p, (x, f, history, stress, yielding))| {
                 let (dx, grad_u) = increment(conn.point_links(p), u);
                 let df = Matrix2::identity() + grad_u;

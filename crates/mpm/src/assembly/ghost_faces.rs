@@ -28,6 +28,7 @@ use crate::configuration::Configuration;
 use rayon::prelude::*;
 
 use crate::grid::{Basis, LatticeIndex, node_indices};
+use crate::parallel;
 
 /// The faces to stabilise and the penalty's weight.
 pub struct GhostFaces {
@@ -67,6 +68,7 @@ impl GhostFaces {
             |(i, j): (i64, i64)| (-1..=1).any(|di| (-1..=1).any(|dj| !active((i + di, j + dj))));
         let faces = cells
             .par_iter()
+            .with_min_len(parallel::BOOKKEEPING)
             .flat_map_iter(|&(i, j)| {
                 let edge = at_edge((i, j));
                 // The face to the right: node rows j and j + 1, columns i..=i+2.

@@ -25,15 +25,18 @@ pub use stiffness::stiffness;
 
 use rayon::prelude::*;
 
+use crate::parallel;
+
 /// Sums per-point contributions into a vector of length `len`, in parallel:
-/// one accumulator per worker thread, added at the end.
+/// one accumulator per worker thread (at least
+/// [`parallel::POINT_RESPONSES`] points each), added at the end.
 pub(crate) fn scatter_sum(
     n_points: usize,
     len: usize,
     add: impl Fn(usize, &mut [f64]) + Sync,
 ) -> Vec<f64> {
     let threads = rayon::current_num_threads().max(1);
-    let per = n_points.div_ceil(threads).max(1);
+    let per = n_points.div_ceil(threads).max(parallel::POINT_RESPONSES);
     let parts: Vec<Vec<f64>> = (0..n_points.div_ceil(per))
         .into_par_iter()
         .map(|c| {
@@ -50,6 +53,7 @@ pub(crate) fn scatter_sum(
         total
             .par_iter_mut()
             .zip(part.par_iter())
+            .with_min_len(parallel::BOOKKEEPING)
             .for_each(|(t, v)| *t += v);
     }
     total

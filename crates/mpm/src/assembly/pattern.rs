@@ -4,6 +4,7 @@
 use rayon::prelude::*;
 
 use crate::grid::{Connectivity, node_indices};
+use crate::parallel;
 
 /// Sparsity of the stiffness matrix, in compressed columns (faer's form,
 /// with 32-bit row indices).
@@ -101,7 +102,9 @@ impl Pattern {
             nb
         };
         // A few runs of nodes a thread, each with its own marks.
-        let run = n_nodes.div_ceil(4 * rayon::current_num_threads()).max(1);
+        let run = n_nodes
+            .div_ceil(4 * rayon::current_num_threads())
+            .max(parallel::BOOKKEEPING);
         let lists: Vec<Vec<u32>> = (0..n_nodes.div_ceil(run))
             .into_par_iter()
             .flat_map_iter(|r| {
@@ -142,29 +145,32 @@ impl Pattern {
         assert_eq!(values.len(), self.nnz());
         let n_nodes = self.first.len().saturating_sub(1);
         let shared = SharedValues(values.as_mut_ptr());
-        (0..n_nodes).into_par_iter().for_each(|a| {
-            let shared = &shared;
-            let nb = &self.neighbours[self.first[a]..self.first[a + 1]];
-            let stride = 2 * nb.len();
-            let below = nb.partition_point(|&b| b as usize <= a);
-            for (k, &b) in nb.iter().enumerate().skip(below) {
-                let (above, stride_b) = self.block(a as u32, b);
-                let at = self.col_ptr[2 * a] + 2 * k;
-                for r in 0..2 {
-                    for c in 0..2 {
-                        // SAFETY: both offsets are inside `values` (the
-                        // pattern's own places). This task writes only
-                        // column a's blocks below the diagonal, which no
-                        // other task writes or reads; every task reads
-                        // only blocks above it, which none writes.
-                        unsafe {
-                            *shared.0.add(at + r + c * stride) =
-                                *shared.0.add(above + c + r * stride_b);
+        (0..n_nodes)
+            .into_par_iter()
+            .with_min_len(parallel::BOOKKEEPING)
+            .for_each(|a| {
+                let shared = &shared;
+                let nb = &self.neighbours[self.first[a]..self.first[a + 1]];
+                let stride = 2 * nb.len();
+                let below = nb.partition_point(|&b| b as usize <= a);
+                for (k, &b) in nb.iter().enumerate().skip(below) {
+                    let (above, stride_b) = self.block(a as u32, b);
+                    let at = self.col_ptr[2 * a] + 2 * k;
+                    for r in 0..2 {
+                        for c in 0..2 {
+                            // SAFETY: both offsets are inside `values` (the
+                            // pattern's own places). This task writes only
+                            // column a's blocks below the diagonal, which no
+                            // other task writes or reads; every task reads
+                            // only blocks above it, which none writes.
+                            unsafe {
+                                *shared.0.add(at + r + c * stride) =
+                                    *shared.0.add(above + c + r * stride_b);
+                            }
                         }
                     }
                 }
-            }
-        });
+            });
     }
 
     /// The node adjacency the compressed columns are made from, for telling
@@ -264,6 +270,7 @@ impl PointTiles {
         let coordinates: Vec<(i64, i64)> = conn
             .nodes
             .par_iter()
+            .with_min_len(parallel::BOOKKEEPING)
             .map(|&key| node_indices(key))
             .collect();
         // Each point's lowest node and its span (points that link to no
@@ -281,6 +288,7 @@ impl PointTiles {
         };
         let span = (0..conn.n_points())
             .into_par_iter()
+            .with_min_len(parallel::BOOKKEEPING)
             .filter_map(lowest)
             .map(|((i0, j0), (i1, j1))| (i1 - i0 + 1).max(j1 - j0 + 1))
             .max()
@@ -292,12 +300,14 @@ impl PointTiles {
         };
         let (ti_min, tj_min) = (0..conn.n_points())
             .into_par_iter()
+            .with_min_len(parallel::BOOKKEEPING)
             .filter_map(tile)
             .reduce(|| (i64::MAX, i64::MAX), |a, b| (a.0.min(b.0), a.1.min(b.1)));
         // Sorted by colour, then tile, then point: (colour, tile row and
         // column from the lowest, in 30 bits each) over the point.
         let mut keyed: Vec<(u64, u32)> = (0..conn.n_points())
             .into_par_iter()
+            .with_min_len(parallel::BOOKKEEPING)
             .filter_map(|p| {
                 let (ti, tj) = tile(p)?;
                 let colour = (ti.rem_euclid(2) + 2 * tj.rem_euclid(2)) as u64;
@@ -325,6 +335,11 @@ impl PointTiles {
             start,
             colour_start,
         }
+    }
+
+    /// How many tiles there are, of every colour.
+    pub(crate) fn count(&self) -> usize {
+        self.colour_start[4]
     }
 
     /// The tiles of colour `colour` (of 4).

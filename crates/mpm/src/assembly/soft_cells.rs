@@ -8,6 +8,7 @@ use super::Pattern;
 use crate::configuration::Configuration;
 use crate::grid::{Basis, node_key};
 use crate::material::Elastic;
+use crate::parallel;
 
 /// A soft background material over every cell the material's point domains
 /// overlap: small-strain elastic in the step's displacement increment, with
@@ -104,6 +105,7 @@ pub(crate) fn overlapped_cells(start: &Configuration, basis: Basis) -> Vec<(i64,
     let Configuration { grid, points, .. } = *start;
     let mut keys: Vec<(i64, i64)> = (0..points.len())
         .into_par_iter()
+        .with_min_len(parallel::BOOKKEEPING)
         .flat_map_iter(|p| {
             let (lo, hi) = basis.cell_range(grid, points.position[p], points.support(p));
             let range = |d: usize| lo[d]..=hi[d];

@@ -6,6 +6,7 @@ use rayon::prelude::*;
 use super::Pattern;
 use super::pattern::SharedValues;
 use crate::grid::Connectivity;
+use crate::parallel;
 use crate::particles::MaterialPoints;
 
 /// Values of the tangent stiffness
@@ -16,7 +17,11 @@ use crate::particles::MaterialPoints;
 /// The points are summed tile by tile, the tiles of one colour in
 /// parallel ([`super::pattern::PointTiles`]: their points share no node),
 /// so threads need no accumulators of their own and each point's tangent
-/// is made where it is used, not kept.
+/// is made where it is used, not kept. A scene of a few tiles (fewer than
+/// [`TILES_A_THREAD`] a thread in rayon's pool: a few thousand points)
+/// would then make its tangents on one or two threads; there they are
+/// made first, in parallel over the points, and kept for the sum (128
+/// bytes a point).
 ///
 /// When every point's tangent `A_p` is `symmetric` (then so is `K`), only
 /// the blocks on and above the diagonal are summed, as they would be
@@ -34,6 +39,37 @@ pub fn stiffness(
 ) {
     k.clear();
     k.resize(pattern.nnz(), 0.0);
+    let tiles = &pattern.tiles;
+    if tiles.count() < TILES_A_THREAD * rayon::current_num_threads() {
+        let made: Vec<Matrix4<f64>> = (0..points.len())
+            .into_par_iter()
+            .with_min_len(parallel::POINT_RESPONSES)
+            .map(&tangent)
+            .collect();
+        sum_tiles(conn, pattern, points, |p| made[p], symmetric, k);
+    } else {
+        sum_tiles(conn, pattern, points, tangent, symmetric, k);
+    }
+    if symmetric {
+        pattern.mirror_upper(k);
+    }
+}
+
+/// Below this many tiles a thread, the tangents are made before the sum
+/// rather than in it ([`stiffness`]).
+const TILES_A_THREAD: usize = 8;
+
+/// Sums every point's `K_p` into `k` (zeroed, the pattern's size), tile by
+/// tile, the tiles of one colour in parallel; on and above the diagonal
+/// alone when `symmetric`.
+fn sum_tiles(
+    conn: &Connectivity,
+    pattern: &Pattern,
+    points: &MaterialPoints,
+    tangent: impl Fn(usize) -> Matrix4<f64> + Sync,
+    symmetric: bool,
+    k: &mut [f64],
+) {
     let shared = SharedValues(k.as_mut_ptr());
     let tiles = &pattern.tiles;
     for colour in 0..4 {
@@ -77,7 +113,72 @@ pub fn stiffness(
             }
         });
     }
-    if symmetric {
-        pattern.mirror_upper(k);
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Matrix4;
+
+    use super::{TILES_A_THREAD, stiffness, sum_tiles};
+    use crate::assembly::Pattern;
+    use crate::case::Case;
+    use crate::stepper::Simulation;
+
+    /// A scene of few tiles makes its points' tangents before the sum; its
+    /// tangent is the one the tiles make from each point's own, to the bit,
+    /// with a tangent that differs from point to point (so one point's
+    /// tangent summed at another's links fails), unsymmetric and symmetric.
+    #[test]
+    fn tangents_made_first_give_the_tiles_own_sum() {
+        let case = serde_json::json!({
+            "version": 1,
+            "analysis": { "load_steps": 1 },
+            "grid": { "cell_size": 1.0, "origin": [0.1, 0.13] },
+            "basis": "gimp",
+            "bodies": [{
+                "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [6.0, 3.0] } },
+                "points": { "count": [12, 6] },
+                "material": { "model": "hencky", "youngs_modulus": 1e6, "poisson_ratio": 0.3, "density": 1.0 }
+            }]
+        });
+        let sim = Simulation::new(&Case::from_json(&case.to_string()).unwrap()).unwrap();
+        let conn = sim.reset_grid();
+        let pattern = Pattern::build(&conn, &[]);
+        assert!(pattern.tiles.count() < TILES_A_THREAD * rayon::current_num_threads());
+        for symmetric in [false, true] {
+            let tangent = |p: usize| {
+                Matrix4::from_fn(|r, c| {
+                    let (r, c) = if symmetric {
+                        (r.min(c), r.max(c))
+                    } else {
+                        (r, c)
+                    };
+                    (1.0 + p as f64) * (1.0 + r as f64 + 5.0 * c as f64)
+                })
+            };
+            let mut made_first = Vec::new();
+            stiffness(
+                &conn,
+                &pattern,
+                &sim.points,
+                tangent,
+                symmetric,
+                &mut made_first,
+            );
+            let mut by_tiles = vec![0.0; pattern.nnz()];
+            sum_tiles(
+                &conn,
+                &pattern,
+                &sim.points,
+                tangent,
+                symmetric,
+                &mut by_tiles,
+            );
+            if symmetric {
+                pattern.mirror_upper(&mut by_tiles);
+            }
+            assert!(made_first.iter().any(|&v| v != 0.0));
+            assert_eq!(made_first, by_tiles, "symmetric: {symmetric}");
+        }
     }
 }

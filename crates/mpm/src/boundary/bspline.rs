@@ -97,7 +97,7 @@ fn smooth_abs_cross(a: Point, b: Point) -> f64 {
 
 /// The tangents at a data point: equal unless it is a corner.
 #[derive(Debug, Clone, Copy)]
-struct DataTangent {
+pub struct DataTangent {
     incoming: Point,
     outgoing: Point,
     corner: bool,
@@ -182,6 +182,52 @@ pub fn local_segment(points: &[Point], k: usize) -> [Point; 4] {
         &data_tangent(points, (k + 1) % n),
     )
     .0
+}
+
+/// The tangents at every data point of a closed loop.
+pub fn data_tangents(points: &[Point]) -> Vec<DataTangent> {
+    (0..points.len()).map(|k| data_tangent(points, k)).collect()
+}
+
+/// A loop whose data point `k` has moved: its segments from the tangents
+/// of the loop before the move (made once, for differencing the curve point
+/// by point), of which only the five whose stencil holds `Q_k` are made
+/// again. [`MovedPoint::segment`] is [`local_segment`] of the moved loop.
+pub struct MovedPoint<'a> {
+    points: &'a [Point],
+    before: &'a [DataTangent],
+    /// The tangents at `Q_(k-2) .. Q_(k+2)`, in that order.
+    near: [DataTangent; 5],
+    first_near: usize,
+}
+
+impl<'a> MovedPoint<'a> {
+    /// `points` is the loop after the move, `before` [`data_tangents`] of
+    /// the loop before it.
+    pub fn new(points: &'a [Point], before: &'a [DataTangent], k: usize) -> Self {
+        let n = points.len();
+        let first_near = (k + 2 * n - 2) % n;
+        Self {
+            points,
+            before,
+            near: std::array::from_fn(|d| data_tangent(points, (first_near + d) % n)),
+            first_near,
+        }
+    }
+
+    fn tangent(&self, m: usize) -> &DataTangent {
+        let n = self.points.len();
+        match (m + n - self.first_near) % n {
+            d if d < 5 => &self.near[d],
+            _ => &self.before[m],
+        }
+    }
+
+    /// Segment `j` of the curve through the moved loop.
+    pub fn segment(&self, j: usize) -> [Point; 4] {
+        let n = self.points.len();
+        bezier_segment(self.points, j, self.tangent(j), self.tangent((j + 1) % n)).0
+    }
 }
 
 impl ClosedCurve {
@@ -564,5 +610,34 @@ mod tests {
         assert!(norm(sub(p, [1.5, 0.0])) < 1e-10 && (d - 0.3).abs() < 1e-10);
         let (_, p, d) = c.closest_point([5.0, 1.0]);
         assert!(norm(sub(p, [4.0, 1.0])) < 1e-10 && (d - 1.0).abs() < 1e-10);
+    }
+
+    /// A moved point's segments from the tangents made before the move are
+    /// the moved loop's own, to the bit, for every point and segment: on a
+    /// circle, on the rectangle (moves that make and unmake corners), and
+    /// on loops of three and four points, whose five-point stencils wrap
+    /// onto themselves. Reusing the tangent before the move at `Q_(k+2)`
+    /// (a window of four) fails (checked).
+    #[test]
+    fn a_moved_point_remakes_the_tangents_of_its_stencil() {
+        let loops = [circle(13, 2.0), rectangle(), circle(3, 1.0), circle(4, 1.0)];
+        for data in loops {
+            let n = data.len();
+            let before = data_tangents(&data);
+            for k in 0..n {
+                for delta in [[0.3, 0.0], [0.0, -0.45], [1e-6, 1e-6]] {
+                    let mut moved = data.clone();
+                    moved[k] = add(moved[k], delta);
+                    let by_window = MovedPoint::new(&moved, &before, k);
+                    for j in 0..n {
+                        assert_eq!(
+                            by_window.segment(j),
+                            local_segment(&moved, j),
+                            "n = {n}, point {k} moved by {delta:?}, segment {j}"
+                        );
+                    }
+                }
+            }
+        }
     }
 }

@@ -12,7 +12,9 @@
 //! round-off both near 1e-10 relative), then chained with `dQ_k/du_b =
 //! w_b I` (see [`BoundaryLoading::ring`]).
 
-use super::bspline::{Point, local_segment};
+use rayon::prelude::*;
+
+use super::bspline::{DataTangent, MovedPoint, Point, data_tangents, local_segment};
 use super::current_ring;
 use super::detection::BoundaryLoop;
 use super::traction::{SegmentQuadrature, Traction};
@@ -133,24 +135,19 @@ impl<'a> BoundaryLoading<'a> {
         })
     }
 
-    /// The nodal forces of stretch `i` on its loaded segment `k` of the
-    /// data points `ring`, passed to `sink`.
+    /// The nodal forces of stretch `i` on its loaded segment `k`, whose
+    /// current control points are `segment`, passed to `sink`.
     fn segment_forces(
         &self,
         i: usize,
-        ring: &[Point],
+        segment: &[Point; 4],
         k: usize,
         sink: &mut impl FnMut(usize, [f64; 2]),
     ) {
         let q = self.quadrature[i][k]
             .as_ref()
             .expect("loaded segments have a quadrature");
-        q.forces(
-            &local_segment(ring, k),
-            self.stretches[i].traction,
-            self.load_factor,
-            sink,
-        );
+        q.forces(segment, self.stretches[i].traction, self.load_factor, sink);
     }
 
     /// The loaded segments of stretch `i` whose shape depends on data point
@@ -166,7 +163,7 @@ impl<'a> BoundaryLoading<'a> {
         for (i, s) in self.stretches.iter().enumerate() {
             let ring = self.ring(&self.loops[s.loop_index], u);
             for &k in &s.segments {
-                self.segment_forces(i, &ring, k, &mut |a, force| {
+                self.segment_forces(i, &local_segment(&ring, k), k, &mut |a, force| {
                     f[2 * a] += force[0];
                     f[2 * a + 1] += force[1];
                 });
@@ -176,53 +173,75 @@ impl<'a> BoundaryLoading<'a> {
 
     /// Entries `(row DOF, column DOF, value)` of the load stiffness
     /// `-df_ext/du` at increment `u` (duplicates are to be summed).
+    ///
+    /// The data points are differenced in parallel (24 segment quadratures
+    /// each: most of a small scene's assembly), their segments made from
+    /// the tangents of the trial ring ([`MovedPoint`]), and their entries
+    /// come out in their order.
     pub fn stiffness(&self, u: &[f64]) -> Vec<(usize, usize, f64)> {
         let mut out = Vec::new();
-        let eps = 1e-6 * self.grid.h;
         for (i, s) in self.stretches.iter().enumerate() {
             let l = &self.loops[s.loop_index];
             let n = l.points.len();
-            let mut ring = self.ring(l, u);
-            for k in 0..n {
-                let affected = self.affected(i, k, n);
-                if affected.is_empty() {
-                    continue;
-                }
-                let weights: Vec<(usize, f64)> = self.weights(l, k).collect();
-                for c in 0..2 {
-                    let mut df: Vec<(usize, [f64; 2])> = Vec::new();
-                    for (sign, delta) in [(1.0, eps), (-1.0, -eps)] {
-                        ring[k][c] += delta;
-                        for &j in &affected {
-                            self.segment_forces(i, &ring, j, &mut |a, force| {
-                                df.push((
-                                    a,
-                                    [sign * force[0] / (2.0 * eps), sign * force[1] / (2.0 * eps)],
-                                ));
-                            });
-                        }
-                        ring[k][c] -= delta;
-                    }
-                    // Sum the contributions per node before spreading them
-                    // over the columns (a few nodes, many quadrature points).
-                    df.sort_unstable_by_key(|e| e.0);
-                    let mut merged: Vec<(usize, [f64; 2])> = Vec::with_capacity(16);
-                    for (a, d) in df {
-                        match merged.last_mut() {
-                            Some(last) if last.0 == a => {
-                                last.1[0] += d[0];
-                                last.1[1] += d[1];
+            let ring = self.ring(l, u);
+            let tangents = data_tangents(&ring);
+            let entries: Vec<Vec<(usize, usize, f64)>> = (0..n)
+                .into_par_iter()
+                .map_init(
+                    || ring.clone(),
+                    |ring, k| self.data_point_stiffness(i, ring, &tangents, k),
+                )
+                .collect();
+            out.extend(entries.into_iter().flatten());
+        }
+        out
+    }
+
+    /// The entries of the load stiffness that come from moving data point
+    /// `k` of stretch `i`'s loop (`ring` is its trial ring, given back as
+    /// it came, and `tangents` the ring's [`data_tangents`]).
+    fn data_point_stiffness(
+        &self,
+        i: usize,
+        ring: &mut [Point],
+        tangents: &[DataTangent],
+        k: usize,
+    ) -> Vec<(usize, usize, f64)> {
+        let l = &self.loops[self.stretches[i].loop_index];
+        let eps = 1e-6 * self.grid.h;
+        let mut out = Vec::new();
+        let affected = self.affected(i, k, l.points.len());
+        if affected.is_empty() {
+            return out;
+        }
+        let weights: Vec<(usize, f64)> = self.weights(l, k).collect();
+        for c in 0..2 {
+            // The contributions summed per node before they are spread
+            // over the columns: a few nodes, many quadrature points.
+            let mut df: Vec<(usize, [f64; 2])> = Vec::with_capacity(16);
+            for (sign, delta) in [(1.0, eps), (-1.0, -eps)] {
+                ring[k][c] += delta;
+                let moved = MovedPoint::new(ring, tangents, k);
+                for &j in &affected {
+                    self.segment_forces(i, &moved.segment(j), j, &mut |a, force| {
+                        let d = [sign * force[0] / (2.0 * eps), sign * force[1] / (2.0 * eps)];
+                        match df.iter_mut().find(|e| e.0 == a) {
+                            Some(e) => {
+                                e.1[0] += d[0];
+                                e.1[1] += d[1];
                             }
-                            _ => merged.push((a, d)),
+                            None => df.push((a, d)),
                         }
-                    }
-                    for (a, d) in merged {
-                        for &(node, w) in &weights {
-                            let col = 2 * node + c;
-                            out.push((2 * a, col, -d[0] * w));
-                            out.push((2 * a + 1, col, -d[1] * w));
-                        }
-                    }
+                    });
+                }
+                ring[k][c] -= delta;
+            }
+            df.sort_unstable_by_key(|e| e.0);
+            for (a, d) in df {
+                for &(node, w) in &weights {
+                    let col = 2 * node + c;
+                    out.push((2 * a, col, -d[0] * w));
+                    out.push((2 * a + 1, col, -d[1] * w));
                 }
             }
         }
