@@ -17,10 +17,10 @@ use crate::particles::MaterialPoints;
 /// parallel ([`super::pattern::PointTiles`]: their points share no node),
 /// so threads need no accumulators of their own and each point's tangent
 /// is made where it is used, not kept. A scene of a few tiles (fewer than
-/// [`TILES_A_THREAD`] a thread in rayon's pool: a few thousand points, a
-/// small pattern) would then run on one or two threads; there each thread
-/// sums its share of the points into a copy of the values
-/// ([`super::scatter_sum`]), and the copies are added.
+/// [`TILES_A_THREAD`] a thread in rayon's pool: a few thousand points)
+/// would then run on one or two threads; there, if the copies fit in
+/// [`COPIES_ENTRIES`], each thread sums its share of the points into a
+/// copy of the values ([`super::scatter_sum`]), and the copies are added.
 ///
 /// When every point's tangent `A_p` is `symmetric` (then so is `K`), only
 /// the blocks on and above the diagonal are summed, as they would be
@@ -36,7 +36,9 @@ pub fn stiffness(
     symmetric: bool,
     k: &mut Vec<f64>,
 ) {
-    if pattern.tiles.count() < TILES_A_THREAD * rayon::current_num_threads() {
+    let threads = rayon::current_num_threads();
+    if pattern.tiles.count() < TILES_A_THREAD * threads && pattern.nnz() * threads <= COPIES_ENTRIES
+    {
         *k = super::scatter_sum(points.len(), pattern.nnz(), |p, values| {
             add_point(conn, pattern, points, p, &tangent(p), symmetric, |at, v| {
                 values[at] += v
@@ -86,6 +88,11 @@ fn sum_tiles(
 /// copies of the values rather than by tiles ([`stiffness`]).
 const TILES_A_THREAD: usize = 8;
 
+/// The most entries the threads' copies hold together (8 MB): on a machine
+/// of many threads, fewer tiles than it has threads can still be a pattern
+/// too large to copy for each.
+const COPIES_ENTRIES: usize = 1 << 20;
+
 /// Point `p`'s `K_p` with its tangent `a`, passed to `add` as (place in
 /// the pattern's values, value); on and above the diagonal alone when
 /// `symmetric`.
@@ -130,7 +137,7 @@ fn add_point(
 mod tests {
     use nalgebra::Matrix4;
 
-    use super::{TILES_A_THREAD, stiffness, sum_tiles};
+    use super::{COPIES_ENTRIES, TILES_A_THREAD, stiffness, sum_tiles};
     use crate::assembly::Pattern;
     use crate::case::Case;
     use crate::stepper::Simulation;
@@ -157,7 +164,9 @@ mod tests {
         let sim = Simulation::new(&Case::from_json(&case.to_string()).unwrap()).unwrap();
         let conn = sim.reset_grid();
         let pattern = Pattern::build(&conn, &[]);
-        assert!(pattern.tiles.count() < TILES_A_THREAD * rayon::current_num_threads());
+        let threads = rayon::current_num_threads();
+        assert!(pattern.tiles.count() < TILES_A_THREAD * threads);
+        assert!(pattern.nnz() * threads <= COPIES_ENTRIES);
         for symmetric in [false, true] {
             let tangent = |p: usize| {
                 Matrix4::from_fn(|r, c| {
