@@ -219,8 +219,9 @@ impl<'a> BoundaryLoading<'a> {
             // The contributions summed per node before they are spread
             // over the columns: a few nodes, many quadrature points.
             let mut df: Vec<(usize, [f64; 2])> = Vec::with_capacity(16);
+            let at = ring[k][c];
             for (sign, delta) in [(1.0, eps), (-1.0, -eps)] {
-                ring[k][c] += delta;
+                ring[k][c] = at + delta;
                 let moved = MovedPoint::new(ring, tangents, k);
                 for &j in &affected {
                     self.segment_forces(i, &moved.segment(j), j, &mut |a, force| {
@@ -234,8 +235,11 @@ impl<'a> BoundaryLoading<'a> {
                         }
                     });
                 }
-                ring[k][c] -= delta;
             }
+            // Put back as it was (`at + delta - delta` may differ from `at`
+            // in the last bit): each task's copy of the ring stays the
+            // trial ring, however rayon splits the data points.
+            ring[k][c] = at;
             df.sort_unstable_by_key(|e| e.0);
             for (a, d) in df {
                 for &(node, w) in &weights {
