@@ -54,7 +54,7 @@ pub fn stiffness(
     }
 }
 
-/// Sums every point's `K_p` into `k` (the pattern's values) tile by tile,
+/// Adds every point's `K_p` to `k` (the pattern's values) tile by tile,
 /// the tiles of one colour in parallel.
 fn sum_tiles(
     conn: &Connectivity,
