@@ -236,7 +236,7 @@ impl ClosedCurve {
     pub fn interpolate(points: &[Point]) -> Self {
         let n = points.len();
         assert!(n >= 3, "a closed loop needs at least 3 points");
-        let tangents: Vec<DataTangent> = (0..n).map(|k| data_tangent(points, k)).collect();
+        let tangents = data_tangents(points);
         let corners = tangents.iter().map(|t| t.corner).collect();
         let mut segments = Vec::with_capacity(n);
         let mut params = Vec::with_capacity(n + 1);

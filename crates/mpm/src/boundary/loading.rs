@@ -175,7 +175,7 @@ impl<'a> BoundaryLoading<'a> {
     /// `-df_ext/du` at increment `u` (duplicates are to be summed).
     ///
     /// The data points are differenced in parallel (24 segment quadratures
-    /// each: most of a small scene's assembly), their segments made from
+    /// each: a third of the paper's case's assembly), their segments made from
     /// the tangents of the trial ring ([`MovedPoint`]), and their entries
     /// come out in their order.
     pub fn stiffness(&self, u: &[f64]) -> Vec<(usize, usize, f64)> {
