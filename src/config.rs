@@ -25,6 +25,9 @@ pub const DEFAULT_MAX_JOB_BYTES: u64 = 1 << 32;
 /// points).
 pub const DEFAULT_ADMISSION_TIME_LIMIT: Duration = Duration::from_secs(20);
 pub const DEFAULT_JOB_TIME_LIMIT: Duration = Duration::from_secs(3600);
+/// A client's time to send a request's body, and to take each part of a
+/// response: what a slow or idle client can hold memory for.
+pub const DEFAULT_CLIENT_TIMEOUT: Duration = Duration::from_secs(30);
 
 #[derive(Debug, Clone)]
 pub struct Config {
@@ -62,6 +65,9 @@ pub struct Limits {
     /// What one job's stored steps may take, estimated before it is queued.
     pub max_job_bytes: u64,
     pub job_time_limit: Duration,
+    /// How long a client may take to send a request body, or leave a
+    /// response untaken, before the server gives up on it.
+    pub client_timeout: Duration,
     /// How long checking one submission may take; 503 past it.
     pub admission_time_limit: Duration,
 }
@@ -79,6 +85,47 @@ pub fn checkpoint_interval(every: usize, points: usize) -> usize {
         every
     } else {
         points.div_ceil(AUTO_CHECKPOINT_POINTS).max(1)
+    }
+}
+
+/// The longest stretch of solving a run goes without storing its state,
+/// whatever its step interval: a job of 10 steps over 20,000 points never
+/// reached its interval, and lost all its work to a crash.
+pub const CHECKPOINT_MAX_WAIT: Duration = Duration::from_secs(180);
+
+/// When a run stores its solver's state: every `every` load steps, and
+/// after any step that ends [`CHECKPOINT_MAX_WAIT`] or more after the last
+/// checkpoint (or the run's start).
+#[derive(Debug, Clone)]
+pub struct CheckpointSchedule {
+    every: usize,
+    max_wait: Duration,
+    last: std::time::Instant,
+}
+
+impl CheckpointSchedule {
+    /// For a run of `points` points with the setting `every` (0: auto).
+    pub fn new(every: usize, points: usize) -> Self {
+        Self::with_wait(checkpoint_interval(every, points), CHECKPOINT_MAX_WAIT)
+    }
+
+    pub fn with_wait(every: usize, max_wait: Duration) -> Self {
+        CheckpointSchedule {
+            every: every.max(1),
+            max_wait,
+            last: std::time::Instant::now(),
+        }
+    }
+
+    /// Whether step `step`, just finished, stores a checkpoint; if so, the
+    /// wait starts again.
+    pub fn due(&mut self, step: usize) -> bool {
+        let due =
+            step > 0 && (step.is_multiple_of(self.every) || self.last.elapsed() >= self.max_wait);
+        if due {
+            self.last = std::time::Instant::now();
+        }
+        due
     }
 }
 
@@ -116,6 +163,7 @@ impl Config {
                 max_queued: DEFAULT_MAX_QUEUED,
                 max_job_bytes: DEFAULT_MAX_JOB_BYTES,
                 job_time_limit: DEFAULT_JOB_TIME_LIMIT,
+                client_timeout: DEFAULT_CLIENT_TIMEOUT,
                 admission_time_limit: DEFAULT_ADMISSION_TIME_LIMIT,
             },
         }
@@ -124,6 +172,19 @@ impl Config {
 
 #[cfg(test)]
 mod tests {
+    /// Steps on the interval checkpoint; so does the first step past the
+    /// longest wait, however far from the interval it is.
+    #[test]
+    fn a_checkpoint_is_due_on_the_interval_and_after_the_longest_wait() {
+        let mut steps =
+            super::CheckpointSchedule::with_wait(3, std::time::Duration::from_secs(3600));
+        let due: Vec<usize> = (1..=7).filter(|&s| steps.due(s)).collect();
+        assert_eq!(due, [3, 6]);
+        let mut slow = super::CheckpointSchedule::with_wait(1000, std::time::Duration::ZERO);
+        assert!((1..=5).all(|s| slow.due(s)), "every step past the wait");
+        assert!(!slow.due(0), "step 0 is the undeformed state");
+    }
+
     use super::*;
 
     #[test]

@@ -78,6 +78,7 @@ impl Server {
             tokio::spawn(prune_ended_jobs(store.clone(), retention, stopped.clone()));
         }
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let client_timeout = config.limits.client_timeout;
         let app = http::router(AppState {
             store,
             config,
@@ -87,6 +88,10 @@ impl Server {
             stopping: stopped.clone(),
         });
         let serving = tokio::spawn(async move {
+            let listener = http::connection::StallLimitedListener {
+                listener,
+                limit: client_timeout,
+            };
             axum::serve(listener, app)
                 .with_graceful_shutdown(async move {
                     let _ = stopped.wait_for(|stop| *stop).await;
@@ -155,8 +160,7 @@ async fn prune_ended_jobs(
     mut stopped: watch::Receiver<bool>,
 ) {
     loop {
-        let before = jobs::store::now() - retention.as_secs_f64();
-        match store.prune(before).await {
+        match store.prune(retention).await {
             Ok(0) => {}
             Ok(n) => tracing::info!(jobs = n, "deleted ended jobs past their retention"),
             Err(e) => tracing::warn!(error = %e, "pruning ended jobs failed; will retry"),

@@ -19,7 +19,7 @@ use tokio::runtime::Handle;
 use tokio::sync::Notify;
 
 use crate::config::Config;
-use crate::jobs::{Claimed, Failure, FailureKind, JobStatus, Store};
+use crate::jobs::{Claimed, Failure, FailureKind, JobStatus, Requeued, Store};
 use crate::step::StoredStep;
 
 /// What the workers share.
@@ -89,7 +89,10 @@ impl WorkerPool {
             process_tag: format!(
                 "pid{}-{:x}",
                 std::process::id(),
-                (crate::jobs::store::now() * 1e6) as u64
+                std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .unwrap_or_default()
+                    .as_micros()
             ),
             config,
             running,
@@ -171,7 +174,7 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
         job: job.id,
         flags: &flags,
         deadline: started + shared.config.limits.job_time_limit,
-        checkpoint_every: 1,
+        checkpoints: crate::config::CheckpointSchedule::with_wait(1, Duration::MAX),
         output: OutputSpec::default(),
         timed_out: false,
         store_error: None,
@@ -183,8 +186,10 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
             .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
         let mut sim = Simulation::new(&case)
             .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
-        observer.checkpoint_every =
-            crate::config::checkpoint_interval(shared.config.checkpoint_every, sim.points.len());
+        observer.checkpoints = crate::config::CheckpointSchedule::new(
+            shared.config.checkpoint_every,
+            sim.points.len(),
+        );
         observer.output = case.output.clone();
         if let Some((step, state)) = &job.checkpoint
             && !resume(&mut sim, job.id, *step, state)
@@ -201,7 +206,12 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
             let (report, state) = sim.initial_step();
             observer.step_finished(&report, &state);
         }
-        sim.run(&mut observer).map_err(Failure::from)
+        sim.run(&mut observer).map_err(|e| {
+            let hint = crate::jobs::failure::units_hint(&case, &e);
+            let mut failure = Failure::from(e);
+            failure.message.push_str(&hint.unwrap_or_default());
+            failure
+        })
     }));
     renewal.abort();
     shared.running.remove(job.id);
@@ -224,23 +234,33 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
         Err(f) => End::Final(JobStatus::Failed, Some(f)),
     };
     let store = &shared.store;
-    let result = shared.runtime.block_on(async {
+    // What the job's row says when this run is done with it.
+    let result: Result<&str, sqlx::Error> = shared.runtime.block_on(async {
         match end {
             End::Final(status, failure) => {
                 let error = failure.as_ref().map(Failure::json);
-                store
+                let held = store
                     .finish(job.id, owner, status, seconds, error.as_deref())
-                    .await
-                    .map(|_| ())
+                    .await?;
+                Ok(if held { status.as_str() } else { "taken over" })
             }
-            End::Requeue => store.requeue(job.id, owner).await,
-            End::LeaseLost => Ok(()),
+            End::Requeue => Ok(match store.requeue(job.id, owner).await? {
+                Requeued::Queued => JobStatus::Queued.as_str(),
+                Requeued::Cancelled => JobStatus::Cancelled.as_str(),
+                Requeued::NotHeld => "taken over",
+            }),
+            End::LeaseLost => Ok("taken over"),
         }
     });
-    if let Err(e) = result {
-        tracing::error!(job = job.id, error = %e, "recording the job's end failed; its lease will expire and it will be retried");
+    match result {
+        Ok(status) => tracing::info!(job = job.id, status, seconds, "job ended"),
+        Err(e) => tracing::error!(
+            job = job.id,
+            error = %e,
+            seconds,
+            "recording the job's end failed; its lease will expire and it will be retried"
+        ),
     }
-    tracing::info!(job = job.id, seconds, "job ended");
 }
 
 /// Restores a claimed job's checkpoint; whether it could. One that does not
@@ -330,8 +350,8 @@ struct JobObserver<'a> {
     job: i64,
     flags: &'a StopFlags,
     deadline: Instant,
-    /// Store the solver's state with every this many steps.
-    checkpoint_every: usize,
+    /// When to store the solver's state with a step.
+    checkpoints: crate::config::CheckpointSchedule,
     /// Which steps store their points, and which columns.
     output: OutputSpec,
     timed_out: bool,
@@ -341,7 +361,9 @@ struct JobObserver<'a> {
 impl Observer for JobObserver<'_> {
     fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
         let document = StoredStep::new(report, state, &self.output, state.load_steps());
-        let checkpoint = (report.step > 0 && report.step.is_multiple_of(self.checkpoint_every))
+        let checkpoint = self
+            .checkpoints
+            .due(report.step)
             .then(|| state.checkpoint().to_bytes());
         let saved = self.shared.runtime.block_on(self.shared.store.save_step(
             self.job,

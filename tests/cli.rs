@@ -320,15 +320,15 @@ fn summary_only_writes_no_step_folder() {
     assert!(!out.join("steps").exists());
 }
 
-/// The case-format example in the README is a case that runs, with its
+/// The case-format example in the user guide is a case that runs, with its
 /// point load and probe inside its body (the load once sat outside it).
 #[test]
-fn the_readmes_case_example_runs_and_its_points_lie_in_its_body() {
-    let readme = include_str!("../README.md");
-    let section = readme
+fn the_guides_case_example_runs_and_its_points_lie_in_its_body() {
+    let guide = include_str!("../docs/guide.md");
+    let section = guide
         .split("## Case format (JSON, version 1)")
         .nth(1)
-        .expect("the README has a case-format section");
+        .expect("the guide has a case-format section");
     let text = section
         .split("```json\n")
         .nth(1)
@@ -362,4 +362,90 @@ fn the_readmes_case_example_runs_and_its_points_lie_in_its_body() {
         "{}",
         String::from_utf8_lossy(&output.stderr)
     );
+}
+
+/// Runs the built-in `cantilever-grid` case, edited, from `dir/case.json`
+/// into `dir/out`: its exit code and standard error.
+fn run_edited_example(
+    dir: &std::path::Path,
+    edit: impl Fn(&mut serde_json::Value),
+) -> (Option<i32>, String) {
+    let mut case: serde_json::Value =
+        serde_json::from_str(mpm::case::builtin::get("cantilever-grid").unwrap()).unwrap();
+    edit(&mut case);
+    let path = dir.join("case.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let run = mpm()
+        .args(["run"])
+        .arg(&path)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    (
+        run.status.code(),
+        String::from_utf8_lossy(&run.stderr).into_owned(),
+    )
+}
+
+/// A cell size typed in mm for m asked for billions of points, and the
+/// run allocated 8 GB before it aborted: it is refused (exit 2) with the
+/// count before any point is made, and `--max-points` raises the limit.
+#[test]
+fn a_case_over_the_point_limit_is_refused_before_seeding() {
+    let dir = temp_dir("point-limit");
+    let (code, stderr) = run_edited_example(&dir, |case| case["grid"]["cell_size"] = 0.001.into());
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(stderr.contains("80000000 material points"), "{stderr}");
+    assert!(stderr.contains("--max-points"), "{stderr}");
+
+    // The built-in example's 320 points, against a limit of 100 and 1000.
+    let small = mpm()
+        .args([
+            "run",
+            "--example",
+            "cantilever-grid",
+            "--summary-only",
+            "--max-points",
+            "100",
+            "--out",
+        ])
+        .arg(dir.join("small"))
+        .output()
+        .unwrap();
+    assert_eq!(
+        small.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&small.stderr)
+    );
+    run_ok(
+        &[
+            "run",
+            "--example",
+            "cantilever-grid",
+            "--summary-only",
+            "--max-points",
+            "1000",
+            "--out",
+        ],
+        &dir.join("small"),
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A Young's modulus of 1 meant as 1 MPa fails the first step with an
+/// inverted point: the message hints at units, and offers no --resume,
+/// as no checkpoint was written.
+#[test]
+fn a_first_step_failing_under_loads_far_beyond_the_stiffness_hints_at_units() {
+    let dir = temp_dir("units");
+    let (code, stderr) = run_edited_example(&dir, |case| {
+        case["bodies"][0]["material"]["youngs_modulus"] = 1.0.into()
+    });
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("load step 1"), "{stderr}");
+    assert!(stderr.contains("are the units SI"), "{stderr}");
+    assert!(!stderr.contains("--resume"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use common::{
     Process, TempDir, agent, base_url, cli_final_positions, example, largest_difference, positions,
-    postgres_database, request, slow_case, spawn_mpm, try_get_json,
+    postgres_database, request, slow_case, spawn_mpm, spawn_mpm_with, try_get_json,
 };
 use serde_json::Value;
 
@@ -350,4 +350,121 @@ fn a_crash_loop_loses_no_job_and_never_goes_back_past_a_checkpoint() {
         kill(w);
     }
     kill(&mut api);
+}
+
+/// A worker of its own lease length, with extra environment variables.
+fn start_worker_with(database: &str, lease: &str, log: &Path, env: &[(&str, &str)]) -> Process {
+    spawn_mpm_with(
+        &[
+            "worker",
+            "--database",
+            database,
+            "--lease-seconds",
+            lease,
+            "--solver-threads",
+            "1",
+            "--log-format",
+            "json",
+        ],
+        Some(log),
+        env,
+    )
+    .0
+}
+
+/// The job once it has finished `step` steps (or ended).
+fn wait_for_step(base: &str, id: i64, step: i64) -> Value {
+    let start = Instant::now();
+    loop {
+        if let Some(job) = all_jobs(base).and_then(|mut jobs| jobs.remove(&id))
+            && (job["progress"]["step"].as_i64() >= Some(step) || common::is_final(&job))
+        {
+            return job;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "job {id} never reached step {step}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// A cancel answered 202 while a worker runs the job, then SIGTERM to the
+/// worker before its lease renewal (every 10 s with a 30 s lease) told it
+/// of the cancel: the job ends cancelled with its steps. It went back to
+/// the queue with the request still set, and ran to success, 5 of 5 times.
+#[test]
+fn a_cancel_asked_for_before_a_worker_stops_is_kept() {
+    let dir = TempDir::new("cancel-sigterm");
+    let database = postgres_database();
+    let (mut api, base) = start_api(&database);
+    let mut worker = start_worker_with(&database, "30", &dir.0.join("worker.log"), &[]);
+    let id = submit(&base, &slow_case(60));
+    wait_for_step(&base, id, 2);
+    let (status, body) = request(&agent(), "POST", &format!("{base}/jobs/{id}/cancel"), None);
+    assert_eq!(status, 202, "{body}");
+    // SIGTERM: the worker hands its running job back and exits.
+    assert_eq!(unsafe { libc::kill(worker.id() as i32, libc::SIGTERM) }, 0);
+    assert!(worker.wait().unwrap().success());
+    let job = all_jobs(&base).unwrap()[&id].clone();
+    assert_eq!(job["status"], "cancelled", "{job}");
+    assert!(job["progress"]["step"].as_i64() >= Some(2), "{job}");
+    kill(&mut api);
+}
+
+/// libfaketime's library, which shifts a process's clock, if installed
+/// (Debian: apt-get install faketime).
+fn libfaketime() -> Option<PathBuf> {
+    [
+        "/usr/lib/x86_64-linux-gnu/faketime",
+        "/usr/lib/aarch64-linux-gnu/faketime",
+        "/usr/lib/faketime",
+    ]
+    .iter()
+    .map(|dir| Path::new(dir).join("libfaketime.so.1"))
+    .find(|lib| lib.exists())
+}
+
+/// A worker whose clock runs 45 s ahead takes no job that another holds:
+/// leases are judged by the database's clock. It stole jobs and restarted
+/// them from step 1 (with --max-attempts 1, a healthy job failed at step
+/// 38 of 40).
+#[test]
+fn a_worker_whose_clock_runs_ahead_takes_no_job_another_holds() {
+    let Some(lib) = libfaketime() else {
+        assert!(
+            std::env::var_os("MPM_TEST_REQUIRE_FAKETIME").is_none(),
+            "libfaketime is not installed (apt-get install faketime)"
+        );
+        eprintln!("skipped: libfaketime is not installed (apt-get install faketime)");
+        return;
+    };
+    let dir = TempDir::new("clock-skew");
+    let database = postgres_database();
+    let (mut api, base) = start_api(&database);
+    let (honest_log, ahead_log) = (dir.0.join("honest.log"), dir.0.join("ahead.log"));
+    let mut honest = start_worker_with(&database, "5", &honest_log, &[]);
+    let id = submit(&base, &slow_case(40));
+    wait_for_step(&base, id, 1);
+    let mut ahead = start_worker_with(
+        &database,
+        "5",
+        &ahead_log,
+        &[
+            ("LD_PRELOAD", lib.to_str().unwrap()),
+            ("FAKETIME", "+45s"),
+            ("FAKETIME_DONT_FAKE_MONOTONIC", "1"),
+        ],
+    );
+    let jobs = wait_all_final(&base, Duration::from_secs(300));
+    let job = &jobs[&id];
+    assert_eq!(job["status"], "succeeded", "{job}");
+    assert_eq!(job["attempts"], 1, "claimed once: {job}");
+    assert!(
+        starts(&[ahead_log]).is_empty(),
+        "the worker ahead took the job"
+    );
+    for w in [&mut honest, &mut ahead, &mut api] {
+        kill(w);
+    }
 }

@@ -57,6 +57,22 @@ def test_validate_names_the_path_of_the_error() -> None:
         cases.validate(case)
 
 
+def test_validate_names_the_field_inside_a_choice_of_models() -> None:
+    # A material is one of several models: the error was "is not valid
+    # under any of the given schemas" at bodies[0].material.
+    case = cases.cantilever()
+    case["bodies"][0]["material"]["youngs_modulus"] = "200 GPa"
+    with pytest.raises(CaseError) as raised:
+        cases.validate(case)
+    assert raised.value.path == "bodies[0].material.youngs_modulus"
+    assert "any of the given schemas" not in raised.value.message
+
+    case = cases.cantilever()
+    case["bodies"][0]["material"]["model"] = "steel"
+    with pytest.raises(CaseError, match=r"'steel' is not one of 'hencky', 'linear_elastic'"):
+        cases.validate(case)
+
+
 def test_json_path_is_written_as_the_service_writes_it() -> None:
     assert cases.json_path(["bodies", 0, "material", "poisson_ratio"]) == "bodies[0].material.poisson_ratio"
     assert cases.json_path([]) == "$"

@@ -57,6 +57,10 @@ enum Command {
         /// last checkpoint.
         #[arg(long, conflicts_with_all = ["case", "example", "force"], value_name = "DIR")]
         resume: Option<PathBuf>,
+        /// Refuse a case of more material points than this (about 1 KB of
+        /// memory each): a typo in a cell size can ask for billions.
+        #[arg(long, default_value_t = mpm_service::config::DEFAULT_MAX_POINTS)]
+        max_points: usize,
     },
     /// Print a built-in example case (list them when no name is given).
     Example { name: Option<String> },
@@ -116,8 +120,9 @@ fn main() -> ExitCode {
         Command::Run {
             resume: Some(dir),
             summary_only,
+            max_points,
             ..
-        } => run::resume(&dir, !summary_only),
+        } => run::resume(&dir, !summary_only, max_points),
         Command::Run {
             case,
             example,
@@ -125,7 +130,8 @@ fn main() -> ExitCode {
             summary_only,
             force,
             resume: None,
-        } => run::run(case, example, &out, !summary_only, force),
+            max_points,
+        } => run::run(case, example, &out, !summary_only, force, max_points),
         Command::Example { name } => example(name),
         Command::Schema => {
             let schema = mpm::case::json_schema();

@@ -10,6 +10,9 @@ use mpm::case::OutputSpec;
 use mpm::report::PointColumns;
 use mpm::vtk::{write_vtp, write_vtu};
 use mpm::{Case, Checkpoint, Observer, Simulation, StepReport, StepState};
+use mpm_service::config::CheckpointSchedule;
+use mpm_service::jobs::admission::{PointLimit, Rejection, check_fill_sizes, check_points};
+use mpm_service::jobs::failure::units_hint;
 use mpm_service::results::{
     BOUNDARY_SERIES, CASE_FILE, POINTS_SERIES, STEPS_DIR, SUMMARY_FILE, Series, StepFiles, Summary,
 };
@@ -44,6 +47,7 @@ pub fn run(
     out: &Path,
     point_files: bool,
     force: bool,
+    max_points: usize,
 ) -> Result<(), CliError> {
     let (source, text) = match case_path {
         Some(path) => {
@@ -58,8 +62,7 @@ pub fn run(
             (format!("built-in example {name}"), text.to_string())
         }
     };
-    let case = Case::from_json(&text).map_err(|e| CliError::input(format!("{source}: {e}")))?;
-    let sim = Simulation::new(&case).map_err(|e| CliError::input(format!("{source}: {e}")))?;
+    let (case, sim) = build(&text, &source, max_points)?;
     prepare_output(out, force)?;
     fs::write(out.join(CASE_FILE), &text)?;
     solve(case, sim, &source, out, point_files, Vec::new(), None)
@@ -67,7 +70,7 @@ pub fn run(
 
 /// `mpm run --resume DIR`: goes on with the run in `dir` from its last
 /// checkpoint, dropping what was written after it.
-pub fn resume(dir: &Path, point_files: bool) -> Result<(), CliError> {
+pub fn resume(dir: &Path, point_files: bool, max_points: usize) -> Result<(), CliError> {
     let source = dir.join(CASE_FILE);
     let text = fs::read_to_string(&source).map_err(|e| {
         CliError::input(format!(
@@ -77,8 +80,7 @@ pub fn resume(dir: &Path, point_files: bool) -> Result<(), CliError> {
         ))
     })?;
     let source = source.display().to_string();
-    let case = Case::from_json(&text).map_err(|e| CliError::input(format!("{source}: {e}")))?;
-    let mut sim = Simulation::new(&case).map_err(|e| CliError::input(format!("{source}: {e}")))?;
+    let (case, mut sim) = build(&text, &source, max_points)?;
     let bytes = fs::read(dir.join(CHECKPOINT_FILE)).map_err(|e| {
         CliError::input(format!(
             "{}: {e} (the run stopped before its first checkpoint: run it again)",
@@ -126,6 +128,28 @@ pub fn resume(dir: &Path, point_files: bool) -> Result<(), CliError> {
     fs::rename(aside, &reports_path)?;
     eprintln!("resuming after step {done} of {}", sim.load_steps);
     solve(case, sim, &source, dir, point_files, earlier, Some(done))
+}
+
+/// Reads a case and builds its points, within `max_points`: the count is
+/// checked before seeding (from each body's lattice) and after.
+fn build(text: &str, source: &str, max_points: usize) -> Result<(Case, Simulation), CliError> {
+    let refused =
+        |path: &str, message: &str| CliError::input(format!("{source}: {path}: {message}"));
+    let limit = PointLimit {
+        max: max_points,
+        name: "the point limit (--max-points)",
+    };
+    let case = Case::from_json(text).map_err(|e| CliError::input(format!("{source}: {e}")))?;
+    let over = |r: Rejection| match r {
+        Rejection::LimitExceeded { path, message } | Rejection::InvalidCase { path, message } => {
+            refused(&path, &message)
+        }
+        Rejection::MalformedJson(message) => refused("$", &message),
+    };
+    check_fill_sizes(&case, limit).map_err(over)?;
+    let sim = Simulation::new(&case).map_err(|e| CliError::input(format!("{source}: {e}")))?;
+    check_points(sim.points.len(), limit).map_err(over)?;
+    Ok((case, sim))
 }
 
 /// Refuses a non-empty output directory, unless `force`: then removes the
@@ -207,7 +231,7 @@ fn solve(
         out: out.to_path_buf(),
         point_files,
         output: case.output.clone(),
-        checkpoint_every: mpm_service::config::checkpoint_interval(0, sim.points.len()),
+        checkpoints: CheckpointSchedule::new(0, sim.points.len()),
         series: Series::default(),
         reports: fs::OpenOptions::new()
             .create(true)
@@ -233,10 +257,18 @@ fn solve(
         return Err(e.into());
     }
     let mut report = result.map_err(|e| {
-        CliError::failed(format!(
-            "solve failed: {e} (mpm run --resume {} goes on from the last checkpoint)",
-            out.display()
-        ))
+        // A hint of units where the first step fails on loads far beyond
+        // the stiffness: E = 1 meant as 1 MPa, say.
+        let units = units_hint(&case, &e).unwrap_or_default();
+        let resume = if out.join(CHECKPOINT_FILE).exists() {
+            format!(
+                " (mpm run --resume {} goes on from the last checkpoint)",
+                out.display()
+            )
+        } else {
+            String::new()
+        };
+        CliError::failed(format!("solve failed: {e}{resume}{units}"))
     })?;
     if point_files {
         let series = &writer.series;
@@ -274,8 +306,8 @@ struct ResultWriter {
     point_files: bool,
     /// Which steps write their points, and which columns.
     output: OutputSpec,
-    /// Write the solver's state every this many steps.
-    checkpoint_every: usize,
+    /// When to write the solver's state.
+    checkpoints: CheckpointSchedule,
     /// `reports.jsonl`, unbuffered: a line goes out in one write.
     reports: File,
     series: Series,
@@ -317,7 +349,7 @@ impl ResultWriter {
         let mut line = serde_json::to_string(report)?;
         line.push('\n');
         self.reports.write_all(line.as_bytes())?;
-        if report.step.is_multiple_of(self.checkpoint_every) {
+        if self.checkpoints.due(report.step) {
             let aside = self.out.join(NEW_CHECKPOINT_FILE);
             fs::write(&aside, state.checkpoint().to_bytes())?;
             fs::rename(aside, self.out.join(CHECKPOINT_FILE))?;

@@ -87,6 +87,10 @@ pub struct ServeArgs {
     /// seconds; past it the submission gets 503.
     #[arg(long, env = "MPM_ADMISSION_TIME_LIMIT", default_value_t = config::DEFAULT_ADMISSION_TIME_LIMIT.as_secs_f64())]
     admission_time_limit: f64,
+    /// Seconds a client may take to send a request's body, or leave a
+    /// response unread, before the server closes the connection.
+    #[arg(long, env = "MPM_CLIENT_TIMEOUT", default_value_t = config::DEFAULT_CLIENT_TIMEOUT.as_secs_f64())]
+    client_timeout: f64,
 }
 
 /// `mpm worker`: solves jobs from a shared database without serving.
@@ -161,6 +165,8 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
     config.limits.max_queued = args.max_queued;
     config.limits.max_job_bytes = args.max_job_bytes;
     config.limits.admission_time_limit = admission_time_limit;
+    config.limits.client_timeout = seconds(args.client_timeout)
+        .ok_or_else(|| CliError::input("--client-timeout must be a positive number of seconds"))?;
 
     let runtime = tokio::runtime::Runtime::new()?;
     let served = runtime.block_on(async {
@@ -172,8 +178,9 @@ pub fn serve(args: ServeArgs) -> Result<(), CliError> {
         let stop = shutdown_signal();
         // Scripts (and the tests) read the bound address from this line.
         println!(
-            "listening on http://{} (database {database}, {workers} workers)",
-            server.addr
+            "listening on http://{} (database {database}, {})",
+            server.addr,
+            workers_text(workers)
         );
         stop.await;
         tracing::info!("shutting down: running jobs go back to the queue");
@@ -200,7 +207,10 @@ pub fn worker(args: WorkerArgs) -> Result<(), CliError> {
             .map_err(|e| CliError::failed(e.to_string()))?;
         let stop = shutdown_signal();
         // Scripts (and the tests) wait for this line.
-        println!("solving jobs from {database} with {workers} workers");
+        println!(
+            "solving jobs from {database} with {}",
+            workers_text(workers)
+        );
         stop.await;
         tracing::info!("shutting down: running jobs go back to the queue");
         pool.shutdown().await;
@@ -237,5 +247,14 @@ fn shutdown_signal() -> impl std::future::Future<Output = ()> {
         }
         #[cfg(not(unix))]
         let _ = ctrl_c.await;
+    }
+}
+
+/// "1 worker", "2 workers", "no workers".
+fn workers_text(n: usize) -> String {
+    match n {
+        0 => "no workers".into(),
+        1 => "1 worker".into(),
+        n => format!("{n} workers"),
     }
 }

@@ -13,13 +13,17 @@ use zip::ZipWriter;
 use zip::write::SimpleFileOptions;
 
 use super::extract::IdPath;
+use super::views::civil;
 use super::{ApiError, AppState, jobs, steps};
 use crate::jobs::{JobRow, Store};
 use crate::results::{
     BOUNDARY_SERIES, CASE_FILE, POINTS_SERIES, SUMMARY_FILE, Series, StepFiles, Summary,
 };
 
-static BUILDING: Semaphore = Semaphore::const_new(1);
+/// Archives built at once: each is held whole in memory (up to about its
+/// job's stored size). A request past them is answered 503 at once, with
+/// a `Retry-After`, rather than queued behind them for minutes.
+static BUILDING: Semaphore = Semaphore::const_new(2);
 
 pub async fn archive(
     State(state): State<AppState>,
@@ -32,12 +36,9 @@ pub async fn archive(
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("job {id}")))?;
     let reports = jobs::reports(&state.store, id).await?;
-    // An archive is built whole in memory (up to about the job's stored
-    // size): one at a time, so that requests for several cannot add up.
-    let _building = BUILDING
-        .acquire()
-        .await
-        .map_err(|e| ApiError::Internal(format!("archive: {e}")))?;
+    let _building = BUILDING.try_acquire().map_err(|_| {
+        ApiError::Unavailable("other archives are being built; try again shortly".into())
+    })?;
     let store = state.store.clone();
     let runtime = Handle::current();
     // Compressing a large job takes a while: off the async threads.
@@ -67,7 +68,22 @@ fn write_archive(
 ) -> Result<Vec<u8>, ApiError> {
     let zip_error = |e: zip::result::ZipError| ApiError::Internal(format!("archive: {e}"));
     let io_error = |e: std::io::Error| ApiError::Internal(format!("archive: {e}"));
-    let options = SimpleFileOptions::default().compression_method(zip::CompressionMethod::Deflated);
+    // Entries dated when the job ended (or was submitted): zip's default
+    // is 1980.
+    let ([year, month, day], ms) = civil(job.finished_at.unwrap_or(job.created_at));
+    let s = ms / 1000;
+    let dated = zip::DateTime::from_date_and_time(
+        year.clamp(1980, 2107) as u16,
+        month as u8,
+        day as u8,
+        (s / 3600) as u8,
+        (s / 60 % 60) as u8,
+        (s % 60) as u8,
+    )
+    .unwrap_or_default();
+    let options = SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated)
+        .last_modified_time(dated);
     let mut zip = ZipWriter::new(Cursor::new(Vec::new()));
     let add = |zip: &mut ZipWriter<_>, name: &str, bytes: &[u8]| -> Result<(), ApiError> {
         zip.start_file(name, options).map_err(zip_error)?;

@@ -1,4 +1,5 @@
-//! The bearer-token check in front of every endpoint but `/health`.
+//! The bearer-token check in front of every endpoint but `/health`, and
+//! the same-origin check in front of every request that changes jobs.
 
 use axum::extract::{Request, State};
 use axum::http::{HeaderMap, header};
@@ -21,6 +22,42 @@ pub async fn require_token(
         return ApiError::Unauthorized.into_response();
     }
     next.run(request).await
+}
+
+/// Refuses (403) a request that changes jobs (any method but GET and HEAD)
+/// sent by a browser from a page of another origin: browsers name the
+/// page's origin in `Origin` on such requests, and a page may send a form,
+/// or a POST with no body, to any address without asking first. Without a
+/// token (the default), that would let any page a user visits cancel or
+/// submit jobs on their service. Clients other than browsers send no
+/// `Origin` and pass.
+pub async fn require_same_origin(request: Request, next: Next) -> Response {
+    let method = request.method();
+    if method != axum::http::Method::GET && method != axum::http::Method::HEAD {
+        let headers = request.headers();
+        if let Some(origin) = headers.get(header::ORIGIN) {
+            let origin = origin.to_str().unwrap_or("?");
+            let host = headers.get(header::HOST).and_then(|h| h.to_str().ok());
+            if !same_origin(origin, host) {
+                return ApiError::CrossOrigin {
+                    origin: origin.to_string(),
+                }
+                .into_response();
+            }
+        }
+    }
+    next.run(request).await
+}
+
+/// Whether `origin` (`scheme://host[:port]`, or `null`) names the host the
+/// request was sent to.
+fn same_origin(origin: &str, host: Option<&str>) -> bool {
+    let Some(host) = host else {
+        return false;
+    };
+    origin
+        .split_once("://")
+        .is_some_and(|(_, authority)| authority.eq_ignore_ascii_case(host))
 }
 
 /// Whether a request with these headers may pass: no token is configured,
@@ -61,6 +98,19 @@ mod tests {
         assert_eq!(bearer("BEARER  abc"), Some("abc"));
         assert_eq!(bearer("Basic abc"), None);
         assert_eq!(bearer("Bearerabc"), None);
+    }
+
+    #[test]
+    fn an_origin_matches_only_its_own_host_and_port() {
+        assert!(same_origin("http://127.0.0.1:8080", Some("127.0.0.1:8080")));
+        assert!(same_origin("https://Mpm.example", Some("mpm.example")));
+        assert!(!same_origin("http://evil.example", Some("127.0.0.1:8080")));
+        assert!(!same_origin(
+            "http://127.0.0.1:8081",
+            Some("127.0.0.1:8080")
+        ));
+        assert!(!same_origin("null", Some("127.0.0.1:8080")));
+        assert!(!same_origin("http://127.0.0.1:8080", None));
     }
 
     #[test]

@@ -9,7 +9,7 @@ use serde_json::{Value, json};
 
 use crate::jobs::admission::Rejection;
 
-/// What a 429 or 503 asks a client to wait before it submits again, in seconds.
+/// What a 429, 503 or 507 asks a client to wait before it submits again, in seconds.
 const RETRY_AFTER_SECONDS: &str = "10";
 
 #[derive(Debug, thiserror::Error)]
@@ -25,6 +25,8 @@ pub enum ApiError {
     LimitExceeded { path: String, message: String },
     #[error("the request body exceeds the limit of {limit} bytes")]
     PayloadTooLarge { limit: usize },
+    #[error("the request body did not arrive within {seconds} s")]
+    RequestTimeout { seconds: f64 },
     #[error("invalid query parameter {name}: {message}")]
     BadQuery { name: &'static str, message: String },
     #[error("invalid header {name}: {message}")]
@@ -40,6 +42,11 @@ pub enum ApiError {
     Conflict(String),
     #[error("missing or wrong bearer token")]
     Unauthorized,
+    /// A browser's request from a page of another origin.
+    #[error("a request from another origin ({origin}) may not change jobs")]
+    CrossOrigin { origin: String },
+    #[error("the body must be declared Content-Type: application/json (it was {given})")]
+    UnsupportedMediaType { given: String },
     #[error("this route does not answer that method")]
     MethodNotAllowed,
     #[error("the queue is full ({limit} jobs wait); try again later")]
@@ -47,6 +54,9 @@ pub enum ApiError {
     /// Shutting down, or a submission's check ran out of time.
     #[error("{0}")]
     Unavailable(String),
+    /// The database's disk is full: nothing of the request was stored.
+    #[error("the database's disk is full: nothing was stored; try again when space is freed")]
+    InsufficientStorage,
     #[error("internal error")]
     Internal(String),
 }
@@ -63,6 +73,10 @@ impl From<Rejection> for ApiError {
 
 impl From<sqlx::Error> for ApiError {
     fn from(e: sqlx::Error) -> Self {
+        if crate::jobs::store::is_disk_full(&e) {
+            tracing::error!(error = %e, "the database's disk is full");
+            return ApiError::InsufficientStorage;
+        }
         ApiError::Internal(format!("database: {e}"))
     }
 }
@@ -86,6 +100,9 @@ impl ApiError {
                 "payload_too_large",
                 json!({ "limit_bytes": limit }),
             ),
+            ApiError::RequestTimeout { .. } => {
+                (StatusCode::REQUEST_TIMEOUT, "request_timeout", Value::Null)
+            }
             ApiError::BadQuery { name, .. } => (
                 StatusCode::BAD_REQUEST,
                 "bad_query",
@@ -104,6 +121,16 @@ impl ApiError {
             ApiError::NotFound(_) => (StatusCode::NOT_FOUND, "not_found", Value::Null),
             ApiError::Conflict(_) => (StatusCode::CONFLICT, "conflict", Value::Null),
             ApiError::Unauthorized => (StatusCode::UNAUTHORIZED, "unauthorized", Value::Null),
+            ApiError::CrossOrigin { .. } => (
+                StatusCode::FORBIDDEN,
+                "cross_origin",
+                json!({ "header": "Origin" }),
+            ),
+            ApiError::UnsupportedMediaType { .. } => (
+                StatusCode::UNSUPPORTED_MEDIA_TYPE,
+                "unsupported_media_type",
+                json!({ "header": "Content-Type" }),
+            ),
             ApiError::QueueFull { limit } => (
                 StatusCode::TOO_MANY_REQUESTS,
                 "queue_full",
@@ -117,6 +144,11 @@ impl ApiError {
             ApiError::Unavailable(_) => {
                 (StatusCode::SERVICE_UNAVAILABLE, "unavailable", Value::Null)
             }
+            ApiError::InsufficientStorage => (
+                StatusCode::INSUFFICIENT_STORAGE,
+                "insufficient_storage",
+                Value::Null,
+            ),
             ApiError::Internal(_) => (StatusCode::INTERNAL_SERVER_ERROR, "internal", Value::Null),
         }
     }
@@ -134,7 +166,9 @@ impl IntoResponse for ApiError {
         let mut response = (status, body).into_response();
         if matches!(
             status,
-            StatusCode::TOO_MANY_REQUESTS | StatusCode::SERVICE_UNAVAILABLE
+            StatusCode::TOO_MANY_REQUESTS
+                | StatusCode::SERVICE_UNAVAILABLE
+                | StatusCode::INSUFFICIENT_STORAGE
         ) {
             response.headers_mut().insert(
                 axum::http::header::RETRY_AFTER,

@@ -3,8 +3,8 @@
 
 use axum::Json;
 use axum::body::Bytes;
-use axum::extract::State;
 use axum::extract::rejection::BytesRejection;
+use axum::extract::{FromRequest, Request, State};
 
 use super::extract::{IdPath, Params, integer};
 use axum::http::{HeaderMap, StatusCode, header};
@@ -20,20 +20,26 @@ use crate::jobs::{
 
 /// `POST /jobs`: validate, store, queue. With an `Idempotency-Key`, a
 /// retry of the same body returns the job the first request made (200).
-pub async fn submit(
-    State(state): State<AppState>,
-    headers: HeaderMap,
-    body: Result<Bytes, BytesRejection>,
-) -> Result<Response, ApiError> {
-    let body = body.map_err(|rejection| {
-        if rejection.status() == StatusCode::PAYLOAD_TOO_LARGE {
-            ApiError::PayloadTooLarge {
-                limit: state.config.limits.max_body_bytes,
+/// The body must come within the client timeout: a client trickling it
+/// holds its memory meanwhile.
+pub async fn submit(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
+    let headers = request.headers().clone();
+    json_content_type(&headers)?;
+    let limit = state.config.limits.client_timeout;
+    let body = tokio::time::timeout(limit, Bytes::from_request(request, &state))
+        .await
+        .map_err(|_| ApiError::RequestTimeout {
+            seconds: limit.as_secs_f64(),
+        })?
+        .map_err(|rejection: BytesRejection| {
+            if rejection.status() == StatusCode::PAYLOAD_TOO_LARGE {
+                ApiError::PayloadTooLarge {
+                    limit: state.config.limits.max_body_bytes,
+                }
+            } else {
+                ApiError::MalformedJson(rejection.body_text())
             }
-        } else {
-            ApiError::MalformedJson(rejection.body_text())
-        }
-    })?;
+        })?;
     let Some(key) = idempotency_key(&headers)? else {
         return queue(&state, body, None).await;
     };
@@ -53,29 +59,53 @@ pub async fn submit(
     }
 }
 
+/// Refuses a body not declared JSON (415): a browser sends forms, text and
+/// XML to any address without asking first, but not JSON.
+fn json_content_type(headers: &HeaderMap) -> Result<(), ApiError> {
+    let given = headers
+        .get(header::CONTENT_TYPE)
+        .map(|v| String::from_utf8_lossy(v.as_bytes()).into_owned());
+    let media_type = given
+        .as_deref()
+        .and_then(|v| v.split(';').next())
+        .map(str::trim);
+    if media_type.is_some_and(|m| m.eq_ignore_ascii_case("application/json")) {
+        return Ok(());
+    }
+    Err(ApiError::UnsupportedMediaType {
+        given: given.unwrap_or_else(|| "missing".into()),
+    })
+}
+
 /// Checks a new submission and queues it (201), or, if its key was taken
 /// meanwhile, answers as a replay.
 async fn queue(state: &AppState, body: Bytes, key: Option<&str>) -> Result<Response, ApiError> {
     let limits = &state.config.limits;
+    let full = ApiError::QueueFull {
+        limit: limits.max_queued,
+    };
+    // Cheap, before the check; the insert counts again, atomically.
     if state.store.queued().await? >= limits.max_queued as i64 {
-        return Err(ApiError::QueueFull {
-            limit: limits.max_queued,
-        });
+        return Err(full);
     }
     let admitted = check(state, body.clone()).await?;
     let text = std::str::from_utf8(&body)
         .map_err(|e| ApiError::Internal(format!("checked body is not UTF-8: {e}")))?;
     let inserted = state
         .store
-        .insert(&NewJob {
-            case_json: text,
-            title: admitted.case.title.as_deref(),
-            points: admitted.points as i64,
-            load_steps: admitted.case.analysis.load_steps as i64,
-            idempotency_key: key,
-        })
+        .insert(
+            &NewJob {
+                case_json: text,
+                title: admitted.case.title.as_deref(),
+                points: admitted.points as i64,
+                load_steps: admitted.case.analysis.load_steps as i64,
+                idempotency_key: key,
+            },
+            limits.max_queued as i64,
+        )
         .await?;
     match (inserted, key) {
+        (Inserted::QueueFull, _) => Err(full),
         (Inserted::New(id), _) => {
             state.wake.notify_one();
             job_response(StatusCode::CREATED, find(&state.store, id).await?)

@@ -3,6 +3,7 @@
 
 mod archive;
 mod auth;
+pub mod connection;
 mod error;
 mod extract;
 mod jobs;
@@ -70,7 +71,8 @@ pub fn router(state: AppState) -> Router {
         .route_layer(middleware::from_fn_with_state(
             state.clone(),
             auth::require_token,
-        ));
+        ))
+        .route_layer(middleware::from_fn(auth::require_same_origin));
     Router::new()
         .route("/health", get(health))
         .route("/schema/case.json", get(case_schema))
@@ -79,7 +81,32 @@ pub fn router(state: AppState) -> Router {
         .fallback(unknown_route)
         .method_not_allowed_fallback(method_not_allowed)
         .layer(DefaultBodyLimit::max(state.config.limits.max_body_bytes))
+        .layer(middleware::map_response(security_headers))
         .with_state(state)
+}
+
+/// What a browser may do with any response: load the viewer's script,
+/// style and images from this origin only and run nothing inline; show no
+/// page of ours in another's frame; read no type but the one declared.
+const CONTENT_SECURITY_POLICY: &str = "default-src 'none'; script-src 'self'; style-src 'self'; \
+     img-src 'self' data: blob:; connect-src 'self'; base-uri 'none'; form-action 'self'; \
+     frame-ancestors 'none'";
+
+async fn security_headers(mut response: Response) -> Response {
+    let headers = response.headers_mut();
+    headers.insert(
+        header::CONTENT_SECURITY_POLICY,
+        header::HeaderValue::from_static(CONTENT_SECURITY_POLICY),
+    );
+    headers.insert(
+        header::X_CONTENT_TYPE_OPTIONS,
+        header::HeaderValue::from_static("nosniff"),
+    );
+    headers.insert(
+        header::X_FRAME_OPTIONS,
+        header::HeaderValue::from_static("DENY"),
+    );
+    response
 }
 
 /// No such route: 404, or 401 without the token when one is set.
@@ -101,41 +128,58 @@ async fn method_not_allowed(State(state): State<AppState>, headers: HeaderMap) -
     }
 }
 
-async fn health(State(state): State<AppState>) -> Response {
+/// `GET /health`: 200 with `status: ok` when the database answers and its
+/// last write did not fail on storage; 503 with `degraded` (a write failed
+/// for want of space or on an I/O error, until one that stores data
+/// succeeds) or `unavailable` (the database does not answer). The counts,
+/// the size and the failure go only to a caller the token admits.
+async fn health(State(state): State<AppState>, headers: HeaderMap) -> Response {
+    let detailed = auth::authorized(&state, &headers);
     let checked = async {
         state.store.ping().await?;
         Ok::<_, sqlx::Error>((state.store.size_bytes().await?, state.store.counts().await?))
     };
-    match checked.await {
-        Ok((bytes, counts)) => {
-            let jobs: serde_json::Map<String, serde_json::Value> = counts
-                .into_iter()
-                .map(|(status, n)| (status.as_str().to_string(), n.into()))
-                .collect();
-            let backend = match state.store.backend() {
-                Backend::Sqlite => "sqlite",
-                Backend::Postgres => "postgres",
-            };
-            Json(json!({
-                "status": "ok",
-                "database": "ok",
-                "backend": backend,
-                "database_bytes": bytes,
-                "jobs": jobs,
-                "max_queued": state.config.limits.max_queued,
-                "workers": state.config.workers,
-            }))
-            .into_response()
-        }
+    let (bytes, counts) = match checked.await {
+        Ok(found) => found,
         Err(e) => {
             tracing::error!(error = %e, "health check: database unavailable");
-            (
-                StatusCode::SERVICE_UNAVAILABLE,
-                Json(json!({"status": "unavailable", "database": "error"})),
-            )
-                .into_response()
+            let body = if detailed {
+                json!({"status": "unavailable", "database": "error"})
+            } else {
+                json!({"status": "unavailable"})
+            };
+            return (StatusCode::SERVICE_UNAVAILABLE, Json(body)).into_response();
         }
+    };
+    let trouble = state.store.storage_trouble();
+    let (code, status) = match trouble {
+        Some(_) => (StatusCode::SERVICE_UNAVAILABLE, "degraded"),
+        None => (StatusCode::OK, "ok"),
+    };
+    if !detailed {
+        return (code, Json(json!({ "status": status }))).into_response();
     }
+    let jobs: serde_json::Map<String, serde_json::Value> = counts
+        .into_iter()
+        .map(|(status, n)| (status.as_str().to_string(), n.into()))
+        .collect();
+    let backend = match state.store.backend() {
+        Backend::Sqlite => "sqlite",
+        Backend::Postgres => "postgres",
+    };
+    let mut body = json!({
+        "status": status,
+        "database": if trouble.is_some() { "storage_error" } else { "ok" },
+        "backend": backend,
+        "database_bytes": bytes,
+        "jobs": jobs,
+        "max_queued": state.config.limits.max_queued,
+        "workers": state.config.workers,
+    });
+    if let Some(error) = trouble {
+        body["database_error"] = error.into();
+    }
+    (code, Json(body)).into_response()
 }
 
 async fn openapi() -> impl IntoResponse {

@@ -12,7 +12,7 @@ use super::{ApiError, AppState};
 
 const INDEX: &str = include_str!("viewer/index.html");
 /// The viewer's files under `/viewer/`: name, content type, text.
-const FILES: [(&str, &str, &str); 2] = [
+const FILES: [(&str, &str, &str); 3] = [
     (
         "viewer.js",
         "text/javascript; charset=utf-8",
@@ -22,6 +22,11 @@ const FILES: [(&str, &str, &str); 2] = [
         "viewer.css",
         "text/css; charset=utf-8",
         include_str!("viewer/viewer.css"),
+    ),
+    (
+        "favicon.svg",
+        "image/svg+xml",
+        include_str!("viewer/favicon.svg"),
     ),
 ];
 

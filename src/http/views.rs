@@ -180,6 +180,19 @@ impl ResultView {
 
 /// `2026-11-24T08:40:00.123Z` from Unix seconds (UTC, millisecond precision).
 pub fn rfc3339(unix_seconds: f64) -> String {
+    let ([year, month, day], ms_of_day) = civil(unix_seconds);
+    let s = ms_of_day / 1000;
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}.{:03}Z",
+        s / 3600,
+        s / 60 % 60,
+        s % 60,
+        ms_of_day % 1000
+    )
+}
+
+/// `([year, month, day], milliseconds into the day)` of a Unix time, UTC.
+pub fn civil(unix_seconds: f64) -> ([i64; 3], i64) {
     let millis = (unix_seconds * 1000.0).round() as i64;
     let (days, ms_of_day) = (millis.div_euclid(86_400_000), millis.rem_euclid(86_400_000));
     // Civil date from days since 1970-01-01 (H. Hinnant, "chrono-compatible
@@ -193,14 +206,7 @@ pub fn rfc3339(unix_seconds: f64) -> String {
     let day = doy - (153 * mp + 2) / 5 + 1;
     let month = if mp < 10 { mp + 3 } else { mp - 9 };
     let year = yoe + era * 400 + i64::from(month <= 2);
-    let s = ms_of_day / 1000;
-    format!(
-        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}.{:03}Z",
-        s / 3600,
-        s / 60 % 60,
-        s % 60,
-        ms_of_day % 1000
-    )
+    ([year, month, day], ms_of_day)
 }
 
 #[cfg(test)]

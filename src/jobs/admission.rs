@@ -1,8 +1,7 @@
 //! What a submission must be to be queued: JSON, a valid case, and within
 //! the service's limits. Each check names the field that fails it.
 
-use mpm::model::Seeded;
-use mpm::{Case, CaseErrorKind};
+use mpm::{Case, CaseErrorKind, Simulation};
 
 use crate::config::Limits;
 
@@ -45,23 +44,34 @@ pub fn read(body: &[u8]) -> Result<(&str, Case), Rejection> {
     Ok((text, case))
 }
 
-/// Checks a case against the limits and builds its points (CPU work: call
-/// it off the async threads). Building the points also checks what only
-/// they can tell, e.g. that a boundary load selects some stretch of
-/// boundary.
+/// Checks a case against the limits and builds what a worker builds first
+/// (CPU work: call it off the async threads), so that a case is refused
+/// here, naming its field, rather than failing on the worker: a boundary
+/// load or support that selects nothing, a grid-node support that holds no
+/// node, a probe outside every body. The checks that cost microseconds
+/// come first: the counts of every body's lattice, and the stored size
+/// they imply (a lower bound, without the boundary curves).
 pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
     check_load_steps(&case, limits)?;
-    check_fill_sizes(&case, limits)?;
-    let seeded = Seeded::new(&case).map_err(|e| Rejection::InvalidCase {
+    let point_limit = PointLimit::service(limits.max_points);
+    if let Some(points) = check_fill_sizes(&case, point_limit)? {
+        let at_least = Footprint {
+            points: points as usize,
+            boundary_points: 0,
+            loops: 0,
+        };
+        check_stored_bytes(at_least, &case, limits)?;
+    }
+    let sim = Simulation::new(&case).map_err(|e| Rejection::InvalidCase {
         path: e.path,
         message: e.message,
     })?;
-    let points = seeded.points.len();
-    check_points(points, limits)?;
+    let points = sim.points.len();
+    check_points(points, point_limit)?;
     let footprint = Footprint {
         points,
-        boundary_points: seeded.loops.iter().map(|l| l.points.len()).sum(),
-        loops: seeded.loops.len(),
+        boundary_points: sim.loops.iter().map(|l| l.points.len()).sum(),
+        loops: sim.loops.len(),
     };
     check_stored_bytes(footprint, &case, limits)?;
     Ok(Admitted { case, points })
@@ -88,12 +98,15 @@ const SITES_PER_POINT: f64 = 4.0;
 /// Refuses a case over the point limit before seeding anything, from the
 /// per-direction counts of every body's lattice: exact for rectangles,
 /// quadrilaterals and annulus sectors, and for other shapes the sites their seeding would
-/// scan. Microseconds, whatever the case asks for.
-fn check_fill_sizes(case: &Case, limits: &Limits) -> Result<(), Rejection> {
-    let max = limits.max_points as f64;
+/// scan. Microseconds, whatever the case asks for. Returns the number of
+/// points when every body's count is exact.
+pub fn check_fill_sizes(case: &Case, limit: PointLimit) -> Result<Option<f64>, Rejection> {
+    let max = limit.max as f64;
     let mut points = 0.0;
+    let mut exact = true;
     for (i, body) in case.bodies.iter().enumerate() {
         let size = mpm::model::fill_size(body, &case.grid);
+        exact &= size.exact;
         if size.exact {
             points += size.sites;
         } else if size.sites > SITES_PER_POINT * max {
@@ -101,9 +114,10 @@ fn check_fill_sizes(case: &Case, limits: &Limits) -> Result<(), Rejection> {
                 path: format!("bodies[{i}].points"),
                 message: format!(
                     "seeding this body scans {:.3e} lattice sites (its bounding box at this spacing), \
-                     over this service's limit of {:.3e} ({SITES_PER_POINT} per point of the point limit)",
+                     over the limit of {:.3e} ({SITES_PER_POINT} per point of {})",
                     size.sites,
-                    SITES_PER_POINT * max
+                    SITES_PER_POINT * max,
+                    limit.name
                 ),
             });
         }
@@ -112,22 +126,39 @@ fn check_fill_sizes(case: &Case, limits: &Limits) -> Result<(), Rejection> {
         return Err(Rejection::LimitExceeded {
             path: "bodies".into(),
             message: format!(
-                "the bodies make {points:.0} material points, over this service's limit of {}",
-                limits.max_points
+                "the bodies make {points:.0} material points, over {} of {}",
+                limit.name, limit.max
             ),
         });
     }
-    Ok(())
+    Ok(exact.then_some(points))
+}
+
+/// A limit on a case's material points, and how a refusal names it.
+#[derive(Debug, Clone, Copy)]
+pub struct PointLimit {
+    pub max: usize,
+    /// e.g. "this service's point limit".
+    pub name: &'static str,
+}
+
+impl PointLimit {
+    pub fn service(max: usize) -> Self {
+        PointLimit {
+            max,
+            name: "this service's point limit",
+        }
+    }
 }
 
 /// The number of points the case made: within the limit, and some.
-fn check_points(points: usize, limits: &Limits) -> Result<(), Rejection> {
-    if points > limits.max_points {
+pub fn check_points(points: usize, limit: PointLimit) -> Result<(), Rejection> {
+    if points > limit.max {
         return Err(Rejection::LimitExceeded {
             path: "bodies".into(),
             message: format!(
-                "the bodies make {points} material points, over this service's limit of {}",
-                limits.max_points
+                "the bodies make {points} material points, over {} of {}",
+                limit.name, limit.max
             ),
         });
     }
@@ -350,7 +381,7 @@ mod tests {
             Err(Rejection::LimitExceeded { path, .. }) if path == "bodies"
         ));
         assert!(matches!(
-            check_points(0, &limits),
+            check_points(0, PointLimit::service(limits.max_points)),
             Err(Rejection::InvalidCase { path, .. }) if path == "bodies"
         ));
     }

@@ -16,6 +16,8 @@ pub enum FailureKind {
     LinearSolve,
     /// Material left the grid's extent.
     LeftGrid,
+    /// A step converged to results that are not finite numbers.
+    NonFinite,
     /// The per-job wall-time limit was reached.
     TimeLimit,
     /// The job's worker stopped (crashed or was killed) on every attempt.
@@ -62,6 +64,51 @@ impl Failure {
     }
 }
 
+/// A hint of units for a first load step that failed with its loads far
+/// beyond the bodies' stiffness: the largest stress the loads make (a
+/// pressure, a traction, a body's weight over its height) against the
+/// smallest Young's modulus, when over a tenth of it. A modulus of 1
+/// meant as 1 MPa fails so, and the solver's message (an inverted point,
+/// a diverged Newton) says nothing of why.
+pub fn units_hint(case: &mpm::Case, e: &SolveError) -> Option<String> {
+    if e.location().0 != 1 || matches!(e.cause(), SolveError::Cancelled { .. }) {
+        return None;
+    }
+    let stiffness = case
+        .bodies
+        .iter()
+        .map(|b| b.material.constants().0)
+        .fold(f64::INFINITY, f64::min);
+    let gravity = case.loads.gravity.map_or(0.0, |g| g[0].hypot(g[1]));
+    let weight = case
+        .bodies
+        .iter()
+        .map(|b| {
+            let (lo, hi) = b.geometry.bounding_box();
+            let height = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+            b.material.constants().2 * gravity * height
+        })
+        .fold(0.0, f64::max);
+    let surface = case
+        .loads
+        .boundary
+        .iter()
+        .map(|l| match (l.traction, l.pressure) {
+            (Some(t), _) => t[0].hypot(t[1]),
+            (None, Some(p)) => p.abs(),
+            (None, None) => 0.0,
+        })
+        .fold(0.0, f64::max);
+    let stress = weight.max(surface);
+    (stress > 0.1 * stiffness).then(|| {
+        format!(
+            "; the loads make stresses of about {stress:.3e} Pa against a Young's modulus of \
+             {stiffness:.3e} Pa: are the units SI throughout (moduli and pressures in Pa, \
+             1 MPa = 1e6)?"
+        )
+    })
+}
+
 impl From<SolveError> for Failure {
     fn from(e: SolveError) -> Self {
         let kind = match e.cause() {
@@ -70,6 +117,7 @@ impl From<SolveError> for Failure {
             SolveError::Inverted { .. } => FailureKind::InvertedPoint,
             SolveError::LinearSolve { .. } => FailureKind::LinearSolve,
             SolveError::LeftGrid { .. } => FailureKind::LeftGrid,
+            SolveError::NonFinite { .. } => FailureKind::NonFinite,
             SolveError::Cancelled { .. } => FailureKind::Cancelled,
             // cause() never returns it.
             SolveError::SubstepsExhausted { .. } => FailureKind::NotConverged,
@@ -94,12 +142,13 @@ impl From<SolveError> for Failure {
 mod tests {
     use super::*;
 
-    const STORED: [FailureKind; 9] = [
+    const STORED: [FailureKind; 10] = [
         FailureKind::NotConverged,
         FailureKind::Diverged,
         FailureKind::InvertedPoint,
         FailureKind::LinearSolve,
         FailureKind::LeftGrid,
+        FailureKind::NonFinite,
         FailureKind::TimeLimit,
         FailureKind::AttemptsExhausted,
         FailureKind::InvalidCase,

@@ -2,12 +2,13 @@
 //! (SQLite or PostgreSQL).
 
 pub mod admission;
-mod failure;
+pub mod failure;
 mod status;
 pub mod store;
 
 pub use failure::{Failure, FailureKind};
 pub use status::JobStatus;
 pub use store::{
-    Backend, CancelOutcome, Claimed, DeleteOutcome, Earlier, Inserted, JobRow, NewJob, Store,
+    Backend, CancelOutcome, Claimed, DeleteOutcome, Earlier, Inserted, JobRow, NewJob, Requeued,
+    Store,
 };

@@ -16,28 +16,34 @@
 //! it runs; a job whose lease expired is claimable again, up to the attempt
 //! limit, and resumes from its checkpoint if it has one.
 //!
+//! Every time the queue stores or compares (created, started and finished
+//! times, lease expiries) is read from the database's clock, never the
+//! caller's: a worker whose clock runs ahead would otherwise see other
+//! workers' leases as expired and take their jobs.
+//!
+//! A SQLite connection goes back to the pool only outside a transaction
+//! ([`released_outside_a_transaction`]); see docs/queue.md on the full disk
+//! that taught this.
+//!
 //! The few statements assembled with `format!` insert only constants of this
-//! module (column lists, status names from [`JobStatus`]); every value from a
-//! request is a bind parameter.
+//! module (column lists, status names from [`JobStatus`], the clock's SQL);
+//! every value from a request is a bind parameter.
 
+use std::future::Future;
 use std::path::Path;
+use std::pin::Pin;
 use std::str::FromStr;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 use sqlx::postgres::{PgPool, PgPoolOptions};
-use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
-use sqlx::{AssertSqlSafe, FromRow, SqlitePool};
+use sqlx::sqlite::{
+    SqliteConnectOptions, SqliteConnection, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous,
+};
+use sqlx::{AssertSqlSafe, Connection, Executor, FromRow, SqlitePool};
 
 use super::{Failure, FailureKind, JobStatus};
 use crate::step::StoredStep;
-
-/// Unix time in seconds.
-pub fn now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .unwrap_or_default()
-        .as_secs_f64()
-}
 
 /// A row of `jobs`, without the case text.
 #[derive(Debug, Clone, FromRow)]
@@ -109,6 +115,19 @@ pub enum Inserted {
     New(i64),
     /// The key was taken (by a request that raced this one, or earlier).
     Earlier(Earlier),
+    /// Nothing: the queue already held the limit's number of jobs.
+    QueueFull,
+}
+
+/// What [`Store::requeue`] did with a job its worker hands back.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Requeued {
+    /// Back in the queue, to resume from its checkpoint.
+    Queued,
+    /// A cancel had been asked for: it ended as cancelled instead.
+    Cancelled,
+    /// The worker no longer held it.
+    NotHeld,
 }
 
 /// What `POST /jobs/{id}/cancel` did.
@@ -159,6 +178,68 @@ macro_rules! on_pool {
 #[derive(Clone)]
 pub struct Store {
     pool: Pool,
+    /// The last write that failed for want of space or on an I/O error,
+    /// until a later write that stores data succeeds: what `/health` reports.
+    trouble: Arc<Mutex<Option<String>>>,
+}
+
+/// Whether an error is the database's storage failing (a full disk, an I/O
+/// error), rather than the statement or the request.
+pub fn is_storage_error(e: &sqlx::Error) -> bool {
+    match e {
+        sqlx::Error::Io(_) => true,
+        sqlx::Error::Database(d) => {
+            let code = d.code();
+            let code = code.as_deref().unwrap_or("");
+            // SQLite's primary result codes (the low byte of extended ones):
+            // 13 SQLITE_FULL, 10 SQLITE_IOERR. PostgreSQL's SQLSTATE classes
+            // 53 (insufficient resources: 53100 disk_full) and 58 (I/O).
+            let sqlite_primary = code.parse::<i64>().ok().map(|c| c & 0xff);
+            matches!(sqlite_primary, Some(13 | 10))
+                || code.starts_with("53")
+                || code.starts_with("58")
+        }
+        _ => false,
+    }
+}
+
+/// Whether an error is the database's disk being full.
+pub fn is_disk_full(e: &sqlx::Error) -> bool {
+    match e {
+        sqlx::Error::Database(d) => {
+            let code = d.code();
+            let code = code.as_deref().unwrap_or("");
+            code.parse::<i64>().is_ok_and(|c| c & 0xff == 13) || code == "53100"
+        }
+        _ => false,
+    }
+}
+
+/// The `after_release` check of SQLite's pool: whether a connection may go
+/// back to it. A SQLite transaction that a full disk ends (SQLITE_FULL on a
+/// statement or a COMMIT rolls it back) leaves sqlx's count of open
+/// transactions at 1, as its ROLLBACK then fails; sqlx's next `begin` on
+/// that connection is a SAVEPOINT, and a failed one's rollback (`ROLLBACK
+/// TO`) keeps the transaction open, write lock and all. Such a connection
+/// sat in the pool: every other connection waited on its lock ("database
+/// is locked"), and what ran on it was acknowledged but never committed.
+/// A `BEGIN` fails inside a transaction; run after the queued rollback, it
+/// and sqlx's count say whether the connection is clean. A connection that
+/// is not is closed, which rolls back whatever it held.
+fn released_outside_a_transaction(
+    conn: &mut SqliteConnection,
+) -> Pin<Box<dyn Future<Output = Result<bool, sqlx::Error>> + Send + '_>> {
+    Box::pin(async move {
+        let probed = conn.execute("BEGIN; ROLLBACK").await;
+        if probed.is_err() || conn.is_in_transaction() {
+            tracing::warn!(
+                error = ?probed.err(),
+                "a database connection was left inside a transaction; closing it"
+            );
+            return Ok(false);
+        }
+        Ok(true)
+    })
 }
 
 /// `UPDATE jobs SET {set}` on job `$k+1` if owner `$k+2` still holds it
@@ -182,29 +263,77 @@ impl Store {
             // Processes starting together take turns: sqlx holds an
             // advisory lock while it migrates.
             sqlx::migrate!("./migrations/postgres").run(&pool).await?;
-            return Ok(Store {
-                pool: Pool::Postgres(pool),
-            });
+            return Ok(Store::with(Pool::Postgres(pool)));
         }
         let path = url
             .strip_prefix("sqlite://")
             .or_else(|| url.strip_prefix("sqlite:"))
             .unwrap_or(url);
-        let options = SqliteConnectOptions::from_str("sqlite:")?
-            .filename(Path::new(path))
+        let options = SqliteConnectOptions::from_str("sqlite:")?.filename(Path::new(path));
+        Store::open_sqlite(options, 8).await
+    }
+
+    /// A SQLite store on `options` (its file named), with the service's
+    /// settings added, and at most `connections` connections.
+    async fn open_sqlite(
+        options: SqliteConnectOptions,
+        connections: u32,
+    ) -> Result<Store, sqlx::Error> {
+        let options = options
             .create_if_missing(true)
             .journal_mode(SqliteJournalMode::Wal)
             .synchronous(SqliteSynchronous::Normal)
             .busy_timeout(Duration::from_secs(10))
             .foreign_keys(true);
         let pool = SqlitePoolOptions::new()
-            .max_connections(8)
+            .max_connections(connections)
+            .after_release(|conn, _| released_outside_a_transaction(conn))
             .connect_with(options)
             .await?;
         sqlx::migrate!("./migrations/sqlite").run(&pool).await?;
-        Ok(Store {
-            pool: Pool::Sqlite(pool),
-        })
+        Ok(Store::with(Pool::Sqlite(pool)))
+    }
+
+    fn with(pool: Pool) -> Store {
+        Store {
+            pool,
+            trouble: Arc::default(),
+        }
+    }
+
+    /// The last storage failure of a write (see [`is_storage_error`]), if no
+    /// write that stores data has succeeded since.
+    pub fn storage_trouble(&self) -> Option<String> {
+        self.trouble.lock().expect("not poisoned").clone()
+    }
+
+    /// Notes the outcome of a write that stores data (a job, a step) for
+    /// [`Store::storage_trouble`]: a storage failure is kept, a success
+    /// clears it.
+    fn note<T>(&self, result: Result<T, sqlx::Error>) -> Result<T, sqlx::Error> {
+        let mut trouble = self.trouble.lock().expect("not poisoned");
+        match &result {
+            Err(e) if is_storage_error(e) => *trouble = Some(e.to_string()),
+            Ok(_) => *trouble = None,
+            Err(_) => {}
+        }
+        result
+    }
+
+    /// The database's clock as an SQL expression, in Unix seconds.
+    fn now(&self) -> &'static str {
+        match self.backend() {
+            Backend::Sqlite => "((julianday('now') - 2440587.5) * 86400.0)",
+            Backend::Postgres => "CAST(extract(epoch FROM clock_timestamp()) AS DOUBLE PRECISION)",
+        }
+    }
+
+    /// The database's clock, in Unix seconds.
+    pub async fn clock(&self) -> Result<f64, sqlx::Error> {
+        let sql = format!("SELECT {}", self.now());
+        on_pool!(self, |pool| sqlx::query_scalar(AssertSqlSafe(sql))
+            .fetch_one(pool)
+            .await)
     }
 
     pub fn backend(&self) -> Backend {
@@ -221,26 +350,46 @@ impl Store {
             .map(|_| ()))
     }
 
-    /// Queues a job. With an idempotency key already taken, nothing is
+    /// Queues a job unless `max_queued` jobs already wait: the count and
+    /// the insert are one step, so simultaneous submissions cannot pass the
+    /// limit together (SQLite: `BEGIN IMMEDIATE` takes the write lock before
+    /// counting; PostgreSQL: a transaction's advisory lock orders the
+    /// submissions). With an idempotency key already taken, nothing is
     /// inserted and the job that holds the key is returned instead.
-    pub async fn insert(&self, job: &NewJob<'_>) -> Result<Inserted, sqlx::Error> {
-        let inserted: Result<i64, _> = on_pool!(self, |pool| {
-            sqlx::query_scalar(
+    pub async fn insert(&self, job: &NewJob<'_>, max_queued: i64) -> Result<Inserted, sqlx::Error> {
+        let insert = AssertSqlSafe(format!(
             "INSERT INTO jobs (status, case_json, title, points, load_steps, created_at, idempotency_key) \
-             VALUES ($1, $2, $3, $4, $5, $6, $7) RETURNING id",
-        )
-        .bind(QUEUED)
-        .bind(job.case_json)
-        .bind(job.title)
-        .bind(job.points)
-        .bind(job.load_steps)
-        .bind(now())
-        .bind(job.idempotency_key)
-        .fetch_one(pool)
-        .await
-        });
-        match (inserted, job.idempotency_key) {
-            (Ok(id), _) => Ok(Inserted::New(id)),
+             SELECT $1, $2, $3, $4, $5, {}, $6 \
+             WHERE (SELECT COUNT(*) FROM jobs WHERE status = '{QUEUED}') < $7 RETURNING id",
+            self.now()
+        ));
+        let (begin, lock) = match self.backend() {
+            Backend::Sqlite => ("BEGIN IMMEDIATE", None),
+            // Any constant key: the queue's one lock of this kind.
+            Backend::Postgres => ("BEGIN", Some("SELECT pg_advisory_xact_lock(7340001)")),
+        };
+        let inserted: Result<Option<i64>, _> = on_pool!(self, |pool| async {
+            let mut tx = pool.begin_with(begin).await?;
+            if let Some(lock) = lock {
+                sqlx::query(lock).execute(&mut *tx).await?;
+            }
+            let id = sqlx::query_scalar(insert)
+                .bind(QUEUED)
+                .bind(job.case_json)
+                .bind(job.title)
+                .bind(job.points)
+                .bind(job.load_steps)
+                .bind(job.idempotency_key)
+                .bind(max_queued)
+                .fetch_optional(&mut *tx)
+                .await?;
+            tx.commit().await?;
+            Ok(id)
+        }
+        .await);
+        match (self.note(inserted), job.idempotency_key) {
+            (Ok(Some(id)), _) => Ok(Inserted::New(id)),
+            (Ok(None), _) => Ok(Inserted::QueueFull),
             (Err(e), Some(key))
                 if e.as_database_error()
                     .is_some_and(|d| d.is_unique_violation()) =>
@@ -354,24 +503,27 @@ impl Store {
     }
 
     /// Fails running jobs whose lease has expired and that have used all
-    /// their attempts. Returns how many.
+    /// their attempts: claims since their checkpoint last moved on (a run
+    /// that stored a later checkpoint before its worker died made
+    /// progress, and is not held against the job). Returns how many.
     pub async fn fail_exhausted(&self, max_attempts: i64) -> Result<u64, sqlx::Error> {
         let error = Failure::new(
             FailureKind::AttemptsExhausted,
             format!(
-                "the worker running this job stopped (crashed or was killed) {max_attempts} times"
+                "the worker running this job stopped (crashed or was killed) {max_attempts} times \
+                 without the job getting past its last checkpoint"
             ),
         )
         .json();
+        let now = self.now();
         let sql = format!(
-            "UPDATE jobs SET status = $1, error = $2, finished_at = $3, lease_owner = NULL, lease_expires_at = NULL \
-             WHERE status = '{RUNNING}' AND lease_expires_at < $3 AND attempts >= $4"
+            "UPDATE jobs SET status = $1, error = $2, finished_at = {now}, lease_owner = NULL, lease_expires_at = NULL \
+             WHERE status = '{RUNNING}' AND lease_expires_at < {now} AND stalled_attempts >= $3"
         );
         on_pool!(self, |pool| {
             let done = sqlx::query(AssertSqlSafe(sql))
                 .bind(JobStatus::Failed.as_str())
                 .bind(&error)
-                .bind(now())
                 .bind(max_attempts)
                 .execute(pool)
                 .await?
@@ -392,23 +544,25 @@ impl Store {
         owner: &str,
         lease: Duration,
     ) -> Result<Option<Claimed>, sqlx::Error> {
-        let t = now();
-        // A job whose worker died after a cancel request ends as cancelled,
-        // keeping its steps, rather than being run again.
+        let now = self.now();
+        // A job whose worker died or handed it back after a cancel request
+        // ends as cancelled, keeping its steps, rather than being run again.
         let orphans = format!(
-            "UPDATE jobs SET status = '{CANCELLED}', finished_at = $1 \
-             WHERE status = '{RUNNING}' AND cancel_requested = TRUE AND lease_expires_at < $1"
+            "UPDATE jobs SET status = '{CANCELLED}', finished_at = {now}, lease_owner = NULL, lease_expires_at = NULL \
+             WHERE cancel_requested = TRUE AND (status = '{QUEUED}' OR (status = '{RUNNING}' AND lease_expires_at < {now}))"
         );
         let lock = match self.backend() {
             Backend::Sqlite => "",
             Backend::Postgres => "FOR UPDATE SKIP LOCKED",
         };
         let claimable =
-            format!("(status = '{QUEUED}' OR (status = '{RUNNING}' AND lease_expires_at < $1))");
+            format!("(status = '{QUEUED}' OR (status = '{RUNNING}' AND lease_expires_at < {now}))");
         let checkpoint = "(SELECT c.step FROM checkpoints c WHERE c.job_id = jobs.id)";
         let claim = format!(
-            "UPDATE jobs SET status = '{RUNNING}', attempts = attempts + 1, lease_owner = $2, lease_expires_at = $3, \
-                 started_at = $1, resumed_from = {checkpoint}, steps_done = COALESCE({checkpoint}, 0), \
+            "UPDATE jobs SET status = '{RUNNING}', attempts = attempts + 1, \
+                 stalled_attempts = CASE WHEN COALESCE({checkpoint}, 0) > COALESCE(resumed_from, 0) \
+                     THEN 1 ELSE stalled_attempts + 1 END, lease_owner = $1, lease_expires_at = {now} + $2, \
+                 started_at = {now}, resumed_from = {checkpoint}, steps_done = COALESCE({checkpoint}, 0), \
                  newton_iterations = COALESCE((SELECT c.newton_iterations FROM checkpoints c WHERE c.job_id = jobs.id), 0) \
              WHERE id = (SELECT id FROM jobs WHERE {claimable} ORDER BY id LIMIT 1 {lock}) AND {claimable} \
              RETURNING id, case_json, attempts, resumed_from"
@@ -419,7 +573,6 @@ impl Store {
         on_pool!(self, |pool| {
             let mut tx = pool.begin().await?;
             let orphaned = sqlx::query(AssertSqlSafe(orphans))
-                .bind(t)
                 .execute(&mut *tx)
                 .await?
                 .rows_affected();
@@ -428,9 +581,8 @@ impl Store {
             }
             let claimed: Option<(i64, String, i64, Option<i64>)> =
                 sqlx::query_as(AssertSqlSafe(claim))
-                    .bind(t)
                     .bind(owner)
-                    .bind(t + lease.as_secs_f64())
+                    .bind(lease.as_secs_f64())
                     .fetch_optional(&mut *tx)
                     .await?;
             let Some((id, case_json, attempts, resumed_from)) = claimed else {
@@ -470,11 +622,12 @@ impl Store {
         lease: Duration,
     ) -> Result<Option<bool>, sqlx::Error> {
         let sql = format!(
-            "UPDATE jobs SET lease_expires_at = $1 WHERE id = $2 AND lease_owner = $3 AND status = '{RUNNING}' \
-             RETURNING cancel_requested"
+            "UPDATE jobs SET lease_expires_at = {} + $1 WHERE id = $2 AND lease_owner = $3 AND status = '{RUNNING}' \
+             RETURNING cancel_requested",
+            self.now()
         );
         on_pool!(self, |pool| sqlx::query_scalar(AssertSqlSafe(sql))
-            .bind(now() + lease.as_secs_f64())
+            .bind(lease.as_secs_f64())
             .bind(id)
             .bind(owner)
             .fetch_optional(pool)
@@ -486,6 +639,21 @@ impl Store {
     /// when given (replacing the last), in one transaction. Returns false
     /// if `owner` no longer holds the job.
     pub async fn save_step(
+        &self,
+        id: i64,
+        owner: &str,
+        step: i64,
+        iterations: i64,
+        document: &StoredStep,
+        checkpoint: Option<&[u8]>,
+    ) -> Result<bool, sqlx::Error> {
+        let saved = self
+            .save_step_once(id, owner, step, iterations, document, checkpoint)
+            .await;
+        self.note(saved)
+    }
+
+    async fn save_step_once(
         &self,
         id: i64,
         owner: &str,
@@ -551,15 +719,17 @@ impl Store {
         error: Option<&str>,
     ) -> Result<bool, sqlx::Error> {
         let end = update_held(
-            "status = $1, finished_at = $2, solve_seconds = $3, error = $4, lease_owner = NULL, \
-             lease_expires_at = NULL",
-            4,
+            &format!(
+                "status = $1, finished_at = {}, solve_seconds = $2, error = $3, lease_owner = NULL, \
+                 lease_expires_at = NULL",
+                self.now()
+            ),
+            3,
         );
         on_pool!(self, |pool| {
             let mut tx = pool.begin().await?;
             let held = sqlx::query(end)
                 .bind(status.as_str())
-                .bind(now())
                 .bind(solve_seconds)
                 .bind(error)
                 .bind(id)
@@ -581,11 +751,22 @@ impl Store {
 
     /// Puts a job `owner` was running back in the queue (shutdown): the
     /// attempt does not count, and the job keeps its steps up to its
-    /// checkpoint, from which it will resume.
-    pub async fn requeue(&self, id: i64, owner: &str) -> Result<(), sqlx::Error> {
+    /// checkpoint, from which it will resume. A job whose cancel was asked
+    /// for ends as cancelled instead, its finished steps kept: the request
+    /// may have reached the database after the worker last renewed its
+    /// lease, so the worker need not have seen it.
+    pub async fn requeue(&self, id: i64, owner: &str) -> Result<Requeued, sqlx::Error> {
+        let cancel = update_held(
+            &format!(
+                "status = '{CANCELLED}', finished_at = {}, lease_owner = NULL, lease_expires_at = NULL",
+                self.now()
+            ),
+            0,
+        );
         let back = update_held(
             &format!(
                 "status = '{QUEUED}', attempts = CASE WHEN attempts > 0 THEN attempts - 1 ELSE 0 END, \
+                 stalled_attempts = CASE WHEN stalled_attempts > 0 THEN stalled_attempts - 1 ELSE 0 END, \
                  lease_owner = NULL, lease_expires_at = NULL, started_at = NULL, \
                  steps_done = COALESCE((SELECT c.step FROM checkpoints c WHERE c.job_id = jobs.id), 0), \
                  newton_iterations = COALESCE((SELECT c.newton_iterations FROM checkpoints c WHERE c.job_id = jobs.id), 0)"
@@ -594,6 +775,24 @@ impl Store {
         );
         on_pool!(self, |pool| {
             let mut tx = pool.begin().await?;
+            let cancelled = sqlx::query(AssertSqlSafe(format!(
+                "{} AND cancel_requested = TRUE",
+                cancel.0
+            )))
+            .bind(id)
+            .bind(owner)
+            .execute(&mut *tx)
+            .await?
+            .rows_affected()
+                == 1;
+            if cancelled {
+                sqlx::query("DELETE FROM checkpoints WHERE job_id = $1")
+                    .bind(id)
+                    .execute(&mut *tx)
+                    .await?;
+                tx.commit().await?;
+                return Ok(Requeued::Cancelled);
+            }
             let held = sqlx::query(back)
                 .bind(id)
                 .bind(owner)
@@ -609,7 +808,12 @@ impl Store {
                 .execute(&mut *tx)
                 .await?;
             }
-            tx.commit().await
+            tx.commit().await?;
+            Ok(if held {
+                Requeued::Queued
+            } else {
+                Requeued::NotHeld
+            })
         })
     }
 
@@ -647,22 +851,21 @@ impl Store {
 
     /// Cancels a queued job at once, or asks a running one to stop.
     pub async fn cancel(&self, id: i64) -> Result<CancelOutcome, sqlx::Error> {
-        let t = now();
+        let now = self.now();
         let queued = format!(
-            "UPDATE jobs SET status = '{CANCELLED}', finished_at = $1 WHERE id = $2 AND status = '{QUEUED}'"
+            "UPDATE jobs SET status = '{CANCELLED}', finished_at = {now} WHERE id = $1 AND status = '{QUEUED}'"
         );
         // Running, but its worker is gone (the lease expired): no one would
         // stop it, so it ends here, its finished steps kept.
         let orphaned = format!(
-            "UPDATE jobs SET status = '{CANCELLED}', finished_at = $1 \
-             WHERE id = $2 AND status = '{RUNNING}' AND lease_expires_at < $1"
+            "UPDATE jobs SET status = '{CANCELLED}', finished_at = {now}, lease_owner = NULL, lease_expires_at = NULL \
+             WHERE id = $1 AND status = '{RUNNING}' AND lease_expires_at < {now}"
         );
         let running = format!(
             "UPDATE jobs SET cancel_requested = TRUE WHERE id = $1 AND status = '{RUNNING}'"
         );
         let done = on_pool!(self, |pool| {
             let queued = sqlx::query(AssertSqlSafe(queued))
-                .bind(t)
                 .bind(id)
                 .execute(pool)
                 .await?;
@@ -672,7 +875,6 @@ impl Store {
                 return Ok(CancelOutcome::Cancelled);
             }
             let orphaned = sqlx::query(AssertSqlSafe(orphaned))
-                .bind(t)
                 .bind(id)
                 .execute(pool)
                 .await?;
@@ -713,14 +915,14 @@ impl Store {
         })
     }
 
-    /// Deletes the jobs that ended before `before` (Unix seconds). Returns
-    /// how many.
-    pub async fn prune(&self, before: f64) -> Result<u64, sqlx::Error> {
+    /// Deletes the jobs that ended more than `age` ago. Returns how many.
+    pub async fn prune(&self, age: Duration) -> Result<u64, sqlx::Error> {
         let sql = format!(
-            "DELETE FROM jobs WHERE status NOT IN ('{QUEUED}', '{RUNNING}') AND finished_at < $1"
+            "DELETE FROM jobs WHERE status NOT IN ('{QUEUED}', '{RUNNING}') AND finished_at < {} - $1",
+            self.now()
         );
         on_pool!(self, |pool| Ok(sqlx::query(AssertSqlSafe(sql))
-            .bind(before)
+            .bind(age.as_secs_f64())
             .execute(pool)
             .await?
             .rows_affected()))
@@ -757,28 +959,67 @@ impl Store {
 mod tests {
     use super::*;
 
-    async fn store(tag: &str) -> Store {
+    /// A store in a directory of its own, removed when it drops.
+    struct Scratch {
+        store: Store,
+        dir: std::path::PathBuf,
+    }
+
+    impl std::ops::Deref for Scratch {
+        type Target = Store;
+        fn deref(&self) -> &Store {
+            &self.store
+        }
+    }
+
+    impl Drop for Scratch {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.dir);
+        }
+    }
+
+    fn scratch_dir(tag: &str) -> std::path::PathBuf {
         let dir = std::env::temp_dir().join(format!("mpm-store-{tag}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        Store::open(dir.join("jobs.sqlite").to_str().unwrap())
+        dir
+    }
+
+    async fn store(tag: &str) -> Scratch {
+        let dir = scratch_dir(tag);
+        let store = Store::open(dir.join("jobs.sqlite").to_str().unwrap())
+            .await
+            .unwrap();
+        Scratch { store, dir }
+    }
+
+    /// Whether a worker's claim finds no job.
+    async fn nothing_to_claim(store: &Store) -> bool {
+        store
+            .claim("next", Duration::from_secs(30))
             .await
             .unwrap()
+            .is_none()
+    }
+
+    fn new_job(case_json: &str) -> NewJob<'_> {
+        NewJob {
+            case_json,
+            title: None,
+            points: 1,
+            load_steps: 10,
+            idempotency_key: None,
+        }
+    }
+
+    fn step_of(bytes: usize) -> StoredStep {
+        let points = format!("{{\"x\": \"{}\"}}", "p".repeat(bytes));
+        StoredStep::from_text("{}".into(), points, "[]".into()).unwrap()
     }
 
     /// A running job with one finished step, claimed by `owner` with `lease`.
     async fn running_job(store: &Store, owner: &str, lease: Duration) -> i64 {
-        let id = match store
-            .insert(&NewJob {
-                case_json: "{}",
-                title: None,
-                points: 1,
-                load_steps: 10,
-                idempotency_key: None,
-            })
-            .await
-            .unwrap()
-        {
+        let id = match store.insert(&new_job("{}"), i64::MAX).await.unwrap() {
             Inserted::New(id) => id,
             other => panic!("{other:?}"),
         };
@@ -810,13 +1051,7 @@ mod tests {
             CancelOutcome::Requested
         );
         tokio::time::sleep(Duration::from_millis(400)).await;
-        assert!(
-            store
-                .claim("next", Duration::from_secs(30))
-                .await
-                .unwrap()
-                .is_none()
-        );
+        assert!(nothing_to_claim(&store).await);
 
         for id in [orphan, requested] {
             let job = store.get(id).await.unwrap().unwrap();
@@ -838,8 +1073,9 @@ mod tests {
                 .unwrap()
         );
         let still_running = running_job(&store, "v", Duration::from_secs(30)).await;
-        assert_eq!(store.prune(now() - 3600.0).await.unwrap(), 0);
-        assert_eq!(store.prune(now() + 1.0).await.unwrap(), 1);
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        assert_eq!(store.prune(Duration::from_secs(3600)).await.unwrap(), 0);
+        assert_eq!(store.prune(Duration::ZERO).await.unwrap(), 1);
         assert!(store.get(ended).await.unwrap().is_none());
         assert!(store.step_reports(ended).await.unwrap().is_empty());
         assert!(store.get(still_running).await.unwrap().is_some());
@@ -903,10 +1139,10 @@ mod tests {
             load_steps: 1,
             idempotency_key: Some("k"),
         };
-        let Inserted::New(first) = store.insert(&job("{\"a\": 1}")).await.unwrap() else {
+        let Inserted::New(first) = store.insert(&job("{\"a\": 1}"), 10).await.unwrap() else {
             panic!("the first insert makes a job");
         };
-        match store.insert(&job("{\"b\": 2}")).await.unwrap() {
+        match store.insert(&job("{\"b\": 2}"), 10).await.unwrap() {
             Inserted::Earlier(earlier) => {
                 assert_eq!(earlier.id, first);
                 assert_eq!(earlier.case_json, "{\"a\": 1}");
@@ -914,5 +1150,202 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert_eq!(store.list(None, 10, 0).await.unwrap().1, 1);
+    }
+
+    /// The database's disk filled while a job stored its steps (SQLite's
+    /// page limit stands in for the disk here). Writes fail with a full
+    /// disk, the store says so, and once space is freed every write
+    /// succeeds again and everything acknowledged survives a reopening.
+    /// Before the pool refused connections left inside a transaction, one
+    /// sat in it with SQLite's write lock: the others' writes waited and
+    /// failed ("database is locked"), and what ran on it was lost.
+    #[tokio::test]
+    async fn after_a_full_disk_no_acknowledged_write_is_lost() {
+        let dir = scratch_dir("full");
+        let path = dir.join("jobs.sqlite");
+        let limited = SqliteConnectOptions::from_str("sqlite:")
+            .unwrap()
+            .filename(&path)
+            .pragma("max_page_count", "80");
+        let store = Store::open_sqlite(limited, 2).await.unwrap();
+        let lease = Duration::from_secs(30);
+
+        let ballast = running_job(&store, "b", lease).await;
+        assert!(
+            store
+                .save_step(ballast, "b", 2, 1, &step_of(100_000), None)
+                .await
+                .unwrap()
+        );
+        assert!(
+            store
+                .finish(ballast, "b", JobStatus::Succeeded, 1.0, None)
+                .await
+                .unwrap()
+        );
+
+        let job = running_job(&store, "w", lease).await;
+        let mut step = 2;
+        let full = loop {
+            match store
+                .save_step(job, "w", step, 1, &step_of(20_000), Some(&[7; 3000]))
+                .await
+            {
+                Ok(held) => assert!(held),
+                Err(e) => break e,
+            }
+            step += 1;
+            assert!(step < 100, "the page limit was never reached");
+        };
+        assert!(is_disk_full(&full), "{full}");
+        assert!(store.storage_trouble().is_some());
+        // What the service does while the disk is full: each fails or not,
+        // and none may leave the store unable to write once space is back.
+        for k in 0..4 {
+            let _ = store
+                .save_step(job, "w", step, 1, &step_of(20_000), Some(&[7; 3000]))
+                .await;
+            let _ = store.claim("x", lease).await;
+            let _ = store.insert(&new_job(&"c".repeat(30_000 * k)), 100).await;
+            let _ = store.renew(job, "w", lease).await;
+            let _ = store.cancel(ballast).await;
+        }
+
+        // Space back: the ballast's pages go free.
+        assert_eq!(store.delete(ballast).await.unwrap(), DeleteOutcome::Deleted);
+        assert!(
+            store
+                .save_step(job, "w", step, 1, &step_of(10), None)
+                .await
+                .unwrap()
+        );
+        assert!(store.storage_trouble().is_none(), "a stored step clears it");
+        assert!(
+            store
+                .finish(job, "w", JobStatus::Succeeded, 1.0, None)
+                .await
+                .unwrap()
+        );
+        let Inserted::New(queued) = store.insert(&new_job("{}"), 100).await.unwrap() else {
+            panic!("the queue takes a job")
+        };
+        on_pool!(store, |pool| pool.close().await);
+
+        let reopened = Store::open(path.to_str().unwrap()).await.unwrap();
+        assert!(
+            reopened.get(ballast).await.unwrap().is_none(),
+            "the delete stands"
+        );
+        let ended = reopened.get(job).await.unwrap().unwrap();
+        assert_eq!(
+            (ended.status, ended.steps_done),
+            (JobStatus::Succeeded, step)
+        );
+        assert_eq!(
+            reopened.get(queued).await.unwrap().unwrap().status,
+            JobStatus::Queued
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A cancel asked for while a worker ran the job, which the worker had
+    /// not yet seen when it was stopped (SIGTERM): the job ends cancelled,
+    /// with its steps, and is never claimed again. Before, it went back to
+    /// the queue and ran to success.
+    #[tokio::test]
+    async fn a_job_handed_back_after_a_cancel_request_ends_cancelled() {
+        let store = store("cancel-requeue").await;
+        let id = running_job(&store, "w", Duration::from_secs(30)).await;
+        assert_eq!(store.cancel(id).await.unwrap(), CancelOutcome::Requested);
+        assert_eq!(store.requeue(id, "w").await.unwrap(), Requeued::Cancelled);
+        let job = store.get(id).await.unwrap().unwrap();
+        assert_eq!(job.status, JobStatus::Cancelled);
+        assert!(job.finished_at.is_some());
+        assert_eq!(store.step_reports(id).await.unwrap().len(), 1);
+        assert!(nothing_to_claim(&store).await);
+    }
+
+    /// Leases are judged by the database's clock: the expiry a claim
+    /// stores is the database's time plus the lease, whatever the
+    /// caller's clock says.
+    #[tokio::test]
+    async fn leases_run_on_the_database_clock() {
+        let store = store("clock").await;
+        let id = running_job(&store, "w", Duration::from_secs(30)).await;
+        let expires: f64 = on_pool!(store, |pool| sqlx::query_scalar(
+            "SELECT lease_expires_at FROM jobs WHERE id = $1"
+        )
+        .bind(id)
+        .fetch_one(pool)
+        .await
+        .unwrap());
+        let clock = store.clock().await.unwrap();
+        assert!(
+            (expires - clock - 30.0).abs() < 1.0,
+            "{expires} against {clock}"
+        );
+        assert!(nothing_to_claim(&store).await);
+    }
+
+    /// Simultaneous submissions at the queue's limit: exactly the limit's
+    /// number are queued (SQLite took 55 of 200 at a limit of 50).
+    #[tokio::test]
+    async fn the_queue_limit_holds_under_simultaneous_submissions() {
+        let store = store("cap").await;
+        let tries = (0..40).map(|_| {
+            let store = store.store.clone();
+            tokio::spawn(async move { store.insert(&new_job("{}"), 10).await })
+        });
+        let mut new = 0;
+        for t in tries {
+            match t.await.unwrap().unwrap() {
+                Inserted::New(_) => new += 1,
+                Inserted::QueueFull => {}
+                other => panic!("{other:?}"),
+            }
+        }
+        assert_eq!(new, 10);
+        assert_eq!(store.queued().await.unwrap(), 10);
+    }
+
+    /// A job whose runs each get further before their workers die keeps
+    /// its attempts; one that makes no progress uses them up.
+    #[tokio::test]
+    async fn only_attempts_without_progress_count_against_the_limit() {
+        let store = store("attempts").await;
+        let id = running_job(&store, "w0", Duration::ZERO).await;
+        let stalled = || async {
+            on_pool!(store, |pool| sqlx::query_scalar::<_, i64>(
+                "SELECT stalled_attempts FROM jobs WHERE id = $1"
+            )
+            .bind(id)
+            .fetch_one(pool)
+            .await
+            .unwrap())
+        };
+        for k in 1..=4 {
+            // This run stores a later checkpoint, then its worker dies.
+            let owner = format!("w{}", k - 1);
+            let step = StoredStep::from_text("{}".into(), "{}".into(), "[]".into()).unwrap();
+            assert!(
+                store
+                    .save_step(id, &owner, k, 1, &step, Some(b"state"))
+                    .await
+                    .unwrap()
+            );
+            tokio::time::sleep(Duration::from_millis(5)).await;
+            assert_eq!(store.fail_exhausted(2).await.unwrap(), 0);
+            let claimed = store.claim(&format!("w{k}"), Duration::ZERO).await.unwrap();
+            assert_eq!(claimed.map(|c| c.id), Some(id));
+            assert_eq!(stalled().await, 1, "run {k} made progress");
+        }
+        // No progress: the next claim is a second stalled attempt, and the
+        // limit of 2 is reached.
+        tokio::time::sleep(Duration::from_millis(5)).await;
+        assert!(store.claim("w5", Duration::ZERO).await.unwrap().is_some());
+        assert_eq!(stalled().await, 2);
+        tokio::time::sleep(Duration::from_millis(5)).await;
+        assert_eq!(store.fail_exhausted(2).await.unwrap(), 1);
+        assert_eq!(store.get(id).await.unwrap().unwrap().attempts, 6);
     }
 }

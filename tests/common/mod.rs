@@ -426,6 +426,15 @@ impl Drop for Process {
 /// stdout (`mpm serve` prints its address there, `mpm worker` its start);
 /// its stderr goes to `log` when given. Returns the child and the line.
 pub fn spawn_mpm(args: &[&str], log: Option<&std::path::Path>) -> (Process, String) {
+    spawn_mpm_with(args, log, &[])
+}
+
+/// [`spawn_mpm`] with these environment variables set.
+pub fn spawn_mpm_with(
+    args: &[&str],
+    log: Option<&std::path::Path>,
+    env: &[(&str, &str)],
+) -> (Process, String) {
     use std::io::{BufRead, BufReader};
     // Logs to a file in full; to the terminal, only what went wrong.
     let (stderr, level) = match log {
@@ -434,6 +443,7 @@ pub fn spawn_mpm(args: &[&str], log: Option<&std::path::Path>) -> (Process, Stri
     };
     let mut child = Command::new(env!("CARGO_BIN_EXE_mpm"))
         .args(args)
+        .envs(env.iter().copied())
         .env("MPM_LOG", level)
         .stdout(Stdio::piped())
         .stderr(stderr)

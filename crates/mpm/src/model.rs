@@ -167,6 +167,7 @@ impl Simulation {
             load_steps: case.analysis.load_steps as usize,
         };
         sim.check_grid_supports()?;
+        check_probes(case, &sim.points, &grid)?;
         Ok(sim)
     }
 
@@ -193,6 +194,32 @@ impl Simulation {
             None => Ok(()),
         }
     }
+}
+
+/// A probe must start in the material: within the cells that hold points
+/// or next to one. One outside every body follows no grid node, and
+/// reported [0, 0] at every step.
+fn check_probes(case: &Case, points: &MaterialPoints, grid: &Grid) -> Result<(), CaseError> {
+    if case.probes.is_empty() {
+        return Ok(());
+    }
+    let cell = |x: [f64; 2]| [0, 1].map(|d| ((x[d] - grid.origin[d]) / grid.h).floor() as i64);
+    let occupied: std::collections::HashSet<[i64; 2]> =
+        points.position.iter().map(|&x| cell(x)).collect();
+    for (i, probe) in case.probes.iter().enumerate() {
+        let [ci, cj] = cell(probe.at);
+        let near = (-1..=1).any(|di| (-1..=1).any(|dj| occupied.contains(&[ci + di, cj + dj])));
+        if !near {
+            return Err(CaseError::new(
+                format!("probes[{i}].at"),
+                format!(
+                    "({}, {}) lies outside every body: a probe follows the material it starts in",
+                    probe.at[0], probe.at[1]
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Every body of the case filled with points in its reference state.

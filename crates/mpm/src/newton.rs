@@ -110,6 +110,14 @@ pub enum SolveError {
         x: f64,
         y: f64,
     },
+    /// A converged step whose results are not finite numbers: never
+    /// committed, never reported as a success.
+    #[error("load step {step} converged to non-finite {quantity}")]
+    NonFinite {
+        step: usize,
+        /// What was not finite, e.g. `reactions` or `stress of material point 12`.
+        quantity: String,
+    },
     /// A load step's increment failed however far it was cut: `cause` is
     /// how its last try failed.
     #[error(
@@ -193,7 +201,9 @@ impl SolveError {
                 residual,
                 ..
             } => (step, Some(iteration), residual),
-            SolveError::LeftGrid { step, .. } => (step, None, None),
+            SolveError::LeftGrid { step, .. } | SolveError::NonFinite { step, .. } => {
+                (step, None, None)
+            }
             SolveError::SubstepsExhausted { ref cause, .. } => return cause.location(),
         };
         (step, iteration, residual.filter(|r| r.is_finite()))

@@ -317,10 +317,23 @@ impl Simulation {
         let reactions = eq.reactions(&self.anchors, &u, self.n_supports);
         let applied_load = eq.applied_load();
         let active_dofs = eq.n_free_dofs();
+        let non_finite = |quantity: &str| SolveError::NonFinite {
+            step,
+            quantity: quantity.to_string(),
+        };
+        if !applied_load.iter().all(|f| f.is_finite()) {
+            return Err(non_finite("applied load"));
+        }
+        if !reactions.iter().flatten().all(|f| f.is_finite()) {
+            return Err(non_finite("reactions"));
+        }
         let converged = eq.into_converged();
         self.analysed = Some(converged.analysed);
         let (states, band) = (converged.states, converged.band);
         self.update_points(&conn, &u, &states);
+        if let Some(p) = self.points.first_non_finite() {
+            return Err(non_finite(&format!("state of material point {p}")));
+        }
         self.probes.advect(&self.grid, self.basis, &conn, &u);
         self.advance_anchors(&band, &conn, &u);
         let timings = StepTimings {

@@ -118,4 +118,21 @@ def validate(case: Mapping[str, Any]) -> None:
     """
     error = best_match(_validator().iter_errors(case))
     if error is not None:
-        raise CaseError(json_path(error.absolute_path), error.message)
+        raise CaseError(*_most_specific(error))
+
+
+def _most_specific(error: Any) -> tuple[str, str]:
+    """`(path, message)` of an error; inside a `oneOf` or `anyOf` (a
+    material, a geometry), of the alternative that got furthest into the
+    case, as the service reports it: `bodies[0].material.youngs_modulus`,
+    not "is not valid under any of the given schemas" at
+    `bodies[0].material`. Alternatives told apart by a constant (the
+    material's `model`) that all fail on it name the constants."""
+    while error.context:
+        depth = max(len(e.absolute_path) for e in error.context)
+        deepest = [e for e in error.context if len(e.absolute_path) == depth]
+        if len(deepest) > 1 and all(e.validator == "const" for e in deepest):
+            names = ", ".join(repr(e.validator_value) for e in deepest)
+            return json_path(deepest[0].absolute_path), f"{deepest[0].instance!r} is not one of {names}"
+        error = deepest[0]
+    return json_path(error.absolute_path), error.message

@@ -280,7 +280,7 @@ async function jobPage(id, stale) {
     // None when the case stores no column to colour by: one colour.
     const field = FIELDS.find((f) => f.key === fieldSelect.value) || null;
     const drawn = drawBody(canvas, doc, reference, field, kase.grid);
-    drawColourBar(colourBar, barLabels, field, drawn.range);
+    drawColourBar(colourBar, barLabels, field, drawn.range, drawn.uniform);
     message.textContent = `${drawn.points} points and ${drawn.curves} boundary curve(s) drawn; ` +
       `grid lines every h = ${kase.grid.cell_size} m.`;
   };
@@ -381,7 +381,10 @@ function drawBody(canvas, doc, reference, field, grid) {
   const values = Array.from({ length: n }, (_, i) => (field ? field.value(c, i) : 0));
   let [lo, hi] = [Infinity, -Infinity];
   for (const v of values) if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
-  if (!(hi > lo)) { const m = Number.isFinite(lo) ? lo : 0; [lo, hi] = [m - 0.5 * Math.abs(m || 1), m + 0.5 * Math.abs(m || 1)]; }
+  // One value everywhere (step 0's displacements): the bar says so rather
+  // than show a made-up range around it.
+  const uniform = !(hi > lo) ? (Number.isFinite(lo) ? lo : 0) : null;
+  if (uniform !== null) [lo, hi] = [uniform - 0.5 * Math.abs(uniform || 1), uniform + 0.5 * Math.abs(uniform || 1)];
   // A point is drawn as a square of its own area (and half a pixel more, so
   // that neighbours meet), at least 2 px across.
   const side = (i) => Math.max(2, 0.5 + scale * Math.sqrt(c.volume && c.volume.length ? c.volume[i] : (h * h) / 4));
@@ -408,10 +411,10 @@ function drawBody(canvas, doc, reference, field, grid) {
 
   canvas.dataset.points = n;
   canvas.dataset.curves = doc.boundaries.length;
-  return { points: n, curves: doc.boundaries.length, range: [lo, hi] };
+  return { points: n, curves: doc.boundaries.length, range: [lo, hi], uniform };
 }
 
-function drawColourBar(bar, labels, field, [lo, hi]) {
+function drawColourBar(bar, labels, field, [lo, hi], uniform = null) {
   bar.hidden = !field;
   if (!field) {
     labels.replaceChildren(el('div', {}, 'no field stored to colour by (output.fields)'));
@@ -421,6 +424,12 @@ function drawColourBar(bar, labels, field, [lo, hi]) {
   for (let y = 0; y < bar.height; y++) {
     ctx.fillStyle = colour(1 - y / (bar.height - 1));
     ctx.fillRect(0, y, bar.width, 1);
+  }
+  if (uniform !== null) {
+    labels.replaceChildren(
+      el('div', {}, `${field.label} (${field.unit})`),
+      el('div', {}, `${formatNumber(uniform)} everywhere`));
+    return;
   }
   labels.replaceChildren(
     el('div', {}, `${field.label} (${field.unit})`),
@@ -433,13 +442,13 @@ function drawColourBar(bar, labels, field, [lo, hi]) {
 const COLOURS = ['#1f77b4', '#d62728', '#2ca02c', '#9467bd', '#ff7f0e', '#8c564b'];
 
 // A small line plot: series of {label, points: [[x, y]]}.
-function linePlot(title, xLabel, yLabel, series, { bars = false } = {}) {
+function linePlot(title, xLabel, yLabel, series, { bars = false, empty = 'no finished steps yet' } = {}) {
   const [W, H, L, R, T, B] = [380, 240, 64, 12, 10, 40];
   const all = series.flatMap((s) => s.points).filter(([x, y]) => Number.isFinite(x) && Number.isFinite(y));
   const node = svg('svg', { width: W, height: H + 18 * series.length, 'font-size': 11, 'font-family': 'sans-serif' });
   const figure = el('figure', { class: 'plot', 'data-title': title }, el('figcaption', {}, title), node);
   if (!all.length) {
-    figure.append(el('p', { class: 'note' }, 'no finished steps yet'));
+    figure.append(el('p', { class: 'note' }, empty));
     return figure;
   }
   // Bars stand on whole numbers with half a unit either side.
@@ -498,11 +507,14 @@ function ticks(lo, hi) {
 
 function resultPlots(result, kase) {
   const figures = [];
+  // A job that has ended will finish no more steps.
+  const ended = !['queued', 'running'].includes(result.job.status);
+  const empty = ended ? `no step finished (the job ${result.job.status})` : 'no finished steps yet';
   for (const [name, samples] of Object.entries(result.probes)) {
     figures.push(linePlot(`probe ${name}`, 'load factor', 'displacement (m)', [
       { label: 'u_x', points: samples.map((s) => [s.load_factor, s.displacement[0]]) },
       { label: 'u_y', points: samples.map((s) => [s.load_factor, s.displacement[1]]) },
-    ]));
+    ], { empty }));
   }
   const supports = kase.supports || [];
   if (result.reactions.length && result.reactions[0].supports.length) {
@@ -513,19 +525,25 @@ function resultPlots(result, kase) {
         series.push({ label: `${name} ${axis}`, points: result.reactions.map((r) => [r.load_factor, r.supports[j][c]]) });
       }
     });
-    figures.push(linePlot('reactions', 'load factor', 'force per unit thickness (N/m)', series));
+    figures.push(linePlot('reactions', 'load factor', 'force per unit thickness (N/m)', series, { empty }));
   }
   figures.push(linePlot('Newton iterations per step', 'load step', 'iterations',
-    [{ label: 'iterations', points: result.newton.filter((s) => s.step > 0).map((s) => [s.step, s.iterations]) }], { bars: true }));
+    [{ label: 'iterations', points: result.newton.filter((s) => s.step > 0).map((s) => [s.step, s.iterations]) }], { bars: true, empty }));
   return figures;
 }
 
 // ---- start ----
 
-document.getElementById('forget-token').hidden = false;
-document.getElementById('forget-token').addEventListener('click', () => {
+// "forget token" only while there is one to forget.
+const forgetToken = document.getElementById('forget-token');
+const showForgetToken = () => { forgetToken.hidden = !sessionStorage.getItem(TOKEN_KEY); };
+forgetToken.addEventListener('click', () => {
   sessionStorage.removeItem(TOKEN_KEY);
+  showForgetToken();
   route();
 });
 window.addEventListener('hashchange', route);
+window.addEventListener('hashchange', showForgetToken);
+document.getElementById('token-form').addEventListener('submit', () => setTimeout(showForgetToken));
+showForgetToken();
 route();

@@ -19,29 +19,63 @@ impl CaseError {
     }
 }
 
-/// No field takes `null`: serde reads it as the field left out, so a case
-/// given with nulls would be stored and served with values it does not
-/// have. The first null found names its path.
-fn reject_nulls(value: &Value, path: String) -> Result<(), CaseError> {
-    let at = |key: String| {
+/// The largest magnitude of a number in a case. A modulus of 1e12 Pa, a
+/// coordinate of 1e6 m and a pressure of 1e9 Pa are far inside it; a
+/// gravity of 1e308 is not, and its forces overflowed to infinity (the job
+/// "succeeded" with null reactions). Products of a dozen such numbers stay
+/// finite.
+pub const MAX_MAGNITUDE: f64 = 1e15;
+
+/// The least a body may measure across, in cells.
+const MIN_BODY_CELLS: f64 = 1e-6;
+
+/// What serde cannot refuse, found in the JSON tree; the first names its
+/// path.
+/// - `null`: serde reads it as the field left out, so a case given with
+///   nulls would be stored and served with values it does not have.
+/// - A NUL character in a string: PostgreSQL's text cannot hold it.
+/// - A number beyond [`MAX_MAGNITUDE`].
+fn reject_unfit(value: &Value, path: &mut String) -> Result<(), CaseError> {
+    let here = |path: &str| {
         if path.is_empty() {
-            key
+            "$".to_string()
         } else {
-            format!("{path}.{key}")
+            path.to_string()
         }
     };
     match value {
         Value::Null => Err(CaseError::new(
-            if path.is_empty() { "$".into() } else { path },
+            here(path),
             "null is not a value here: leave the field out for its default",
         )),
-        Value::Array(items) => items
-            .iter()
-            .enumerate()
-            .try_for_each(|(i, v)| reject_nulls(v, format!("{path}[{i}]"))),
-        Value::Object(fields) => fields
-            .iter()
-            .try_for_each(|(k, v)| reject_nulls(v, at(k.clone()))),
+        Value::String(s) if s.contains('\0') => Err(CaseError::new(
+            here(path),
+            "must not contain the NUL character (U+0000)",
+        )),
+        Value::Number(n) => match n.as_f64() {
+            Some(x) if x.abs() <= MAX_MAGNITUDE => Ok(()),
+            _ => Err(CaseError::new(
+                here(path),
+                format!("{n} is out of range: a case's numbers lie within ±{MAX_MAGNITUDE:e}"),
+            )),
+        },
+        Value::Array(items) => items.iter().enumerate().try_for_each(|(i, v)| {
+            let len = path.len();
+            path.push_str(&format!("[{i}]"));
+            let checked = reject_unfit(v, path);
+            path.truncate(len);
+            checked
+        }),
+        Value::Object(fields) => fields.iter().try_for_each(|(k, v)| {
+            let len = path.len();
+            if !path.is_empty() {
+                path.push('.');
+            }
+            path.push_str(k);
+            let checked = reject_unfit(v, path);
+            path.truncate(len);
+            checked
+        }),
         _ => Ok(()),
     }
 }
@@ -77,10 +111,8 @@ impl Case {
             kind: CaseErrorKind::Syntax,
             ..CaseError::new("$", e.to_string())
         })?;
-        if text.contains("null")
-            && let Ok(value) = serde_json::from_str::<Value>(text)
-        {
-            reject_nulls(&value, String::new())?;
+        if let Ok(value) = serde_json::from_str::<Value>(text) {
+            reject_unfit(&value, &mut String::new())?;
         }
         case.validate()?;
         Ok(case)
@@ -284,6 +316,39 @@ impl Case {
                 ),
             ));
         }
+        // A body a millionth of a cell across is no body the grid can see,
+        // and its boundary curve's chords vanish (a 5e-324 m wide
+        // rectangle's curve was NaN, and its stored step unreadable).
+        let across = (hi[0] - lo[0]).min(hi[1] - lo[1]);
+        if across.is_nan() || across < MIN_BODY_CELLS * g.cell_size {
+            return Err(CaseError::new(
+                path,
+                format!(
+                    "is {across:.3e} m across, less than {MIN_BODY_CELLS:e} of a cell ({} m)",
+                    g.cell_size
+                ),
+            ));
+        }
+        if let Some(extent) = &g.extent {
+            let inside = (0..2).all(|d| lo[d] >= extent.min[d] && hi[d] <= extent.max[d]);
+            if !inside {
+                return Err(CaseError::new(
+                    path,
+                    format!(
+                        "spans [{:.6}, {:.6}] x [{:.6}, {:.6}] m, not inside grid.extent \
+                         [{}, {}] x [{}, {}] m: the grid has no nodes outside its extent",
+                        lo[0],
+                        hi[0],
+                        lo[1],
+                        hi[1],
+                        extent.min[0],
+                        extent.max[0],
+                        extent.min[1],
+                        extent.max[1]
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 }
@@ -316,6 +381,10 @@ impl Body {
                 }
             }
             Geometry::Polygon { vertices, holes } => {
+                // The counts first: the checks below take time quadratic in them.
+                if self.points.lattice == Lattice::Body {
+                    check_triangulation_size(&format!("{g}.polygon"), vertices, holes)?;
+                }
                 check_ring(&format!("{g}.polygon.vertices"), vertices)?;
                 for (k, h) in holes.iter().enumerate() {
                     check_ring(&format!("{g}.polygon.holes[{k}]"), h)?;
@@ -705,11 +774,9 @@ fn check_mesh(path: &str, mesh: &crate::geometry::Mesh) -> Result<(), CaseError>
     Ok(())
 }
 
-/// A polygon filled on its own lattice is cut into triangles first: at most
-/// [`triangulation::MAX_VERTICES`] vertices (holes' included), and its
-/// holes must lie inside it and apart, which the triangles' areas adding
-/// up to the polygon's (less the holes') shows.
-fn check_triangulation(
+/// A polygon filled on its own lattice has at most
+/// [`triangulation::MAX_VERTICES`] vertices, its holes' included.
+fn check_triangulation_size(
     path: &str,
     outer: &[[f64; 2]],
     holes: &[Vec<[f64; 2]>],
@@ -725,6 +792,19 @@ fn check_triangulation(
             ),
         ));
     }
+    Ok(())
+}
+
+/// A polygon filled on its own lattice is cut into triangles first: at most
+/// [`triangulation::MAX_VERTICES`] vertices (holes' included), and its
+/// holes must lie inside it and apart, which the triangles' areas adding
+/// up to the polygon's (less the holes') shows.
+fn check_triangulation(
+    path: &str,
+    outer: &[[f64; 2]],
+    holes: &[Vec<[f64; 2]>],
+) -> Result<(), CaseError> {
+    check_triangulation_size(path, outer, holes)?;
     let holes_area: f64 = holes.iter().map(|h| signed_area(h).abs()).sum();
     let exact = signed_area(outer).abs() - holes_area;
     let covered = triangulation::triangulate(outer, holes).map(|t| {

@@ -38,6 +38,18 @@ pub struct MaterialPoints {
 
 impl MaterialPoints {
     /// Bytes of the points' state on the heap.
+    /// The first point whose position, deformation or stress is not a
+    /// finite number.
+    pub fn first_non_finite(&self) -> Option<usize> {
+        (0..self.len()).find(|&p| {
+            let s = &self.stress[p];
+            !(self.position[p].iter().all(|x| x.is_finite())
+                && self.deformation[p].iter().all(|x| x.is_finite())
+                && s.plane.iter().all(|x| x.is_finite())
+                && s.zz.is_finite())
+        })
+    }
+
     pub fn heap_bytes(&self) -> usize {
         use std::mem::size_of_val;
         size_of_val(self.position.as_slice())
