@@ -159,7 +159,7 @@ fn sigterm_does_not_wait_for_a_submission_being_checked() {
     let (mut server, base) =
         start_server_with(&dir.0.join("jobs.sqlite"), &["--max-points", "200000000"]);
     let mut case =
-        common::filled_at_1mm(json!({"polygon": {"vertices": [[0, 0], [1e-12, 0], [0, 3e5]]}}));
+        common::filled_at_1mm(json!({"polygon": {"vertices": [[0, 0], [1e-6, 0], [0, 3e5]]}}));
     // On the grid's lattice, where counting its sites means scanning them.
     case["bodies"][0]["points"]["lattice"] = "grid".into();
     let response = std::thread::scope(|s| {

@@ -167,6 +167,7 @@ impl Simulation {
             load_steps: case.analysis.load_steps as usize,
         };
         sim.check_grid_supports()?;
+        check_inside_extent(case, &sim.points)?;
         check_probes(case, &sim.points, &grid)?;
         Ok(sim)
     }
@@ -193,6 +194,30 @@ impl Simulation {
             )),
             None => Ok(()),
         }
+    }
+}
+
+/// Every point must start inside the grid's extent, which has no nodes
+/// beyond it: a body outside it failed on the worker ("left the grid")
+/// rather than being refused, named.
+fn check_inside_extent(case: &Case, points: &MaterialPoints) -> Result<(), CaseError> {
+    let Some(extent) = &case.grid.extent else {
+        return Ok(());
+    };
+    let outside = |x: &[f64; 2]| (0..2).any(|d| !(x[d] >= extent.min[d] && x[d] <= extent.max[d]));
+    match points.position.iter().position(outside) {
+        Some(p) => {
+            let [x, y] = points.position[p];
+            Err(CaseError::new(
+                format!("bodies[{}].geometry", points.material[p]),
+                format!(
+                    "has material at ({x}, {y}) m, outside grid.extent [{}, {}] x [{}, {}] m: \
+                     the grid has no nodes there",
+                    extent.min[0], extent.max[0], extent.min[1], extent.max[1]
+                ),
+            ))
+        }
+        None => Ok(()),
     }
 }
 

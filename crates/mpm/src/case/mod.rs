@@ -770,7 +770,6 @@ mod tests {
         ]);
         let mesh_case = |elements: serde_json::Value| {
             let mut v = column_json();
-            v["grid"].as_object_mut().unwrap().remove("extent");
             v["bodies"][0]["geometry"] =
                 serde_json::json!({"mesh": {"nodes": nodes.clone(), "elements": elements}});
             v

@@ -329,26 +329,6 @@ impl Case {
                 ),
             ));
         }
-        if let Some(extent) = &g.extent {
-            let inside = (0..2).all(|d| lo[d] >= extent.min[d] && hi[d] <= extent.max[d]);
-            if !inside {
-                return Err(CaseError::new(
-                    path,
-                    format!(
-                        "spans [{:.6}, {:.6}] x [{:.6}, {:.6}] m, not inside grid.extent \
-                         [{}, {}] x [{}, {}] m: the grid has no nodes outside its extent",
-                        lo[0],
-                        hi[0],
-                        lo[1],
-                        hi[1],
-                        extent.min[0],
-                        extent.max[0],
-                        extent.min[1],
-                        extent.max[1]
-                    ),
-                ));
-            }
-        }
         Ok(())
     }
 }

@@ -224,7 +224,7 @@ fn fill_patches(patches: &[[[f64; 2]; 4]], s: f64) -> Vec<SeedPoint> {
     let mut out = Vec::new();
     for (k, quad) in patches.iter().enumerate() {
         out.extend(
-            mapped_quadrilateral(quad, s, Some(patch_counts(quad, s)))
+            mapped_quadrilateral(quad, s, None)
                 .into_iter()
                 .map(|mut p| {
                     p.lattice = [k as i64, p.lattice[0] + (p.lattice[1] << 32)];
@@ -240,31 +240,10 @@ fn patch_sites(patches: &[[[f64; 2]; 4]], s: f64) -> f64 {
     patches
         .iter()
         .map(|q| {
-            let [n_i, n_j] = patch_counts(q, s).map(f64::from);
+            let [n_i, n_j] = quadrilateral_counts(q, s, None);
             n_i * n_j
         })
         .sum()
-}
-
-/// `[n_i, n_j]` of a patch's mapped lattice: cells of about `s^2` each,
-/// shaped as the patch is. The mean lengths of opposite sides, `l_i` and
-/// `l_j`, give the shape; `l_i l_j` overstates the area of any patch but a
-/// rectangle (a kite from a triangle's centroid has 0.93 of it, the thin
-/// kites of a many-sided polygon half), so the counts are scaled to the
-/// patch's area `a`: `n_i = sqrt(a l_i / l_j) / s`, rounded, at least one.
-fn patch_counts(v: &[[f64; 2]; 4], s: f64) -> [u32; 2] {
-    let len = |a: usize, b: usize| (v[b][0] - v[a][0]).hypot(v[b][1] - v[a][1]);
-    let (l_i, l_j) = (0.5 * (len(0, 1) + len(3, 2)), 0.5 * (len(0, 3) + len(1, 2)));
-    let area = crate::geometry::signed_area(v).abs();
-    let n = |l: f64, other: f64| {
-        let n = (area * l / other).sqrt() / s;
-        if n.is_finite() {
-            n.round().clamp(1.0, u32::MAX as f64) as u32
-        } else {
-            1
-        }
-    };
-    [n(l_i, l_j), n(l_j, l_i)]
 }
 
 /// How a polygon on its own lattice is filled.
@@ -273,16 +252,20 @@ enum PolygonFill {
     /// side of some patch.
     Patches(Vec<[[f64; 2]; 4]>),
     /// Rings about its centroid ([`Star`]): a convex polygon whose patches
-    /// would not follow its area, having more sides than points to spare
-    /// (each patch holds a point at least: a 1000-sided circle of 5,027
-    /// points' area made 400,000 on its thin kites before the counts
-    /// followed the area, and a 10,000-sided one would make 10,000).
+    /// would not follow its area. A patch's counts come from the mean
+    /// lengths of its opposite sides, which overstate the area of any
+    /// patch but a rectangle's: by 8% for the kites of a triangle, and 80
+    /// times for the thin kites of a many-sided polygon (a 1000-sided
+    /// circle of 5,027 points' area made 400,000). A patch holds a point
+    /// at least, so no count makes a 10,000-sided one's fan follow its
+    /// area.
     Rings(Star),
 }
 
 /// How far the patches' points may stray from the area's before a convex
-/// polygon is filled by rings: a few percent, which whole counts per patch
-/// cannot better when a patch holds a few dozen points.
+/// polygon is filled by rings. A polygon that is not convex keeps its
+/// patches: its thin triangles over-seed it (see docs/scale.md), and
+/// their cells, were their counts cut to their area, would be slivers.
 const PATCHES_AREA_TOLERANCE: f64 = 0.02;
 
 fn polygon_fill(vertices: &[[f64; 2]], holes: &[Vec<[f64; 2]>], s: f64) -> PolygonFill {
