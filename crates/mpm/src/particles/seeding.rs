@@ -160,6 +160,15 @@ pub fn fill(
     };
     if lattice == Lattice::Grid {
         let (lo, hi) = geometry.bounding_box();
+        if let Geometry::Polygon { vertices, holes } = geometry {
+            return lattice_inside(
+                lo,
+                hi,
+                spacing,
+                origin,
+                inside_polygon_by_rows(vertices, holes),
+            );
+        }
         return lattice_inside(lo, hi, spacing, origin, |p| geometry.contains(p));
     }
     if let Some(corners) = geometry.turned_corners() {
@@ -264,7 +273,8 @@ enum PolygonFill {
 
 /// How far the patches' points may stray from the area's before a convex
 /// polygon is filled by rings. A polygon that is not convex keeps its
-/// patches: its thin triangles over-seed it (see docs/scale.md), and
+/// patches: its thin triangles over-seed it (docs/guide.md, "Bodies and
+/// their points"), and
 /// their cells, were their counts cut to their area, would be slivers.
 const PATCHES_AREA_TOLERANCE: f64 = 0.02;
 
@@ -614,7 +624,7 @@ fn lattice_inside(
     hi: [f64; 2],
     s: f64,
     origin: [f64; 2],
-    inside: impl Fn([f64; 2]) -> bool,
+    mut inside: impl FnMut([f64; 2]) -> bool,
 ) -> Vec<SeedPoint> {
     let first = |d: usize| lattice_range(lo, hi, s, origin, d).0 as i64;
     let last = |d: usize| lattice_range(lo, hi, s, origin, d).1 as i64;
@@ -636,6 +646,44 @@ fn lattice_inside(
         }
     }
     out
+}
+
+/// Whether a site lies in a polygon (with holes), asked a row of sites at a
+/// time, as [`lattice_inside`] asks: each ring's crossings of the row are
+/// found once a row, sorted, and a site is inside a ring when an odd number
+/// of them lie to its right. That is [`crate::geometry::inside_ring`]'s
+/// rule with its arithmetic, so the same sites, in time linear in the
+/// vertices a row rather than a site (a 5,000-vertex polygon on the grid's
+/// lattice took 18 s to admit, site by site).
+fn inside_polygon_by_rows<'a>(
+    vertices: &'a [[f64; 2]],
+    holes: &'a [Vec<[f64; 2]>],
+) -> impl FnMut([f64; 2]) -> bool + 'a {
+    let rings: Vec<&[[f64; 2]]> = std::iter::once(vertices)
+        .chain(holes.iter().map(Vec::as_slice))
+        .collect();
+    let crossings = |ring: &[[f64; 2]], y: f64| {
+        let n = ring.len();
+        let mut xs: Vec<f64> = (0..n)
+            .filter_map(|i| {
+                let (a, b) = (ring[i], ring[(i + 1) % n]);
+                ((a[1] > y) != (b[1] > y))
+                    .then(|| a[0] + (y - a[1]) / (b[1] - a[1]) * (b[0] - a[0]))
+            })
+            .collect();
+        xs.sort_by(f64::total_cmp);
+        xs
+    };
+    let mut row_y = f64::NAN;
+    let mut row: Vec<Vec<f64>> = Vec::new();
+    move |p| {
+        if p[1] != row_y {
+            row_y = p[1];
+            row = rings.iter().map(|r| crossings(r, p[1])).collect();
+        }
+        let odd = |xs: &Vec<f64>| (xs.len() - xs.partition_point(|&x| x <= p[0])) % 2 == 1;
+        odd(&row[0]) && !row[1..].iter().any(odd)
+    }
 }
 
 /// Points per direction of a rectangle of `size`: the given `count`, or
@@ -898,6 +946,38 @@ mod tests {
             let counted = size(&polygon, Density::Spacing(s), [0.0, 0.0], Lattice::Body);
             assert_eq!(counted.sites, points.len() as f64, "{n} sides");
         }
+    }
+
+    /// A polygon on the grid's lattice, its sites found a row at a time,
+    /// gets exactly the sites its `contains` takes, site by site.
+    #[test]
+    fn a_polygons_sites_found_by_rows_are_those_it_contains() {
+        let n = 500;
+        let star: Vec<[f64; 2]> = (0..n)
+            .map(|k| {
+                let t = std::f64::consts::TAU * k as f64 / n as f64;
+                let r = if k % 2 == 0 { 3.0 } else { 5.0 };
+                [r * t.cos() + 0.3, r * t.sin() - 0.2]
+            })
+            .collect();
+        let hole = vec![[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]];
+        let polygon = Geometry::Polygon {
+            vertices: star,
+            holes: vec![hole],
+        };
+        let (lo, hi) = polygon.bounding_box();
+        let by_rows = fill(&polygon, Density::Spacing(0.05), [0.0, 0.0], Lattice::Grid);
+        let by_sites = lattice_inside(lo, hi, 0.05, [0.0, 0.0], |p| polygon.contains(p));
+        assert!(by_rows.len() > 10_000);
+        assert!(
+            by_rows
+                .iter()
+                .map(|p| p.lattice)
+                .eq(by_sites.iter().map(|p| p.lattice)),
+            "{} sites against {}",
+            by_rows.len(),
+            by_sites.len()
+        );
     }
 
     #[test]
