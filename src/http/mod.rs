@@ -130,8 +130,9 @@ async fn method_not_allowed(State(state): State<AppState>, headers: HeaderMap) -
 
 /// `GET /health`: 200 with `status: ok` when the database answers and its
 /// last write did not fail on storage; 503 with `degraded` (a write failed
-/// for want of space or on an I/O error, until one that stores data
-/// succeeds) or `unavailable` (the database does not answer). The counts,
+/// for want of space or on an I/O error, until a write succeeds: the
+/// check tries one of its own) or `unavailable` (the database does not
+/// answer). The counts,
 /// the size and the failure go only to a caller the token admits.
 async fn health(State(state): State<AppState>, headers: HeaderMap) -> Response {
     let detailed = auth::authorized(&state, &headers);
@@ -151,7 +152,7 @@ async fn health(State(state): State<AppState>, headers: HeaderMap) -> Response {
             return (StatusCode::SERVICE_UNAVAILABLE, Json(body)).into_response();
         }
     };
-    let trouble = state.store.storage_trouble();
+    let trouble = state.store.recheck_storage().await;
     let (code, status) = match trouble {
         Some(_) => (StatusCode::SERVICE_UNAVAILABLE, "degraded"),
         None => (StatusCode::OK, "ok"),

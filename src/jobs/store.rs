@@ -307,6 +307,23 @@ impl Store {
         self.trouble.lock().expect("not poisoned").clone()
     }
 
+    /// After a storage failure, tries a write of its own (one row
+    /// rewritten), so that an idle service learns the space is back; then
+    /// [`Store::storage_trouble`].
+    pub async fn recheck_storage(&self) -> Option<String> {
+        self.storage_trouble()?;
+        let sql = AssertSqlSafe(format!(
+            "INSERT INTO write_probe (id, at) VALUES (1, {0}) ON CONFLICT (id) DO UPDATE SET at = {0}",
+            self.now()
+        ));
+        let probed = on_pool!(self, |pool| sqlx::query(sql)
+            .execute(pool)
+            .await
+            .map(|_| ()));
+        let _ = self.note(probed);
+        self.storage_trouble()
+    }
+
     /// Notes the outcome of a write that stores data (a job, a step) for
     /// [`Store::storage_trouble`]: a storage failure is kept, a success
     /// clears it.
@@ -959,10 +976,28 @@ impl Store {
 mod tests {
     use super::*;
 
-    /// A store in a directory of its own, removed when it drops.
+    /// A directory of a test's own, removed when it drops.
+    struct ScratchDir(std::path::PathBuf);
+
+    impl ScratchDir {
+        fn new(tag: &str) -> Self {
+            let dir = std::env::temp_dir().join(format!("mpm-store-{tag}-{}", std::process::id()));
+            let _ = std::fs::remove_dir_all(&dir);
+            std::fs::create_dir_all(&dir).unwrap();
+            ScratchDir(dir)
+        }
+    }
+
+    impl Drop for ScratchDir {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    /// A store in a directory of its own, removed with it.
     struct Scratch {
         store: Store,
-        dir: std::path::PathBuf,
+        _dir: ScratchDir,
     }
 
     impl std::ops::Deref for Scratch {
@@ -972,25 +1007,12 @@ mod tests {
         }
     }
 
-    impl Drop for Scratch {
-        fn drop(&mut self) {
-            let _ = std::fs::remove_dir_all(&self.dir);
-        }
-    }
-
-    fn scratch_dir(tag: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("mpm-store-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
-
     async fn store(tag: &str) -> Scratch {
-        let dir = scratch_dir(tag);
-        let store = Store::open(dir.join("jobs.sqlite").to_str().unwrap())
+        let dir = ScratchDir::new(tag);
+        let store = Store::open(dir.0.join("jobs.sqlite").to_str().unwrap())
             .await
             .unwrap();
-        Scratch { store, dir }
+        Scratch { store, _dir: dir }
     }
 
     /// Whether a worker's claim finds no job.
@@ -1161,8 +1183,8 @@ mod tests {
     /// failed ("database is locked"), and what ran on it was lost.
     #[tokio::test]
     async fn after_a_full_disk_no_acknowledged_write_is_lost() {
-        let dir = scratch_dir("full");
-        let path = dir.join("jobs.sqlite");
+        let dir = ScratchDir::new("full");
+        let path = dir.0.join("jobs.sqlite");
         let limited = SqliteConnectOptions::from_str("sqlite:")
             .unwrap()
             .filename(&path)
@@ -1211,8 +1233,10 @@ mod tests {
             let _ = store.cancel(ballast).await;
         }
 
-        // Space back: the ballast's pages go free.
+        // Space back: the ballast's pages go free, and the store's own
+        // write (what /health makes) says so before any job writes.
         assert_eq!(store.delete(ballast).await.unwrap(), DeleteOutcome::Deleted);
+        assert!(store.recheck_storage().await.is_none());
         assert!(
             store
                 .save_step(job, "w", step, 1, &step_of(10), None)
@@ -1245,7 +1269,6 @@ mod tests {
             reopened.get(queued).await.unwrap().unwrap().status,
             JobStatus::Queued
         );
-        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// A cancel asked for while a worker ran the job, which the worker had
