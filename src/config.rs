@@ -135,7 +135,9 @@ pub fn redact(database: &str) -> String {
     let Some((scheme, rest)) = database.split_once("://") else {
         return database.to_string();
     };
-    match rest.split_once('@') {
+    // The last '@': a password written with an '@' of its own (which a URL
+    // should percent-encode) showed its tail in the logs.
+    match rest.rsplit_once('@') {
         Some((user_info, host)) if user_info.contains(':') => {
             let user = user_info.split(':').next().unwrap_or_default();
             format!("{scheme}://{user}:***@{host}")
@@ -194,6 +196,10 @@ mod tests {
             "postgres://mpm:***@db:5432/jobs"
         );
         assert_eq!(redact("postgres://db/jobs"), "postgres://db/jobs");
+        assert_eq!(
+            redact("postgres://mpm:p@ss/w:rd@db:5432/jobs"),
+            "postgres://mpm:***@db:5432/jobs"
+        );
         assert_eq!(redact("jobs.sqlite"), "jobs.sqlite");
     }
 

@@ -30,15 +30,26 @@ pub async fn require_token(
 /// or a POST with no body, to any address without asking first. Without a
 /// token (the default), that would let any page a user visits cancel or
 /// submit jobs on their service. Clients other than browsers send no
-/// `Origin` and pass.
+/// `Origin` and pass. Behind a proxy that rewrites `Host`, the
+/// `X-Forwarded-Host` it sets is the service's host (a page cannot set
+/// that header on a request to another site without asking first).
 pub async fn require_same_origin(request: Request, next: Next) -> Response {
     let method = request.method();
     if method != axum::http::Method::GET && method != axum::http::Method::HEAD {
         let headers = request.headers();
         if let Some(origin) = headers.get(header::ORIGIN) {
             let origin = origin.to_str().unwrap_or("?");
-            let host = headers.get(header::HOST).and_then(|h| h.to_str().ok());
-            if !same_origin(origin, host) {
+            let host = |name| {
+                headers
+                    .get(name)
+                    .and_then(|h: &header::HeaderValue| h.to_str().ok())
+            };
+            if !same_origin(origin, host(header::HOST))
+                && !same_origin(
+                    origin,
+                    host(header::HeaderName::from_static("x-forwarded-host")),
+                )
+            {
                 return ApiError::CrossOrigin {
                     origin: origin.to_string(),
                 }
