@@ -110,6 +110,22 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
     }
     assert_eq!(archived, written);
     assert_eq!(archived.len(), 4 + 3 * 6, "{archived:?}");
+    // Dated when the job ended, not zip's 1980: the job's finished_at, to
+    // the two seconds a zip's time holds.
+    let finished = app.get_json(&format!("/jobs/{id}"))["finished_at"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let dated = zip.by_name("case.json").unwrap().last_modified().unwrap();
+    let stamp = format!(
+        "{:04}-{:02}-{:02}T{:02}:{:02}",
+        dated.year(),
+        dated.month(),
+        dated.day(),
+        dated.hour(),
+        dated.minute()
+    );
+    assert_eq!(stamp, finished[..16], "{finished}");
     let mut read = |name: &str| {
         let mut text = String::new();
         std::io::Read::read_to_string(&mut zip.by_name(name).unwrap(), &mut text).unwrap();

@@ -7,11 +7,34 @@ fn mpm() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mpm"))
 }
 
-fn temp_dir(name: &str) -> PathBuf {
+/// A directory of its own for a test, removed when it drops (the tests
+/// left theirs in /tmp).
+struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for Scratch {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn temp_dir(name: &str) -> Scratch {
     let dir = std::env::temp_dir().join(format!("mpm-cli-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    dir
+    Scratch(dir)
 }
 
 /// Runs `mpm ARGS OUT` and requires success.
@@ -431,7 +454,6 @@ fn a_case_over_the_point_limit_is_refused_before_seeding() {
         ],
         &dir.join("small"),
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A Young's modulus of 1 meant as 1 MPa fails the first step with an
@@ -447,5 +469,4 @@ fn a_first_step_failing_under_loads_far_beyond_the_stiffness_hints_at_units() {
     assert!(stderr.contains("load step 1"), "{stderr}");
     assert!(stderr.contains("are the units SI"), "{stderr}");
     assert!(!stderr.contains("--resume"), "{stderr}");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -60,12 +60,16 @@ before(async () => {
   const failing = structuredClone(cantilever);
   failing.title = 'cantilever allowed two Newton iterations a step';
   failing.analysis.newton = { max_iterations: 2 };
+  const stillborn = structuredClone(cantilever);
+  stillborn.title = 'cantilever of E = 1 Pa, failing in its first step';
+  stillborn.bodies[0].material.youngs_modulus = 1;
   const thinned = structuredClone(cantilever);
   thinned.title = 'cantilever storing the points of every second step, no columns';
   thinned.output = { every: 2, fields: [] };
   jobs.cantilever = (await call('POST', '/jobs', cantilever)).id;
   jobs.failing = (await call('POST', '/jobs', failing)).id;
   jobs.thinned = (await call('POST', '/jobs', thinned)).id;
+  jobs.stillborn = (await call('POST', '/jobs', stillborn)).id;
   for (const id of Object.values(jobs)) {
     await until(`job ${id} to end`, async () => {
       const job = await call('GET', `/jobs/${id}`);
@@ -111,6 +115,8 @@ test('the page asks for the token, refuses a wrong one and lists the jobs with t
   const page = await browser.newPage();
   await page.goto(base + '/');
   await page.waitForSelector('#token-form:not([hidden])');
+  // Nothing to forget yet.
+  assert.equal(await page.$eval('#forget-token', (b) => b.hidden), true);
   await page.fill('#token-input', 'wrong');
   await page.click('#token-form button[type=submit]');
   await page.waitForSelector('#token-error:not([hidden])');
@@ -122,7 +128,9 @@ test('the page asks for the token, refuses a wrong one and lists the jobs with t
     [jobs.cantilever]: 'succeeded',
     [jobs.failing]: 'failed',
     [jobs.thinned]: 'succeeded',
+    [jobs.stillborn]: 'failed',
   });
+  assert.equal(await page.$eval('#forget-token', (b) => b.hidden), false);
   // The token is kept for the tab: a reload goes straight to the list.
   await page.reload();
   await page.waitForSelector(`tr[data-job="${jobs.cantilever}"]`);
@@ -194,6 +202,20 @@ test('a failed job shows its error with step, iteration and residual', async () 
   assert.match(text, /\(step \d, iteration 2, residual \d\.\d+e-\d+\)$/);
   // Step 0 was stored before the solve failed: the body is still shown.
   await page.waitForSelector('#points[data-points="896"]');
+  await page.close();
+});
+
+test('a job that failed in its first step says so, not "min -0.5" and "no finished steps yet"', async () => {
+  const page = await browser.newPage();
+  await signedIn(page);
+  await page.click(`a[href="#/jobs/${jobs.stillborn}"]`);
+  await page.waitForSelector('#points[data-points="896"]');
+  // Step 0 only: every displacement is 0.
+  await page.waitForFunction(() => document.querySelector('.legend').textContent.includes('everywhere'));
+  assert.doesNotMatch(await page.textContent('.legend'), /min /);
+  await page.waitForSelector('figure.plot');
+  const notes = await page.$$eval('figure.plot .note', (ps) => ps.map((p) => p.textContent));
+  assert.ok(notes.length > 0 && notes.every((n) => n === 'no step finished (the job failed)'), notes.join('; '));
   await page.close();
 });
 
