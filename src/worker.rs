@@ -131,7 +131,18 @@ fn worker_loop(shared: &Shared, index: usize) {
             shared.store.claim(&owner, shared.config.lease).await
         });
         match claimed {
-            Ok(Some(job)) => run_job(shared, &owner, job),
+            Ok(Some(job)) => {
+                if run_job(shared, &owner, job) == Ran::OutOfStorage {
+                    // The database's disk is full: the job went back to the
+                    // queue, to resume from its checkpoint once there is
+                    // room; try again later rather than at once.
+                    tracing::warn!(
+                        seconds = STORAGE_RETRY.as_secs(),
+                        "the database cannot store results; waiting before claiming again"
+                    );
+                    std::thread::sleep(STORAGE_RETRY);
+                }
+            }
             Ok(None) => {
                 // Sleep until a submission wakes us or the poll interval
                 // passes (expired leases need no wake-up).
@@ -142,11 +153,25 @@ fn worker_loop(shared: &Shared, index: usize) {
                 });
             }
             Err(e) => {
+                shared.store.note_failure(&e);
                 tracing::error!(error = %e, "claiming a job failed");
                 std::thread::sleep(shared.config.poll_interval);
             }
         }
     }
+}
+
+/// How long a worker waits before claiming again after a job's results
+/// could not be stored for want of space.
+const STORAGE_RETRY: Duration = Duration::from_secs(10);
+
+/// How a run went, as far as the worker loop cares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Ran {
+    Done,
+    /// Its results could not be stored for want of space or on an I/O
+    /// error: it went back to the queue.
+    OutOfStorage,
 }
 
 /// Why a run asked the solver to stop.
@@ -156,7 +181,7 @@ pub struct StopFlags {
     lease_lost: AtomicBool,
 }
 
-fn run_job(shared: &Shared, owner: &str, job: Claimed) {
+fn run_job(shared: &Shared, owner: &str, job: Claimed) -> Ran {
     let started = Instant::now();
     tracing::info!(job = job.id, attempt = job.attempts, "job started");
     let flags = shared.running.register(job.id);
@@ -178,6 +203,7 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
         output: OutputSpec::default(),
         timed_out: false,
         store_error: None,
+        out_of_storage: false,
     };
     let outcome = catch_unwind(AssertUnwindSafe(|| {
         // The case was validated on submission; a failure here means the
@@ -228,6 +254,7 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
             "the solver stopped on an internal error",
         ))
     });
+    let out_of_storage = observer.out_of_storage;
     let end = match outcome {
         Ok(_) => End::Final(JobStatus::Succeeded, None),
         Err(f) if f.kind == FailureKind::Cancelled => stopped(shared, &observer, &flags, f),
@@ -254,12 +281,20 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) {
     });
     match result {
         Ok(status) => tracing::info!(job = job.id, status, seconds, "job ended"),
-        Err(e) => tracing::error!(
-            job = job.id,
-            error = %e,
-            seconds,
-            "recording the job's end failed; its lease will expire and it will be retried"
-        ),
+        Err(e) => {
+            shared.store.note_failure(&e);
+            tracing::error!(
+                job = job.id,
+                error = %e,
+                seconds,
+                "recording the job's end failed; its lease will expire and it will be retried"
+            )
+        }
+    }
+    if out_of_storage {
+        Ran::OutOfStorage
+    } else {
+        Ran::Done
     }
 }
 
@@ -302,6 +337,10 @@ fn stopped(shared: &Shared, observer: &JobObserver<'_>, flags: &StopFlags, f: Fa
             ),
         );
         End::Final(JobStatus::Failed, Some(f))
+    } else if observer.out_of_storage {
+        // Not the job's fault: back to the queue, to resume from its
+        // checkpoint when the disk has room again.
+        End::Requeue
     } else if let Some(e) = &observer.store_error {
         let f = Failure::new(
             FailureKind::Internal,
@@ -356,6 +395,8 @@ struct JobObserver<'a> {
     output: OutputSpec,
     timed_out: bool,
     store_error: Option<String>,
+    /// The store error was the database's storage failing (a full disk).
+    out_of_storage: bool,
 }
 
 impl Observer for JobObserver<'_> {
@@ -376,7 +417,10 @@ impl Observer for JobObserver<'_> {
         match saved {
             Ok(true) => {}
             Ok(false) => self.flags.lease_lost.store(true, Ordering::SeqCst),
-            Err(e) => self.store_error = Some(e.to_string()),
+            Err(e) => {
+                self.out_of_storage = crate::jobs::store::is_storage_error(&e);
+                self.store_error = Some(e.to_string());
+            }
         }
     }
 

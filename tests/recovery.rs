@@ -10,8 +10,8 @@ use std::process::Command;
 use std::time::{Duration, Instant};
 
 use common::{
-    Process, TempDir, agent, base_url, cli_final_positions, is_final, largest_difference,
-    positions, request, slow_case, spawn_mpm, wait_for,
+    Process, TempDir, agent, base_url, cli_final_positions, example, is_final, largest_difference,
+    positions, request, slow_case, spawn_mpm, try_get_json, wait_for,
 };
 use serde_json::{Value, json};
 
@@ -224,4 +224,111 @@ fn logs_off_a_terminal_have_no_colour_codes() {
     let text = std::fs::read_to_string(&log).unwrap();
     assert!(text.contains("shutting down"), "{text}");
     assert!(!text.contains('\u{1b}'), "escape codes in: {text:?}");
+}
+
+/// A small filesystem of its own (tmpfs), unmounted when dropped; `None`
+/// where this process may not mount one (not root, or in a container
+/// without the right).
+struct SmallDisk(std::path::PathBuf);
+
+impl SmallDisk {
+    fn mount(dir: &Path, megabytes: u32) -> Option<SmallDisk> {
+        let point = dir.join("disk");
+        std::fs::create_dir_all(&point).unwrap();
+        let mounted = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={megabytes}m"), "tmpfs"])
+            .arg(&point)
+            .status()
+            .is_ok_and(|s| s.success());
+        mounted.then_some(SmallDisk(point))
+    }
+}
+
+impl Drop for SmallDisk {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg("-l").arg(&self.0).status();
+    }
+}
+
+/// The issue's reproduction: jobs storing their steps on a disk that
+/// fills. Before, the first "database or disk is full" left a pooled
+/// connection inside a transaction: every claim failed with "database is
+/// locked" for ten minutes and more, /health said ok, and the job whose
+/// step did not fit failed. Now /health says degraded, the jobs go back to
+/// the queue with their steps, and once space is freed every job ends
+/// succeeded without anyone's help; a delete answered 204 meanwhile stands.
+#[test]
+fn jobs_on_a_full_disk_wait_for_space_and_then_finish() {
+    let dir = TempDir::new("full-disk");
+    let Some(disk) = SmallDisk::mount(&dir.0, 24) else {
+        assert!(
+            std::env::var_os("MPM_TEST_REQUIRE_MOUNT").is_none(),
+            "cannot mount a tmpfs here"
+        );
+        eprintln!("skipped: cannot mount a tmpfs here (needs root)");
+        return;
+    };
+    // Room to free later. The two jobs store some 9 MB of steps (1,280
+    // points, 11 steps each), and the write-ahead log up to 4 MB more.
+    let ballast = disk.0.join("ballast");
+    std::fs::write(&ballast, vec![0u8; 16 << 20]).unwrap();
+    let (mut server, base) = start_server_with(&disk.0.join("jobs.sqlite"), &["--workers", "2"]);
+    let http = agent();
+    let mut case = example("cantilever-grid");
+    case["grid"]["cell_size"] = 0.25.into();
+    case["analysis"]["load_steps"] = 10.into();
+    let ids: Vec<i64> = (0..2)
+        .map(|_| {
+            let (status, body) = request(
+                &http,
+                "POST",
+                &format!("{base}/jobs"),
+                Some(&case.to_string()),
+            );
+            assert_eq!(status, 201, "{body}");
+            serde_json::from_str::<Value>(&body).unwrap()["id"]
+                .as_i64()
+                .unwrap()
+        })
+        .collect();
+    let health = || request(&http, "GET", &format!("{base}/health"), None);
+    let start = Instant::now();
+    while health().0 == 200 {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "the disk never filled"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let (status, body) = health();
+    assert_eq!(status, 503, "{body}");
+    assert!(body.contains("database or disk is full"), "{body}");
+    // No job fails for the disk's sake.
+    std::thread::sleep(Duration::from_secs(3));
+    for id in &ids {
+        let job = try_get_json(&http, &format!("{base}/jobs/{id}")).unwrap();
+        assert_ne!(job["status"], "failed", "{job}");
+    }
+    std::fs::remove_file(&ballast).unwrap();
+    let start = Instant::now();
+    loop {
+        let jobs: Vec<Value> = ids
+            .iter()
+            .map(|id| try_get_json(&http, &format!("{base}/jobs/{id}")).unwrap())
+            .collect();
+        if jobs.iter().all(|j| j["status"] == "succeeded") {
+            break;
+        }
+        assert!(jobs.iter().all(|j| j["status"] != "failed"), "{jobs:?}");
+        assert!(start.elapsed() < Duration::from_secs(300), "{jobs:?}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    assert_eq!(health().0, 200);
+    let (status, _) = request(&http, "DELETE", &format!("{base}/jobs/{}", ids[0]), None);
+    assert_eq!(status, 204);
+    server.kill().unwrap();
+    server.wait().unwrap();
+    let (_server, base) = start_server_with(&disk.0.join("jobs.sqlite"), &["--workers", "0"]);
+    let (status, _) = request(&http, "GET", &format!("{base}/jobs/{}", ids[0]), None);
+    assert_eq!(status, 404, "the delete stands after kill -9");
 }

@@ -324,6 +324,14 @@ impl Store {
         self.storage_trouble()
     }
 
+    /// Notes a failed write of any kind (a claim, a job's end) for
+    /// [`Store::storage_trouble`], if the storage failed.
+    pub fn note_failure(&self, e: &sqlx::Error) {
+        if is_storage_error(e) {
+            *self.trouble.lock().expect("not poisoned") = Some(e.to_string());
+        }
+    }
+
     /// Notes the outcome of a write that stores data (a job, a step) for
     /// [`Store::storage_trouble`]: a storage failure is kept, a success
     /// clears it.
