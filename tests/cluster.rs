@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use common::{
     Process, TempDir, agent, base_url, cli_final_positions, example, largest_difference, positions,
-    postgres_database, request, slow_case, spawn_mpm, spawn_mpm_with, try_get_json,
+    postgres_database, request, slow_case, spawn_mpm, spawn_mpm_with, submit_to, try_get_json,
 };
 use serde_json::Value;
 
@@ -68,19 +68,6 @@ fn start_worker(database: &str, log: &Path) -> Process {
 fn kill(child: &mut Child) {
     child.kill().unwrap(); // SIGKILL: no chance to hand the job back
     child.wait().unwrap();
-}
-
-fn submit(base: &str, case: &Value) -> i64 {
-    let (status, body) = request(
-        &agent(),
-        "POST",
-        &format!("{base}/jobs"),
-        Some(&case.to_string()),
-    );
-    assert_eq!(status, 201, "{body}");
-    serde_json::from_str::<Value>(&body).unwrap()["id"]
-        .as_i64()
-        .unwrap()
 }
 
 /// Every job, by id, as `GET /jobs` lists it; `None` while the API is down.
@@ -179,7 +166,7 @@ fn three_workers_share_fifty_jobs_and_a_killed_ones_job_resumes_elsewhere() {
             3 | 6 | 9 => medium.clone(),
             _ => tiny.clone(),
         };
-        let id = submit(&base, &case);
+        let id = submit_to(&base, &case);
         if i % 10 == 0 {
             long_jobs.push(id);
         }
@@ -266,7 +253,7 @@ fn a_crash_loop_loses_no_job_and_never_goes_back_past_a_checkpoint() {
     let mut cases = BTreeMap::new();
     for i in 0..20 {
         let case = slow_case(if i % 2 == 0 { 12 } else { 20 });
-        cases.insert(submit(&base, &case), case);
+        cases.insert(submit_to(&base, &case), case);
     }
 
     let mut highest: BTreeMap<i64, i64> = BTreeMap::new();
@@ -399,7 +386,7 @@ fn a_cancel_asked_for_before_a_worker_stops_is_kept() {
     let database = postgres_database();
     let (mut api, base) = start_api(&database);
     let mut worker = start_worker_with(&database, "30", &dir.0.join("worker.log"), &[]);
-    let id = submit(&base, &slow_case(60));
+    let id = submit_to(&base, &slow_case(60));
     wait_for_step(&base, id, 2);
     let (status, body) = request(&agent(), "POST", &format!("{base}/jobs/{id}/cancel"), None);
     assert_eq!(status, 202, "{body}");
@@ -444,7 +431,7 @@ fn a_worker_whose_clock_runs_ahead_takes_no_job_another_holds() {
     let (mut api, base) = start_api(&database);
     let (honest_log, ahead_log) = (dir.0.join("honest.log"), dir.0.join("ahead.log"));
     let mut honest = start_worker_with(&database, "5", &honest_log, &[]);
-    let id = submit(&base, &slow_case(40));
+    let id = submit_to(&base, &slow_case(40));
     wait_for_step(&base, id, 1);
     let mut ahead = start_worker_with(
         &database,

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use common::{
     Process, TempDir, agent, base_url, cli_final_positions, example, is_final, largest_difference,
-    positions, request, slow_case, spawn_mpm, try_get_json, wait_for,
+    positions, request, slow_case, spawn_mpm, submit_to, try_get_json, wait_for,
 };
 use serde_json::{Value, json};
 
@@ -49,16 +49,7 @@ fn a_job_resumes_after_its_server_is_stopped_with(signal: &str) {
 
     let (mut first, base) = start_server_with(&database, &["--checkpoint-every", "1"]);
     let case = slow_case(40);
-    let (status, body) = request(
-        &http,
-        "POST",
-        &format!("{base}/jobs"),
-        Some(&case.to_string()),
-    );
-    assert_eq!(status, 201, "{body}");
-    let id = serde_json::from_str::<Value>(&body).unwrap()["id"]
-        .as_i64()
-        .unwrap();
+    let id = submit_to(&base, &case);
     let before = wait_for(&http, &base, id, Duration::from_secs(120), |j| {
         j["progress"]["step"].as_i64() >= Some(2)
     });
@@ -268,8 +259,10 @@ fn jobs_on_a_full_disk_wait_for_space_and_then_finish() {
         eprintln!("skipped: cannot mount a tmpfs here (needs root)");
         return;
     };
-    // Room to free later. The two jobs store some 9 MB of steps (1,280
-    // points, 11 steps each), and the write-ahead log up to 4 MB more.
+    // Room to free later. The three jobs store some 13 MB of steps (1,280
+    // points, 11 steps each, about 400 kB a step), and the write-ahead log
+    // up to 4 MB more: past the 8 MB left at first (two jobs, 9 MB, fitted
+    // once), within the 24 MB once the ballast goes.
     let ballast = disk.0.join("ballast");
     std::fs::write(&ballast, vec![0u8; 16 << 20]).unwrap();
     let (mut server, base) = start_server_with(&disk.0.join("jobs.sqlite"), &["--workers", "2"]);
@@ -277,20 +270,7 @@ fn jobs_on_a_full_disk_wait_for_space_and_then_finish() {
     let mut case = example("cantilever-grid");
     case["grid"]["cell_size"] = 0.25.into();
     case["analysis"]["load_steps"] = 10.into();
-    let ids: Vec<i64> = (0..2)
-        .map(|_| {
-            let (status, body) = request(
-                &http,
-                "POST",
-                &format!("{base}/jobs"),
-                Some(&case.to_string()),
-            );
-            assert_eq!(status, 201, "{body}");
-            serde_json::from_str::<Value>(&body).unwrap()["id"]
-                .as_i64()
-                .unwrap()
-        })
-        .collect();
+    let ids: Vec<i64> = (0..3).map(|_| submit_to(&base, &case)).collect();
     let health = || request(&http, "GET", &format!("{base}/health"), None);
     let start = Instant::now();
     while health().0 == 200 {

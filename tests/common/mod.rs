@@ -270,6 +270,21 @@ impl Drop for TestApp {
     }
 }
 
+/// Submits a case to the service at `base`; returns the job id.
+#[allow(dead_code)] // not every test binary submits this way
+pub fn submit_to(base: &str, case: &Value) -> i64 {
+    let (status, body) = request(
+        &agent(),
+        "POST",
+        &format!("{base}/jobs"),
+        Some(&case.to_string()),
+    );
+    assert_eq!(status, 201, "{body}");
+    serde_json::from_str::<Value>(&body).unwrap()["id"]
+        .as_i64()
+        .unwrap()
+}
+
 /// `(status, body)` of a request.
 pub fn request(agent: &ureq::Agent, method: &str, url: &str, body: Option<&str>) -> (u16, String) {
     let response = match (method, body) {
