@@ -33,7 +33,7 @@ pub struct Server {
     /// Set once at shutdown: the server stops accepting, and submissions
     /// still being checked give up.
     stop: watch::Sender<bool>,
-    serving: JoinHandle<std::io::Result<()>>,
+    serving: JoinHandle<()>,
     workers: WorkerPool,
 }
 
@@ -73,7 +73,7 @@ impl Server {
         let running = Arc::new(RunningJobs::default());
         let workers =
             WorkerPool::start(store.clone(), config.clone(), wake.clone(), running.clone());
-        let (stop, mut stopped) = watch::channel(false);
+        let (stop, stopped) = watch::channel(false);
         if let Some(retention) = config.retention {
             tokio::spawn(prune_ended_jobs(store.clone(), retention, stopped.clone()));
         }
@@ -92,11 +92,7 @@ impl Server {
                 listener,
                 limit: client_timeout,
             };
-            axum::serve(listener, app)
-                .with_graceful_shutdown(async move {
-                    let _ = stopped.wait_for(|stop| *stop).await;
-                })
-                .await
+            http::connection::serve(listener, app, stopped).await;
         });
         Ok(Server {
             addr,
@@ -112,8 +108,7 @@ impl Server {
     pub async fn shutdown(self) {
         let _ = self.stop.send(true);
         match self.serving.await {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => tracing::error!(error = %e, "server stopped with an error"),
+            Ok(()) => {}
             Err(e) => tracing::error!(error = %e, "server task failed"),
         }
         let workers = self.workers;

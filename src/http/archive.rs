@@ -1,7 +1,7 @@
 //! `GET /jobs/{id}/archive`: a job's results as one zip, in the layout
 //! `mpm run` writes its output directory in (`crate::results`).
 
-use std::io::{Cursor, Write};
+use std::io::{BufWriter, Write};
 
 use axum::extract::State;
 use axum::http::header;
@@ -13,6 +13,7 @@ use zip::ZipWriter;
 use zip::write::SimpleFileOptions;
 
 use super::extract::IdPath;
+use super::stream::{self, PieceWriter};
 use super::views::civil;
 use super::{ApiError, AppState, jobs, steps};
 use crate::jobs::{JobRow, Store};
@@ -20,10 +21,11 @@ use crate::results::{
     BOUNDARY_SERIES, CASE_FILE, POINTS_SERIES, SUMMARY_FILE, Series, StepFiles, Summary,
 };
 
-/// Archives built at once: each is held whole in memory (up to about its
-/// job's stored size). A request past them is answered 503 at once, with
-/// a `Retry-After`, rather than queued behind them for minutes.
-static BUILDING: Semaphore = Semaphore::const_new(2);
+/// Archives made at once, each on a thread of its own, sent as they are
+/// made: each holds one step in memory at a time, and a client that reads
+/// slowly slows its own archive alone. A request past them is answered 503
+/// at once, with a `Retry-After`, rather than queued behind them.
+static BUILDING: Semaphore = Semaphore::const_new(4);
 
 pub async fn archive(
     State(state): State<AppState>,
@@ -36,23 +38,35 @@ pub async fn archive(
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("job {id}")))?;
     let reports = jobs::reports(&state.store, id).await?;
-    let _building = BUILDING.try_acquire().map_err(|_| {
-        ApiError::Unavailable("other archives are being built; try again shortly".into())
+    let building = BUILDING.try_acquire().map_err(|_| {
+        ApiError::Unavailable("other archives are being made; try again shortly".into())
     })?;
     let store = state.store.clone();
     let runtime = Handle::current();
+    let (pieces, body) = stream::channel();
     // Compressing a large job takes a while: off the async threads.
-    let zip =
-        tokio::task::spawn_blocking(move || write_archive(&runtime, &store, &job, &case, &reports))
-            .await
-            .map_err(|e| ApiError::Internal(format!("archive task: {e}")))??;
+    tokio::task::spawn_blocking(move || {
+        let _building = building;
+        let mut writer = PieceWriter::new(pieces.clone());
+        let made =
+            write_archive(&runtime, &store, &job, &case, &reports, &mut writer).and_then(|()| {
+                writer
+                    .flush()
+                    .map_err(|e| ApiError::Internal(e.to_string()))
+            });
+        if let Err(e) = made {
+            // Past the headers, an error can only end the download short.
+            tracing::warn!(job = id, "archive of job {id} cut short: {e:?}");
+            let _ = pieces.blocking_send(Err(std::io::Error::other(format!("{e:?}"))));
+        }
+    });
     let disposition = format!("attachment; filename=\"job-{id}.zip\"");
     Ok((
         [
             (header::CONTENT_TYPE, "application/zip".to_string()),
             (header::CONTENT_DISPOSITION, disposition),
         ],
-        zip,
+        body,
     )
         .into_response())
 }
@@ -65,7 +79,8 @@ fn write_archive(
     job: &JobRow,
     case: &str,
     reports: &[StepReport],
-) -> Result<Vec<u8>, ApiError> {
+    out: &mut PieceWriter,
+) -> Result<(), ApiError> {
     let zip_error = |e: zip::result::ZipError| ApiError::Internal(format!("archive: {e}"));
     let io_error = |e: std::io::Error| ApiError::Internal(format!("archive: {e}"));
     // Entries dated when the job ended (or was submitted): zip's default
@@ -84,13 +99,17 @@ fn write_archive(
     let options = SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated)
         .last_modified_time(dated);
-    let mut zip = ZipWriter::new(Cursor::new(Vec::new()));
+    let mut zip = ZipWriter::new_stream(out);
+    let start =
+        |zip: &mut ZipWriter<_>, name: &str| zip.start_file(name, options).map_err(zip_error);
     let add = |zip: &mut ZipWriter<_>, name: &str, bytes: &[u8]| -> Result<(), ApiError> {
-        zip.start_file(name, options).map_err(zip_error)?;
+        start(zip, name)?;
         zip.write_all(bytes).map_err(io_error)
     };
     add(&mut zip, CASE_FILE, case.as_bytes())?;
 
+    // Each step's files are written into the zip as they are made: one
+    // step's stored document is what the archive holds.
     let mut series = Series::default();
     for report in reports {
         let Some(step) = runtime.block_on(store.step(job.id, report.step as i64))? else {
@@ -100,10 +119,16 @@ fn write_archive(
             continue;
         }
         let files = StepFiles::new(report.step);
-        let document = serde_json::to_vec(&step).map_err(|e| ApiError::Internal(e.to_string()))?;
-        add(&mut zip, &files.document, &document)?;
-        add(&mut zip, &files.points, &steps::vtu(&step)?)?;
-        add(&mut zip, &files.boundary, &steps::vtp(&step)?)?;
+        start(&mut zip, &files.document)?;
+        let mut document = BufWriter::new(&mut zip);
+        serde_json::to_writer(&mut document, &step)
+            .map_err(|e| ApiError::Internal(e.to_string()))?;
+        document.flush().map_err(io_error)?;
+        drop(document);
+        start(&mut zip, &files.points)?;
+        steps::write_points(&step, &mut zip)?;
+        start(&mut zip, &files.boundary)?;
+        steps::write_boundaries(&step, &mut zip)?;
         series.add(report.load_factor, files);
     }
     let mut pvd = Vec::new();
@@ -132,5 +157,6 @@ fn write_archive(
     let summary =
         serde_json::to_vec_pretty(&summary).map_err(|e| ApiError::Internal(e.to_string()))?;
     add(&mut zip, SUMMARY_FILE, &summary)?;
-    Ok(zip.finish().map_err(zip_error)?.into_inner())
+    zip.finish().map_err(zip_error)?;
+    Ok(())
 }

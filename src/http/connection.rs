@@ -1,18 +1,72 @@
-//! Connections that give up on a client that stops reading: a response
-//! waiting for the client to take it holds its memory (a 5.9 MB step 300
-//! times over held 1.7 GB). A write that makes no progress for the stall
-//! limit fails, and the connection closes.
+//! Connections: the accept loop, and how long a connection may wait for
+//! its client. A response waiting for the client to take it holds memory
+//! (a 5.9 MB step 300 times over held 1.7 GB): a write that makes no
+//! progress for the stall limit fails, and the connection closes.
 
 use std::future::Future;
 use std::io;
-use std::pin::Pin;
+use std::pin::{Pin, pin};
 use std::task::{Context, Poll, ready};
 use std::time::Duration;
 
+use axum::Router;
 use axum::serve::Listener;
+use hyper::server::conn::http1;
+use hyper_util::rt::TokioIo;
+use hyper_util::service::TowerToHyperService;
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::net::{TcpListener, TcpStream};
+use tokio::sync::watch;
 use tokio::time::Sleep;
+
+/// Headers the HTTP layer reads before it answers 431 itself, with no
+/// body: well past the service's own limit (`super::MAX_HEADERS`), which
+/// answers in the error body.
+pub const HEADERS_READ: usize = 1000;
+
+/// Serves `app` on `listener` (HTTP/1.1) until `stopped` turns true, then
+/// lets each connection finish the request it is answering.
+pub async fn serve(
+    mut listener: StallLimitedListener,
+    app: Router,
+    mut stopped: watch::Receiver<bool>,
+) {
+    // Each connection holds a receiver; all are gone when all have closed.
+    let (open, open_receiver) = watch::channel(());
+    loop {
+        let (io, _) = tokio::select! {
+            accepted = Listener::accept(&mut listener) => accepted,
+            _ = stopped.wait_for(|stop| *stop) => break,
+        };
+        let service = TowerToHyperService::new(app.clone());
+        let mut stop = stopped.clone();
+        let connection_open = open_receiver.clone();
+        tokio::spawn(async move {
+            let mut http = http1::Builder::new();
+            http.max_headers(HEADERS_READ);
+            let mut connection = pin!(http.serve_connection(TokioIo::new(io), service));
+            let mut stopping = false;
+            loop {
+                tokio::select! {
+                    served = connection.as_mut() => {
+                        if let Err(e) = served {
+                            tracing::debug!("connection ended: {e}");
+                        }
+                        break;
+                    }
+                    _ = stop.wait_for(|stop| *stop), if !stopping => {
+                        stopping = true;
+                        connection.as_mut().graceful_shutdown();
+                    }
+                }
+            }
+            drop(connection_open);
+        });
+    }
+    drop(open_receiver);
+    drop(listener);
+    open.closed().await;
+}
 
 /// A TCP listener whose connections fail a write stalled past `limit`.
 pub struct StallLimitedListener {

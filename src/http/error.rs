@@ -47,6 +47,16 @@ pub enum ApiError {
     CrossOrigin { origin: String },
     #[error("the body must be declared Content-Type: application/json (it was {given})")]
     UnsupportedMediaType { given: String },
+    #[error(
+        "the request's headers exceed the limit of {max_headers} headers or {max_bytes} bytes \
+         (they were {count} headers, {bytes} bytes)"
+    )]
+    HeadersTooLarge {
+        count: usize,
+        bytes: usize,
+        max_headers: usize,
+        max_bytes: usize,
+    },
     #[error("this route does not answer that method")]
     MethodNotAllowed,
     #[error("the queue is full ({limit} jobs wait); try again later")]
@@ -130,6 +140,15 @@ impl ApiError {
                 StatusCode::UNSUPPORTED_MEDIA_TYPE,
                 "unsupported_media_type",
                 json!({ "header": "Content-Type" }),
+            ),
+            ApiError::HeadersTooLarge {
+                max_headers,
+                max_bytes,
+                ..
+            } => (
+                StatusCode::REQUEST_HEADER_FIELDS_TOO_LARGE,
+                "headers_too_large",
+                json!({ "max_headers": max_headers, "max_header_bytes": max_bytes }),
             ),
             ApiError::QueueFull { limit } => (
                 StatusCode::TOO_MANY_REQUESTS,

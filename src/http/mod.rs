@@ -8,6 +8,7 @@ mod error;
 mod extract;
 mod jobs;
 mod steps;
+mod stream;
 mod viewer;
 mod views;
 
@@ -81,6 +82,7 @@ pub fn router(state: AppState) -> Router {
         .fallback(unknown_route)
         .method_not_allowed_fallback(method_not_allowed)
         .layer(DefaultBodyLimit::max(state.config.limits.max_body_bytes))
+        .layer(middleware::from_fn(limit_headers))
         .layer(middleware::map_response(security_headers))
         .with_state(state)
 }
@@ -107,6 +109,34 @@ async fn security_headers(mut response: Response) -> Response {
         header::HeaderValue::from_static("DENY"),
     );
     response
+}
+
+/// Headers a request may carry, and their bytes (names and values). The
+/// connection lets through more (`connection::HEADERS_READ`), so that a
+/// request over these is answered in the error body rather than by the
+/// HTTP layer's bare 431.
+pub const MAX_HEADERS: usize = 100;
+pub const MAX_HEADER_BYTES: usize = 64 * 1024;
+
+async fn limit_headers(
+    request: axum::extract::Request,
+    next: middleware::Next,
+) -> Result<Response, ApiError> {
+    let headers = request.headers();
+    let count = headers.len();
+    let bytes = headers
+        .iter()
+        .map(|(name, value)| name.as_str().len() + value.len())
+        .sum();
+    if count > MAX_HEADERS || bytes > MAX_HEADER_BYTES {
+        return Err(ApiError::HeadersTooLarge {
+            count,
+            bytes,
+            max_headers: MAX_HEADERS,
+            max_bytes: MAX_HEADER_BYTES,
+        });
+    }
+    Ok(next.run(request).await)
 }
 
 /// No such route: 404, or 401 without the token when one is set.

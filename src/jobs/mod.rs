@@ -10,5 +10,5 @@ pub use failure::{Failure, FailureKind};
 pub use status::JobStatus;
 pub use store::{
     Backend, CancelOutcome, Claimed, DeleteOutcome, Earlier, Inserted, JobRow, NewJob, Requeued,
-    Store,
+    StepHead, StepPart, Store,
 };

@@ -151,6 +151,23 @@ pub enum DeleteOutcome {
     NotFound,
 }
 
+/// A stored step's report, and whether its points were stored with it.
+#[derive(Debug)]
+pub struct StepHead {
+    pub report: String,
+    pub has_points: bool,
+    /// The stored parts' lengths, in characters.
+    pub points_chars: usize,
+    pub boundaries_chars: usize,
+}
+
+/// A stored step's parts that may be large, read a piece at a time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepPart {
+    Points,
+    Boundaries,
+}
+
 /// Which database a store uses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Backend {
@@ -961,6 +978,60 @@ impl Store {
         .bind(id)
         .fetch_all(pool)
         .await)
+    }
+
+    /// One step's report, and whether its points were stored: what a
+    /// response needs before it streams the rest (`step_part`).
+    pub async fn step_head(&self, id: i64, step: i64) -> Result<Option<StepHead>, sqlx::Error> {
+        let row: Option<(String, i32, i64, i64)> = on_pool!(self, |pool| sqlx::query_as(
+            "SELECT report, CASE WHEN points = 'null' THEN 0 ELSE 1 END, \
+             CAST(length(points) AS BIGINT), CAST(length(boundaries) AS BIGINT) \
+             FROM steps WHERE job_id = $1 AND step = $2",
+        )
+        .bind(id)
+        .bind(step)
+        .fetch_optional(pool)
+        .await?);
+        Ok(
+            row.map(|(report, has_points, points, boundaries)| StepHead {
+                report,
+                has_points: has_points == 1,
+                points_chars: points as usize,
+                boundaries_chars: boundaries as usize,
+            }),
+        )
+    }
+
+    /// Up to `chars` characters of one stored part of a step, from the
+    /// `from`th (counting from 0): an empty string past its end, `None`
+    /// if the step is gone. A response reads a large part this way, a
+    /// piece at a time, rather than holding it whole.
+    pub async fn step_part(
+        &self,
+        id: i64,
+        step: i64,
+        part: StepPart,
+        from: usize,
+        chars: usize,
+    ) -> Result<Option<String>, sqlx::Error> {
+        // SQL's substr counts characters from 1, in both databases.
+        let sql = match part {
+            StepPart::Points => {
+                "SELECT substr(points, CAST($3 AS INTEGER), CAST($4 AS INTEGER)) \
+                 FROM steps WHERE job_id = $1 AND step = $2"
+            }
+            StepPart::Boundaries => {
+                "SELECT substr(boundaries, CAST($3 AS INTEGER), CAST($4 AS INTEGER)) \
+                 FROM steps WHERE job_id = $1 AND step = $2"
+            }
+        };
+        on_pool!(self, |pool| sqlx::query_scalar(sql)
+            .bind(id)
+            .bind(step)
+            .bind(from as i64 + 1)
+            .bind(chars as i64)
+            .fetch_optional(pool)
+            .await)
     }
 
     /// One step's report, points and boundaries.
