@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
-"""Lists cycles in a Rust crate's file-level import graph.
+"""Lists cycles in a Rust crate's file-level import graph; exits 1 if any.
 
     cd crates/mpm/src && python3 ../../../scripts/import_cycles.py
 
-Reads every .rs file below the current folder (test modules and comments
-left out), resolves each `crate::` and `super::` path to the file that holds
+Reads every .rs file below the current folder (items marked
+`#[cfg(test)]`, test modules or not, and comments left out), resolves each `crate::` and `super::` path to the file that holds
 the module it names, and prints the strongly connected components with more
 than one file. `cycles: []` means the files import each other without a
 cycle; the same is then done for the top-level modules (a folder counts as
@@ -13,12 +13,34 @@ re-export counts against the file that re-exports it, and a parent
 module's `pub use` of its own children is not counted as an import.
 """
 import os,re,sys
+
+
+def without_test_items(text):
+    """`text` without each `#[cfg(test)]` item: up to its `;`, or its
+    braces' match (braces in strings and format strings come in pairs)."""
+    out, at = [], 0
+    while (i := text.find("#[cfg(test)]", at)) >= 0:
+        out.append(text[at:i])
+        j = i + len("#[cfg(test)]")
+        semicolon, brace = text.find(";", j), text.find("{", j)
+        if brace < 0 or 0 <= semicolon < brace:
+            at = semicolon + 1
+            continue
+        depth = 0
+        for k in range(brace, len(text)):
+            depth += {"{": 1, "}": -1}.get(text[k], 0)
+            if depth == 0:
+                break
+        at = k + 1
+    return "".join(out) + text[at:]
+
+
 files={}
 for root,_,fs in os.walk('.'):
     for f in fs:
         if f.endswith('.rs'):
             p=os.path.join(root,f)[2:]
-            s=open(p).read().split('#[cfg(test)]')[0]
+            s=without_test_items(open(p).read())
             s='\n'.join(l for l in s.splitlines() if not l.strip().startswith('//'))
             files[p]=s
 def modpath(p):
@@ -58,6 +80,7 @@ def sc(v):
 for v in edges:
     if v not in index: sc(v)
 print("cycles:", res)
+file_cycles = bool(res)
 
 # The same for top-level modules: `grid/basis.rs` belongs to `grid`.
 def top(p):
@@ -81,3 +104,4 @@ for v in edges:
     if v not in index:
         sc(v)
 print("module cycles:", res)
+sys.exit(1 if file_cycles or res else 0)

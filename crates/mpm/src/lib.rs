@@ -40,6 +40,7 @@ pub mod particles;
 pub mod probes;
 pub mod reference_edge;
 pub mod report;
+mod resume;
 pub mod stepper;
 pub mod supports;
 pub mod triangular;

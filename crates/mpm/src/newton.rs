@@ -8,7 +8,16 @@
 use crate::report::NewtonInfo;
 
 use crate::linsolve::Factorisation;
-use crate::observer::Observer;
+
+/// What a solve tells as it goes, and asks whether to stop: the run's
+/// observer ([`crate::Observer`]) stands behind it.
+pub trait Monitor {
+    /// The relative out-of-balance force at an iteration of load step `step`.
+    fn newton_iteration(&mut self, step: usize, iteration: usize, residual: f64);
+    /// Asked at every iteration; `true` ends the solve with
+    /// [`SolveError::Cancelled`].
+    fn should_cancel(&mut self) -> bool;
+}
 
 /// Newton controls; the defaults are the case format's.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -326,11 +335,11 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// residual norm (or converges), and is cut otherwise. A trial state with
 /// an inverted point is halved. Near the solution the full step always
 /// passes Armijo's test, so convergence stays quadratic.
-pub fn solve(
+pub fn solve<M: Monitor + ?Sized>(
     eq: &mut impl Equilibrium,
     settings: &NewtonSettings,
     step: usize,
-    observer: &mut dyn Observer,
+    monitor: &mut M,
 ) -> Result<(Vec<f64>, NewtonInfo), SolveError> {
     let mut u = vec![0.0; eq.n_dofs()];
     let mut info = NewtonInfo::default();
@@ -350,7 +359,7 @@ pub fn solve(
         let norm = norm(&r);
         let residual = if norm == 0.0 { 0.0 } else { norm / scale };
         info.residuals.push(residual);
-        observer.newton_iteration(step, iteration, residual);
+        monitor.newton_iteration(step, iteration, residual);
         if !residual.is_finite() || residual > settings.divergence_limit {
             return Err(SolveError::Diverged {
                 step,
@@ -379,7 +388,7 @@ pub fn solve(
                 stalled: earlier.is_some_and(|r| residual > 0.1 * r),
             });
         }
-        if observer.should_cancel() {
+        if monitor.should_cancel() {
             return Err(SolveError::Cancelled {
                 step,
                 iteration,

@@ -3,35 +3,43 @@
 
 use crate::boundary::{self, BoundaryLoop, BoundaryOutput};
 use crate::checkpoint::Checkpoint;
+use crate::newton::Monitor;
 use crate::particles::MaterialPoints;
 use crate::report::StepReport;
-use crate::stepper::Simulation;
 
 /// The state after a converged step, as observers see it.
 pub struct StepState<'a> {
     pub points: &'a MaterialPoints,
     pub loops: &'a [BoundaryLoop],
-    simulation: &'a Simulation,
+    run: &'a dyn Run,
+}
+
+/// The run behind a step's state: what an observer may ask of it besides
+/// the points (the simulation implements it).
+pub(crate) trait Run {
+    fn load_steps(&self) -> usize;
+    /// A copy of every point's state: made only for an observer that asks.
+    fn checkpoint(&self) -> Checkpoint;
 }
 
 impl<'a> StepState<'a> {
-    pub(crate) fn new(simulation: &'a Simulation) -> Self {
-        Self {
-            points: &simulation.points,
-            loops: &simulation.loops,
-            simulation,
-        }
+    pub(crate) fn new(
+        points: &'a MaterialPoints,
+        loops: &'a [BoundaryLoop],
+        run: &'a dyn Run,
+    ) -> Self {
+        Self { points, loops, run }
     }
 
     /// Load steps in the run.
     pub fn load_steps(&self) -> usize {
-        self.simulation.load_steps
+        self.run.load_steps()
     }
 
     /// The run's state after this step, to resume from
-    /// ([`Simulation::restore`]).
+    /// ([`crate::Simulation::restore`]).
     pub fn checkpoint(&self) -> Checkpoint {
-        self.simulation.checkpoint()
+        self.run.checkpoint()
     }
 
     /// The boundary curves through the points' current positions (built on
@@ -52,6 +60,16 @@ pub trait Observer {
     /// [`crate::SolveError::Cancelled`].
     fn should_cancel(&mut self) -> bool {
         false
+    }
+}
+
+impl<O: Observer + ?Sized> Monitor for O {
+    fn newton_iteration(&mut self, step: usize, iteration: usize, residual: f64) {
+        Observer::newton_iteration(self, step, iteration, residual);
+    }
+
+    fn should_cancel(&mut self) -> bool {
+        Observer::should_cancel(self)
     }
 }
 

@@ -30,7 +30,7 @@ use crate::equilibrium::{AnalysedPattern, PointState, StepEquilibrium, StepTerms
 use crate::grid::{Basis, Connectivity, Grid, NodeKey};
 use crate::material::Elastic;
 use crate::newton::{self, NewtonSettings, SolveError};
-use crate::observer::{Observer, StepState};
+use crate::observer::{self, Observer, StepState};
 use crate::parallel;
 use crate::particles::MaterialPoints;
 use crate::probes::Probes;
@@ -176,7 +176,11 @@ impl Simulation {
             applied_load: [0.0; 2],
             memory: Default::default(),
         };
-        (report, StepState::new(self))
+        (report, self.step_state())
+    }
+
+    fn step_state(&self) -> StepState<'_> {
+        StepState::new(&self.points, &self.loops, self)
     }
 
     /// Runs the load steps not yet done (all of them, unless the run was
@@ -188,7 +192,7 @@ impl Simulation {
             observer.step_started(step, self.load_steps);
             let report = self.load_step(step, observer)?;
             self.steps_done = step;
-            observer.step_finished(&report, &StepState::new(self));
+            observer.step_finished(&report, &self.step_state());
             steps.push(report);
         }
         // The last step's solver (and its factor) serves no later step.
@@ -363,9 +367,14 @@ impl Simulation {
     /// The grid reset: every point's shape functions at its current
     /// position, on the nodes inside the grid's extent.
     pub(crate) fn reset_grid(&self) -> Connectivity {
-        Connectivity::build(&self.grid, self.basis, &self.points, |node| {
-            self.node_in_grid(node)
-        })
+        let points = &self.points;
+        Connectivity::build(
+            &self.grid,
+            self.basis,
+            &points.position,
+            |p| points.support(p),
+            |node| self.node_in_grid(node),
+        )
     }
 
     /// The system of a step at `load_factor` on its grid reset `conn`: the
@@ -513,6 +522,16 @@ impl Simulation {
         band.advance(&mut self.anchors, u, |p| {
             increment(conn.point_links(p), u).0
         });
+    }
+}
+
+impl observer::Run for Simulation {
+    fn load_steps(&self) -> usize {
+        self.load_steps
+    }
+
+    fn checkpoint(&self) -> crate::Checkpoint {
+        Simulation::checkpoint(self)
     }
 }
 

@@ -5,8 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::{Basis, Grid, LatticeIndex, NodeKey, NodeWeight, node_indices};
-use crate::particles::MaterialPoints;
+use super::{Basis, Grid, LatticeIndex, NodeKey, NodeWeight, Support, node_indices};
 
 /// A point's view of one active node.
 #[derive(Debug, Clone, Copy)]
@@ -32,15 +31,17 @@ pub struct Connectivity {
 const CHUNK: usize = 4096;
 
 impl Connectivity {
-    /// Evaluates every point's shape functions, keeping the nodes for which
-    /// `in_grid` holds: the grid ends there, as a finite mesh would.
+    /// Evaluates the shape functions of every point, at `positions` with
+    /// the domains `support` gives, keeping the nodes for which `in_grid`
+    /// holds: the grid ends there, as a finite mesh would.
     pub fn build(
         grid: &Grid,
         basis: Basis,
-        points: &MaterialPoints,
+        positions: &[[f64; 2]],
+        support: impl Fn(usize) -> Support + Sync,
         in_grid: impl Fn(NodeKey) -> bool + Sync,
     ) -> Self {
-        let n = points.len();
+        let n = positions.len();
         let chunks: Vec<(Vec<usize>, Vec<NodeWeight>)> = (0..n)
             .into_par_iter()
             .chunks(CHUNK)
@@ -49,7 +50,7 @@ impl Connectivity {
                 let mut weights = Vec::with_capacity(idx.len() * 9);
                 for p in idx {
                     let before = weights.len();
-                    basis.eval(grid, points.position[p], points.support(p), &mut weights);
+                    basis.eval(grid, positions[p], support(p), &mut weights);
                     let mut k = before;
                     for i in before..weights.len() {
                         if in_grid(weights[i].node) {

@@ -1,0 +1,302 @@
+//! Taking a run's checkpoint between load steps, and restoring one into a
+//! simulation built from the same case (what a checkpoint holds, and its
+//! encoding: `checkpoint.rs`).
+
+use crate::checkpoint::{
+    Checkpoint, CheckpointError, FORMAT, HistoryState, LoopState, StepSizeState,
+};
+use crate::material::CauchyStress;
+use crate::stepper::{Simulation, StepSize};
+
+impl Simulation {
+    /// Load steps converged so far.
+    pub fn steps_done(&self) -> usize {
+        self.steps_done
+    }
+
+    /// The run's state now, after [`Simulation::steps_done`] load steps.
+    pub fn checkpoint(&self) -> Checkpoint {
+        let p = &self.points;
+        Checkpoint {
+            format: FORMAT,
+            fingerprint: self.fingerprint(),
+            steps_done: self.steps_done,
+            position: p.position.clone(),
+            deformation: p
+                .deformation
+                .iter()
+                .map(|f| f.as_slice().try_into().expect("2x2"))
+                .collect(),
+            history: p
+                .history
+                .iter()
+                .map(|h| HistoryState {
+                    tensor: h.tensor.as_slice().try_into().expect("2x2"),
+                    zz: h.zz,
+                    plastic_strain: h.plastic_strain,
+                })
+                .collect(),
+            yielding: p.yielding.clone(),
+            stress: p
+                .stress
+                .iter()
+                .map(|s| [s.plane[0], s.plane[1], s.plane[2], s.zz])
+                .collect(),
+            probes: self.probes.position.clone(),
+            anchors_moved: self.anchors.iter().map(|a| a.moved()).collect(),
+            loops: self.loops.iter().map(LoopState::of).collect(),
+            step_size: StepSizeState {
+                size: self.step_size.size,
+                easy_in_a_row: self.step_size.easy_in_a_row,
+                clean_steps: self.step_size.clean_steps,
+                wait: self.step_size.wait,
+            },
+        }
+    }
+
+    /// Puts the run back where `checkpoint` was taken. `self` must be built
+    /// from the same case and not yet have run; nothing changes on error.
+    pub fn restore(&mut self, checkpoint: &Checkpoint) -> Result<(), CheckpointError> {
+        let c = checkpoint;
+        let n = self.points.len();
+        if c.fingerprint != self.fingerprint() {
+            return Err(CheckpointError::OtherCase(
+                "the seeded points, load steps, supports or probes",
+            ));
+        }
+        let lengths = [
+            c.position.len(),
+            c.deformation.len(),
+            c.history.len(),
+            c.yielding.len(),
+            c.stress.len(),
+        ];
+        if lengths.iter().any(|&l| l != n) {
+            return Err(CheckpointError::OtherCase("the material point counts"));
+        }
+        if c.probes.len() != self.probes.position.len()
+            || c.anchors_moved.len() != self.anchors.len()
+        {
+            return Err(CheckpointError::OtherCase("the probe or anchor counts"));
+        }
+        if c.steps_done > self.load_steps {
+            return Err(CheckpointError::Unreadable(
+                "it is past the case's last load step".into(),
+            ));
+        }
+        // The loops are found once, before any step; anchors and boundary
+        // loads refer to them by loop and segment. A checkpoint whose loops
+        // differ was written by a solver that finds them differently.
+        if c.loops != self.loops.iter().map(LoopState::of).collect::<Vec<_>>() {
+            return Err(CheckpointError::OtherCase("the boundary loops"));
+        }
+        let p = &mut self.points;
+        p.position.clone_from(&c.position);
+        for (f, s) in p.deformation.iter_mut().zip(&c.deformation) {
+            f.copy_from_slice(s);
+        }
+        for (h, s) in p.history.iter_mut().zip(&c.history) {
+            h.tensor.copy_from_slice(&s.tensor);
+            h.zz = s.zz;
+            h.plastic_strain = s.plastic_strain;
+        }
+        p.yielding.clone_from(&c.yielding);
+        p.stress = c
+            .stress
+            .iter()
+            .map(|s| CauchyStress {
+                plane: [s[0], s[1], s[2]],
+                zz: s[3],
+            })
+            .collect();
+        self.probes.position.clone_from(&c.probes);
+        for (a, moved) in self.anchors.iter_mut().zip(&c.anchors_moved) {
+            a.set_moved(*moved);
+        }
+        let s = &c.step_size;
+        self.step_size = StepSize {
+            size: s.size,
+            easy_in_a_row: s.easy_in_a_row,
+            clean_steps: s.clean_steps,
+            wait: s.wait,
+        };
+        self.steps_done = c.steps_done;
+        self.analysed = None;
+        Ok(())
+    }
+
+    /// FNV-1a over what a case fixes before any step: the load steps, the
+    /// seeded points (reference positions, volumes, bodies), the supports'
+    /// anchors and the probes' reference positions.
+    fn fingerprint(&self) -> u64 {
+        let mut hash = Fnv::default();
+        hash.add(self.load_steps as u64);
+        hash.add(self.points.len() as u64);
+        for (x, v) in self.points.reference.iter().zip(&self.points.volume0) {
+            hash.add(x[0].to_bits());
+            hash.add(x[1].to_bits());
+            hash.add(v.to_bits());
+        }
+        for m in &self.points.material {
+            hash.add(u64::from(*m));
+        }
+        hash.add(self.anchors.len() as u64);
+        for x in &self.probes.reference {
+            hash.add(x[0].to_bits());
+            hash.add(x[1].to_bits());
+        }
+        hash.0
+    }
+}
+
+struct Fnv(u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    fn add(&mut self, word: u64) {
+        for byte in word.to_le_bytes() {
+            self.0 = (self.0 ^ u64::from(byte)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Case, Observer, RunReport, SolveError, StepReport, StepState};
+
+    /// Takes a checkpoint after step `stop_after` and stops the run there,
+    /// as a killed worker would (a kill between steps loses at most the
+    /// step in progress, which the resumed run solves again).
+    struct StopAfter {
+        stop_after: usize,
+        taken: Option<Vec<u8>>,
+    }
+
+    impl Observer for StopAfter {
+        fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
+            if report.step == self.stop_after {
+                self.taken = Some(state.checkpoint().to_bytes());
+            }
+        }
+        fn should_cancel(&mut self) -> bool {
+            self.taken.is_some()
+        }
+    }
+
+    fn footing() -> Case {
+        Case::from_json(crate::case::builtin::get("footing").unwrap()).unwrap()
+    }
+
+    /// The footing example (von Mises flow under an IBM-pushed footing,
+    /// F-bar, load steps cut and grown back) stopped after step 4 and
+    /// resumed from its checkpoint in a fresh simulation ends where the
+    /// straight run ends, with the same Newton iterations and cuts in every
+    /// resumed step: the step-size control is part of the state.
+    #[test]
+    fn a_resumed_run_ends_where_the_straight_run_ends() {
+        let case = footing();
+        let mut straight = Simulation::new(&case).unwrap();
+        let whole: RunReport = straight.run(&mut crate::NoObserver).unwrap();
+
+        let mut first = Simulation::new(&case).unwrap();
+        let mut stop = StopAfter {
+            stop_after: 4,
+            taken: None,
+        };
+        assert!(matches!(
+            first.run(&mut stop),
+            Err(SolveError::Cancelled { .. })
+        ));
+        let bytes = stop.taken.expect("a checkpoint after step 4");
+        let checkpoint = Checkpoint::from_bytes(&bytes).unwrap();
+        assert_eq!(checkpoint.steps_done(), 4);
+
+        let mut resumed = Simulation::new(&case).unwrap();
+        resumed.restore(&checkpoint).unwrap();
+        let rest = resumed.run(&mut crate::NoObserver).unwrap();
+        assert_eq!(rest.steps.len(), whole.steps.len() - 4);
+        for (a, b) in rest.steps.iter().zip(&whole.steps[4..]) {
+            assert_eq!(a.step, b.step);
+            assert_eq!(
+                (a.newton.iterations, a.substeps, a.cutbacks),
+                (b.newton.iterations, b.substeps, b.cutbacks),
+                "step {}",
+                a.step
+            );
+        }
+        // Rayon's sums may group differently from run to run, so the two
+        // agree to round-off rather than bit for bit.
+        let scale = 1.0 + whole.steps.last().unwrap().probes[0].displacement[1].abs();
+        let worst = resumed
+            .points
+            .position
+            .iter()
+            .zip(&straight.points.position)
+            .flat_map(|(a, b)| [(a[0] - b[0]).abs(), (a[1] - b[1]).abs()])
+            .fold(0.0, f64::max);
+        assert!(worst <= 1e-12 * scale, "positions differ by {worst:e}");
+        let stress_scale = 1e5;
+        let worst = resumed
+            .points
+            .stress
+            .iter()
+            .zip(&straight.points.stress)
+            .flat_map(|(a, b)| (0..3).map(move |k| (a.plane[k] - b.plane[k]).abs()))
+            .fold(0.0, f64::max);
+        assert!(
+            worst <= 1e-9 * stress_scale,
+            "stresses differ by {worst:e} Pa"
+        );
+        assert_eq!(
+            resumed.points.yielding, straight.points.yielding,
+            "the same points flow"
+        );
+    }
+
+    #[test]
+    fn a_checkpoint_round_trips_and_is_compact() {
+        let case = footing();
+        let sim = Simulation::new(&case).unwrap();
+        let checkpoint = sim.checkpoint();
+        let bytes = checkpoint.to_bytes();
+        assert_eq!(Checkpoint::from_bytes(&bytes).unwrap(), checkpoint);
+        let per_point = bytes.len() as f64 / sim.points.len() as f64;
+        assert!(
+            (129.0..150.0).contains(&per_point),
+            "{per_point} bytes a point"
+        );
+    }
+
+    #[test]
+    fn a_checkpoint_of_another_case_or_garbage_is_refused() {
+        let footing_state = Simulation::new(&footing()).unwrap().checkpoint();
+        let column = Case::from_json(crate::case::builtin::get("column").unwrap()).unwrap();
+        let mut other = Simulation::new(&column).unwrap();
+        assert!(matches!(
+            other.restore(&footing_state),
+            Err(CheckpointError::OtherCase(_))
+        ));
+        assert!(matches!(
+            Checkpoint::from_bytes(b"not a checkpoint"),
+            Err(CheckpointError::Unreadable(_))
+        ));
+        let mut other_loops = footing_state.clone();
+        other_loops.loops[0].points.reverse();
+        assert_eq!(
+            Simulation::new(&footing()).unwrap().restore(&other_loops),
+            Err(CheckpointError::OtherCase("the boundary loops"))
+        );
+        let mut later_format = footing_state.clone();
+        later_format.format = FORMAT + 1;
+        assert!(matches!(
+            Checkpoint::from_bytes(&later_format.to_bytes()),
+            Err(CheckpointError::Unreadable(_))
+        ));
+    }
+}
