@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Runs the standard comparison set with two mpm binaries and compares the
-# results (scripts/compare_runs.py): the paper's cantilever study for both
-# bases, the column and the cantilever examples.
+# results (scripts/compare_runs.py): the paper's cantilever study (quick)
+# for every basis the new binary's case schema names, every built-in
+# example it lists, and the footing study (quick: its first two cells).
 #
 #   scripts/compare_builds.sh OLD_MPM NEW_MPM [WORK_DIR]
 set -euo pipefail
@@ -15,13 +16,28 @@ quiet() {
   fi
   rm -f "$log"
 }
+bases=$("$new" schema | python3 -c '
+import json, sys
+def find(o):
+    if isinstance(o, dict):
+        if "BasisKind" in o:
+            return [c["const"] for c in o["BasisKind"]["oneOf"]]
+        o = list(o.values())
+    for v in o if isinstance(o, list) else []:
+        if (found := find(v)):
+            return found
+print(" ".join(find(json.load(sys.stdin))))')
+examples=$("$new" example)
 for side in before after; do
   bin=$old; [ "$side" = after ] && bin=$new
   dir=$work/$side
   rm -rf "$dir"; mkdir -p "$dir"
-  quiet "$bin" study cantilever --quick --basis gimp --out "$dir/study_gimp"
-  quiet "$bin" study cantilever --quick --basis linear --out "$dir/study_linear"
-  quiet "$bin" run --example column --out "$dir/column"
-  quiet "$bin" run --example cantilever --out "$dir/cantilever"
+  for basis in $bases; do
+    quiet "$bin" study cantilever --quick --basis "$basis" --out "$dir/study_$basis"
+  done
+  for example in $examples; do
+    quiet "$bin" run --example "$example" --out "$dir/$example"
+  done
+  quiet "$bin" study footing --quick --out "$dir/study_footing"
 done
 python3 "$here/compare_runs.py" "$work/before" "$work/after"

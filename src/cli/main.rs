@@ -98,8 +98,8 @@ enum Command {
         /// A small sweep (two cell sizes, three point counts) in seconds.
         #[arg(long)]
         quick: bool,
-        /// Shape functions of `cantilever`: linear (the paper's), gimp,
-        /// bspline2 or bspline3.
+        /// Shape functions of `cantilever`, as a case's `basis` names
+        /// them (the paper's is linear).
         #[arg(long, default_value = "linear")]
         basis: String,
     },

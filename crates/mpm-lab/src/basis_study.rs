@@ -25,6 +25,7 @@ use std::fs;
 use std::path::Path;
 use std::time::Instant;
 
+use mpm::case::BasisKind;
 use mpm::{Case, NoObserver, Simulation};
 use serde_json::{Value, json};
 
@@ -32,7 +33,7 @@ use crate::LabError;
 use crate::plot::{COLOURS, Plot, Series};
 
 /// The bases compared, in order of cost.
-const BASES: [&str; 4] = ["linear", "gimp", "bspline2", "bspline3"];
+const BASES: [BasisKind; 4] = BasisKind::ALL;
 /// Cell sizes of the convergence sweep (m).
 const CELLS: [f64; 5] = [1.0, 0.5, 0.25, 0.125, 0.0625];
 /// The cell size of the offset and step sweeps (m).
@@ -71,7 +72,7 @@ const REFERENCE_UNCERTAINTY: [f64; 2] = [2.4e-4, 1.1e-4];
 /// What one run changes in the paper's case.
 #[derive(Clone, Copy)]
 struct Setting {
-    basis: &'static str,
+    basis: BasisKind,
     h: f64,
     /// The grid's origin, in cells.
     shift: [f64; 2],
@@ -84,7 +85,7 @@ struct Setting {
 impl Setting {
     /// The study's default: origin (0, 0), 5 load steps, 2 points per cell
     /// each way, the ghost penalty on.
-    fn new(basis: &'static str, h: f64) -> Self {
+    fn new(basis: BasisKind, h: f64) -> Self {
         Self {
             basis,
             h,
@@ -139,7 +140,7 @@ fn case(setting: &Setting) -> Value {
         ghost,
     } = *setting;
     let mut case = mpm::case::builtin::json("cantilever").expect("built in");
-    case["basis"] = basis.into();
+    case["basis"] = json!(basis);
     if !ghost {
         case["analysis"]["newton"] =
             json!({ "ghost_penalty": 0.0, "tangent_regularisation": 1e-6 });
@@ -290,7 +291,7 @@ pub fn bases(out: &Path, quick: bool) -> Result<(), LabError> {
                 }
             }
         }
-        let unstabilised = if basis.starts_with("bspline") {
+        let unstabilised = if matches!(basis, BasisKind::Bspline2 | BasisKind::Bspline3) {
             cells_swept
                 .iter()
                 .map(|&h| {

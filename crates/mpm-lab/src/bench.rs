@@ -13,10 +13,7 @@ use std::fs;
 use std::path::Path;
 use std::time::Instant;
 
-use mpm::linsolve::{
-    FillOrdering, SymmetricMethod, last_factor_entries, set_fill_ordering, set_symmetric_method,
-    solver_reuse_counts, symmetric_solve_counts,
-};
+use mpm::linsolve::{FillOrdering, SolverSettings, SymmetricMethod};
 use mpm::report::{StepMemory, StepTimings};
 use mpm::{Case, NoObserver, Simulation};
 use serde_json::{Value, json};
@@ -276,7 +273,7 @@ fn return_map_cost() -> Result<String, LabError> {
 /// from: `minimum_degree` or `nested_dissection` (the default).
 const ORDERING_VARIABLE: &str = "MPM_BENCH_FILL_ORDERING";
 /// `direct`, `kept_factor_cg` or `multigrid`: how the child solves symmetric tangents
-/// whatever their size ([`set_symmetric_method`]).
+/// whatever their size ([`SolverSettings::symmetric`]).
 const METHOD_VARIABLE: &str = "MPM_BENCH_SYMMETRIC_METHOD";
 
 /// Heap bytes per point by component at the largest size of each scene,
@@ -390,13 +387,10 @@ fn symbolic_reuse() -> Result<String, LabError> {
         let case = Case::from_json(&example(name).to_string())
             .map_err(|e| LabError::Failed(e.to_string()))?;
         let mut sim = Simulation::new(&case).map_err(|e| LabError::Failed(e.to_string()))?;
-        let (analysed, reused) = solver_reuse_counts();
         sim.run(&mut NoObserver)
             .map_err(|e| LabError::Failed(format!("{name}: {e}")))?;
-        let (analysed, reused) = (
-            solver_reuse_counts().0 - analysed,
-            solver_reuse_counts().1 - reused,
-        );
+        let counts = sim.solve_counts();
+        let (analysed, reused) = (counts.analysed, counts.reused);
         text.push_str(&format!(
             "| {name} | {} | {} | {analysed} | {reused} | {:.0}% |\n",
             sim.points.len(),
@@ -494,27 +488,34 @@ pub fn bench_row(scene: usize, target: usize) -> Result<(), LabError> {
     let scene = SCENES
         .get(scene)
         .ok_or_else(|| LabError::Input(format!("no scene {scene}")))?;
-    match std::env::var(ORDERING_VARIABLE).as_deref() {
-        Ok("minimum_degree") => set_fill_ordering(FillOrdering::MinimumDegree),
-        Ok("nested_dissection") | Err(_) => set_fill_ordering(FillOrdering::NestedDissection),
+    let ordering = match std::env::var(ORDERING_VARIABLE).as_deref() {
+        Ok("minimum_degree") => FillOrdering::MinimumDegree,
+        Ok("nested_dissection") | Err(_) => FillOrdering::NestedDissection,
         Ok(other) => {
             return Err(LabError::Input(format!(
                 "{ORDERING_VARIABLE}={other}: not minimum_degree or nested_dissection"
             )));
         }
-    }
-    match std::env::var(METHOD_VARIABLE).as_deref() {
-        Ok("direct") => set_symmetric_method(Some(SymmetricMethod::Direct)),
-        Ok("kept_factor_cg") => set_symmetric_method(Some(SymmetricMethod::KeptFactorCg)),
-        Ok("multigrid") => set_symmetric_method(Some(SymmetricMethod::Multigrid)),
-        Err(_) => set_symmetric_method(None),
+    };
+    let symmetric = match std::env::var(METHOD_VARIABLE).as_deref() {
+        Ok("direct") => Some(SymmetricMethod::Direct),
+        Ok("kept_factor_cg") => Some(SymmetricMethod::KeptFactorCg),
+        Ok("multigrid") => Some(SymmetricMethod::Multigrid),
+        Err(_) => None,
         Ok(other) => {
             return Err(LabError::Input(format!(
                 "{METHOD_VARIABLE}={other}: not direct, kept_factor_cg or multigrid"
             )));
         }
-    }
-    let row = measure(scene, target)?;
+    };
+    let row = measure(
+        scene,
+        target,
+        SolverSettings {
+            ordering,
+            symmetric,
+        },
+    )?;
     println!(
         "{}",
         serde_json::to_string(&row).map_err(|e| LabError::Failed(e.to_string()))?
@@ -522,10 +523,11 @@ pub fn bench_row(scene: usize, target: usize) -> Result<(), LabError> {
     Ok(())
 }
 
-fn measure(scene: &Scene, target: usize) -> Result<Row, LabError> {
+fn measure(scene: &Scene, target: usize, solver: SolverSettings) -> Result<Row, LabError> {
     let case = Case::from_json(&(scene.build)(target).to_string())
         .map_err(|e| LabError::Failed(e.to_string()))?;
     let mut sim = Simulation::new(&case).map_err(|e| LabError::Failed(e.to_string()))?;
+    sim.solver = solver;
     let steps = 2.min(sim.load_steps);
     let mut timings = StepTimings::default();
     let mut iterations = 0;
@@ -540,8 +542,7 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, LabError> {
         timings += &r.timings;
         memory = r.memory;
     }
-    let (analysed_steps, reused_steps) = solver_reuse_counts();
-    let (fresh_factorisations, cg_solves, cg_iterations) = symmetric_solve_counts();
+    let counts = sim.solve_counts();
     Ok(Row {
         points: sim.points.len(),
         dofs,
@@ -549,13 +550,13 @@ fn measure(scene: &Scene, target: usize) -> Result<Row, LabError> {
         iterations,
         timings,
         peak_mib: peak_memory_mib(),
-        factor_entries: last_factor_entries(),
-        analysed_steps,
-        reused_steps,
+        factor_entries: counts.last_factor_entries,
+        analysed_steps: counts.analysed,
+        reused_steps: counts.reused,
         memory,
-        fresh_factorisations,
-        cg_solves,
-        cg_iterations,
+        fresh_factorisations: counts.fresh_factorisations,
+        cg_solves: counts.cg_solves,
+        cg_iterations: counts.cg_iterations,
     })
 }
 

@@ -22,6 +22,7 @@ use std::fs;
 use std::path::Path;
 use std::time::Instant;
 
+use mpm::case::BasisKind;
 use mpm::{Case, NoObserver, RunReport, Simulation};
 use serde_json::{Value, json};
 
@@ -75,9 +76,9 @@ struct Measured {
 }
 
 /// The paper's case at cell size `h` with `3.5 rows x rows` points.
-fn case(method: Method, h: f64, rows: usize, band_width: Option<f64>, basis: &str) -> Value {
+fn case(method: Method, h: f64, rows: usize, band_width: Option<f64>, basis: BasisKind) -> Value {
     let mut case = mpm::case::builtin::json("cantilever").expect("built in");
-    case["basis"] = basis.into();
+    case["basis"] = json!(basis);
     case["grid"]["cell_size"] = h.into();
     case["bodies"][0]["points"] = json!({ "count": [rows * 7 / 2, rows] });
     let mut probes = vec![json!({ "name": "tip", "at": [10.0, 1.0] })];
@@ -109,7 +110,7 @@ fn measure(
     h: f64,
     rows: usize,
     band_width: Option<f64>,
-    basis: &str,
+    basis: BasisKind,
 ) -> Result<Run, LabError> {
     let json = case(method, h, rows, band_width, basis);
     let case = Case::from_json(&json.to_string())
@@ -154,13 +155,12 @@ fn summarise(report: &RunReport) -> Measured {
 
 /// Runs the study and writes `cantilever.{csv,md}` and three SVG plots to
 /// `out`. `quick` sweeps the two coarsest cells and three point counts;
-/// `basis` is `linear` (the paper's), `gimp`, `bspline2` or `bspline3`.
+/// `basis` names one in the case format's spelling (`linear`, the paper's,
+/// or another of [`BasisKind::ALL`]).
 pub fn cantilever(out: &Path, quick: bool, basis: &str) -> Result<(), LabError> {
-    if !matches!(basis, "linear" | "gimp" | "bspline2" | "bspline3") {
-        return Err(LabError::Input(format!(
-            "--basis must be linear, gimp, bspline2 or bspline3, got {basis:?}"
-        )));
-    }
+    let basis: BasisKind = basis
+        .parse()
+        .map_err(|e| LabError::Input(format!("--basis: {e}")))?;
     fs::create_dir_all(out)?;
     let cells = if quick { &CELLS[..2] } else { &CELLS[..] };
     let rows = if quick { &ROWS[..3] } else { &ROWS[..] };
@@ -216,7 +216,7 @@ fn progress_line(run: &Run) -> String {
 
 /// The IBM band width from h / 10 to h / 10^5 on the paper's point count
 /// at h = 0.375 m (three points per cell each way).
-fn band_width_study(quick: bool, basis: &str) -> Result<Vec<Run>, LabError> {
+fn band_width_study(quick: bool, basis: BasisKind) -> Result<Vec<Run>, LabError> {
     let h = if quick { 0.75 } else { 0.375 };
     (1..=5)
         .map(|k| {
@@ -229,7 +229,7 @@ fn band_width_study(quick: bool, basis: &str) -> Result<Vec<Run>, LabError> {
 
 /// Median wall time of the paper's case itself (896 points, 1.5 m cells)
 /// over 21 runs.
-fn paper_case_time(method: Method, basis: &str) -> Result<f64, LabError> {
+fn paper_case_time(method: Method, basis: BasisKind) -> Result<f64, LabError> {
     let case = Case::from_json(&case(method, 1.5, 16, None, basis).to_string())
         .map_err(|e| LabError::Failed(format!("study case: {e}")))?;
     let mut times = Vec::new();
@@ -244,8 +244,8 @@ fn paper_case_time(method: Method, basis: &str) -> Result<f64, LabError> {
 
 /// The support methods a basis can use: grid-node supports only with the
 /// bases whose nodal unknowns are the field's values.
-fn methods(basis: &str) -> &'static [Method] {
-    if basis.starts_with("bspline") {
+fn methods(basis: BasisKind) -> &'static [Method] {
+    if matches!(basis, BasisKind::Bspline2 | BasisKind::Bspline3) {
         &[Method::Ibm]
     } else {
         &[Method::Ibm, Method::Grid]
@@ -311,7 +311,7 @@ fn markdown(
     paper_ibm: f64,
     paper_grid: Option<f64>,
     quick: bool,
-    basis: &str,
+    basis: BasisKind,
 ) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Cantilever convergence study\n");

@@ -9,6 +9,7 @@
 //! tangent at its assembly. Making them again costs one more evaluation
 //! of the material a tangent, and one at the commit.
 
+use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
@@ -20,7 +21,7 @@ use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
 use crate::configuration::Configuration;
 use crate::grid::{Connectivity, Link, node_coordinates};
-use crate::linsolve::{Factorisation, SparseSolver};
+use crate::linsolve::{Factorisation, SolveTally, SolverSettings, SparseSolver};
 use crate::material::{CauchyStress, History, Material, Response};
 use crate::newton::{Equilibrium, InvertedPoint};
 use crate::parallel;
@@ -132,6 +133,7 @@ impl<'a> StepEquilibrium<'a> {
         terms: StepTerms<'a>,
         pattern: Pattern,
         previous: Option<AnalysedPattern>,
+        (settings, tally): (&SolverSettings, &Arc<SolveTally>),
     ) -> Self {
         let conn = start.conn;
         let StepTerms {
@@ -152,7 +154,7 @@ impl<'a> StepEquilibrium<'a> {
                 // symmetric: Cholesky's nested-dissection order and the
                 // multigrid's aggregates are made from them. LU orders its
                 // own columns.
-                let solver = SparseSolver::new(conn.n_dofs(), None);
+                let solver = SparseSolver::new(conn.n_dofs(), None, settings, tally.clone());
                 if symmetric_tangent(&loading, fbar.as_ref(), start.points) {
                     solver.with_grid(
                         conn.nodes

@@ -41,6 +41,7 @@ pub mod probes;
 pub mod reference_edge;
 pub mod report;
 mod resume;
+pub mod settings;
 pub mod stepper;
 pub mod supports;
 pub mod triangular;

@@ -26,7 +26,8 @@
 //! V-cycle ([`crate::multigrid`]), whose memory grows linearly with the
 //! unknowns; if no hierarchy serves a tangent, the kept factor does.
 
-use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering as Atomic};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering as Atomic};
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::solvers::Solve;
@@ -48,45 +49,84 @@ use crate::triangular::SubtreeSchedule;
 
 /// The fill-reducing ordering of a Cholesky factorisation (LU orders its
 /// columns by faer's COLAMD, which takes no other).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum FillOrdering {
     /// faer's approximate minimum degree.
     MinimumDegree,
     /// Nested dissection of the active nodes by grid lines (`ordering.rs`),
     /// when the solver is given the nodes.
+    #[default]
     NestedDissection,
 }
 
-static ORDERING: AtomicU8 = AtomicU8::new(1);
-/// Entries of the last Cholesky factor in this process, for benchmarks.
-static LAST_FACTOR_ENTRIES: AtomicUsize = AtomicUsize::new(0);
-/// Steps of this process that analysed their pattern, and that took over
-/// the last step's analysis, for benchmarks.
-static ANALYSED: AtomicUsize = AtomicUsize::new(0);
-static REUSED: AtomicUsize = AtomicUsize::new(0);
-
-/// Solvers this process built for a new pattern, and solvers it reused for
-/// an unchanged one (see [`SparseSolver::reused`]).
-pub fn solver_reuse_counts() -> (usize, usize) {
-    (ANALYSED.load(Atomic::Relaxed), REUSED.load(Atomic::Relaxed))
+/// How a run's linear systems are solved: a value each run holds, so two
+/// runs in one process (two jobs of a service) never share a choice.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SolverSettings {
+    /// Cholesky's fill-reducing ordering (nested dissection).
+    pub ordering: FillOrdering,
+    /// How symmetric tangents are solved whatever their size; `None` (the
+    /// default) chooses by size ([`symmetric_method`]). Benchmarks compare
+    /// the methods this way.
+    pub symmetric: Option<SymmetricMethod>,
 }
 
-/// Entries (the fill) of the last Cholesky factor this process computed;
-/// 0 before the first.
-pub fn last_factor_entries() -> usize {
-    LAST_FACTOR_ENTRIES.load(Atomic::Relaxed)
+/// What a run's solvers did, summed over them (one per pattern), for
+/// benchmarks: read with [`SolveTally::counts`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SolveCounts {
+    /// Solvers built for a new pattern (each analysed it), and solvers a
+    /// later system of the same pattern took over.
+    pub analysed: usize,
+    pub reused: usize,
+    /// Symmetric systems factorised afresh (or given a fresh multigrid
+    /// hierarchy), solved by CG, and CG's iterations.
+    pub fresh_factorisations: usize,
+    pub cg_solves: usize,
+    pub cg_iterations: usize,
+    /// Entries (the fill) of the last Cholesky factor; 0 before the first.
+    pub last_factor_entries: usize,
 }
 
-/// The ordering every later Cholesky factorisation in this process uses
-/// (for benchmarks comparing them; nested dissection by default).
-pub fn set_fill_ordering(ordering: FillOrdering) {
-    ORDERING.store(ordering as u8, Atomic::Relaxed);
+/// The counts of a run's solvers, shared by them: each solver of the run
+/// adds to its run's tally, and nothing else does.
+#[derive(Debug, Default)]
+pub struct SolveTally {
+    analysed: AtomicUsize,
+    reused: AtomicUsize,
+    fresh_factorisations: AtomicUsize,
+    cg_solves: AtomicUsize,
+    cg_iterations: AtomicUsize,
+    last_factor_entries: AtomicUsize,
 }
 
-pub fn fill_ordering() -> FillOrdering {
-    match ORDERING.load(Atomic::Relaxed) {
-        0 => FillOrdering::MinimumDegree,
-        _ => FillOrdering::NestedDissection,
+impl SolveTally {
+    pub fn counts(&self) -> SolveCounts {
+        let read = |count: &AtomicUsize| count.load(Atomic::Relaxed);
+        SolveCounts {
+            analysed: read(&self.analysed),
+            reused: read(&self.reused),
+            fresh_factorisations: read(&self.fresh_factorisations),
+            cg_solves: read(&self.cg_solves),
+            cg_iterations: read(&self.cg_iterations),
+            last_factor_entries: read(&self.last_factor_entries),
+        }
+    }
+
+    fn add(count: &AtomicUsize, n: usize) {
+        count.fetch_add(n, Atomic::Relaxed);
+    }
+
+    fn cg_solve(&self, iterations: usize) {
+        Self::add(&self.cg_solves, 1);
+        Self::add(&self.cg_iterations, iterations);
+    }
+
+    fn fresh_factor(&self, entries: Option<usize>) {
+        Self::add(&self.fresh_factorisations, 1);
+        if let Some(entries) = entries {
+            self.last_factor_entries.store(entries, Atomic::Relaxed);
+        }
     }
 }
 
@@ -118,6 +158,11 @@ pub struct SparseSolver {
     /// [`SymmetricMethod::KeptFactorCg`].
     schedule: Option<SubtreeSchedule>,
     lu: Option<SymbolicLu<usize>>,
+    /// Whether Cholesky orders by nested dissection (the run's
+    /// [`SolverSettings::ordering`]).
+    nested_dissection: bool,
+    /// The run's counts, which this solver adds to.
+    tally: Arc<SolveTally>,
     /// Bytes of the last Cholesky factorisation: its values and its
     /// numeric scratch.
     factor_bytes: usize,
@@ -240,45 +285,15 @@ const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
 /// DOFs^1.3.
 const MULTIGRID_FROM_DOFS: usize = 150_000;
 
-/// 0: by size; 1: direct; 2: kept factor; 3: multigrid (benchmarks
-/// compare them).
-static METHOD: AtomicU8 = AtomicU8::new(0);
-static FRESH_SOLVES: AtomicUsize = AtomicUsize::new(0);
-static CG_SOLVES: AtomicUsize = AtomicUsize::new(0);
-static CG_ITERATIONS: AtomicUsize = AtomicUsize::new(0);
-
-/// Makes every later solver in this process use `method` whatever its
-/// size (`None`: by size, the default), for benchmarks.
-pub fn set_symmetric_method(method: Option<SymmetricMethod>) {
-    let code = match method {
-        None => 0,
-        Some(SymmetricMethod::Direct) => 1,
-        Some(SymmetricMethod::KeptFactorCg) => 2,
-        Some(SymmetricMethod::Multigrid) => 3,
-    };
-    METHOD.store(code, Atomic::Relaxed);
-}
-
-/// The method a solver of `n` unknowns uses.
+/// The method a solver of `n` unknowns uses by default.
 pub fn symmetric_method(n: usize) -> SymmetricMethod {
-    match METHOD.load(Atomic::Relaxed) {
-        1 => SymmetricMethod::Direct,
-        2 => SymmetricMethod::KeptFactorCg,
-        3 => SymmetricMethod::Multigrid,
-        _ if n >= MULTIGRID_FROM_DOFS => SymmetricMethod::Multigrid,
-        _ if n >= KEPT_FACTOR_FROM_DOFS => SymmetricMethod::KeptFactorCg,
-        _ => SymmetricMethod::Direct,
+    if n >= MULTIGRID_FROM_DOFS {
+        SymmetricMethod::Multigrid
+    } else if n >= KEPT_FACTOR_FROM_DOFS {
+        SymmetricMethod::KeptFactorCg
+    } else {
+        SymmetricMethod::Direct
     }
-}
-
-/// (fresh factorisations, CG solves, CG iterations) of symmetric systems
-/// in this process.
-pub fn symmetric_solve_counts() -> (usize, usize, usize) {
-    (
-        FRESH_SOLVES.load(Atomic::Relaxed),
-        CG_SOLVES.load(Atomic::Relaxed),
-        CG_ITERATIONS.load(Atomic::Relaxed),
-    )
 }
 
 /// What the kept-factor path made of a symmetric system.
@@ -320,25 +335,31 @@ pub struct SolverMemory {
 }
 
 impl SparseSolver {
-    /// A solver of `n` unknowns; `order`, when given (and the process's
-    /// [`fill_ordering`] is nested dissection), is the elimination order
-    /// of Cholesky factorisations.
-    pub fn new(n: usize, order: Option<Vec<usize>>) -> Self {
+    /// A solver of `n` unknowns, counting what it does in `tally`;
+    /// `order`, when given (and `settings` order by nested dissection), is
+    /// the elimination order of Cholesky factorisations.
+    pub fn new(
+        n: usize,
+        order: Option<Vec<usize>>,
+        settings: &SolverSettings,
+        tally: Arc<SolveTally>,
+    ) -> Self {
         faer::set_global_parallelism(faer::Par::Seq);
-        ANALYSED.fetch_add(1, Atomic::Relaxed);
-        let order = order
-            .filter(|_| fill_ordering() == FillOrdering::NestedDissection)
-            .map(with_inverse);
+        SolveTally::add(&tally.analysed, 1);
+        let nested_dissection = settings.ordering == FillOrdering::NestedDissection;
+        let order = order.filter(|_| nested_dissection).map(with_inverse);
         Self {
             n,
             order,
+            nested_dissection,
+            tally,
             llt: None,
             schedule: None,
             lu: None,
             factor_bytes: 0,
             scratch_bytes: 0,
             reuses: 0,
-            method: symmetric_method(n),
+            method: settings.symmetric.unwrap_or_else(|| symmetric_method(n)),
             last_cg: None,
             factorisations: 0,
             kept: None,
@@ -365,9 +386,9 @@ impl SparseSolver {
     }
 
     /// This solver, for a later system of the same pattern (the caller
-    /// checks that it is): counted for [`solver_reuse_counts`].
+    /// checks that it is): counted in its tally.
     pub fn reused(mut self) -> Self {
-        REUSED.fetch_add(1, Atomic::Relaxed);
+        SolveTally::add(&self.tally.reused, 1);
         self.reuses += 1;
         self
     }
@@ -524,8 +545,7 @@ impl SparseSolver {
             self.last_cg = Some(outcome);
 
             if direct || outcome.converged {
-                CG_SOLVES.fetch_add(1, Atomic::Relaxed);
-                CG_ITERATIONS.fetch_add(outcome.iterations, Atomic::Relaxed);
+                self.tally.cg_solve(outcome.iterations);
                 self.refresh = !fresh && contraction(&outcome) > REFRESH_RATE;
                 return Kept::Solved(x, timing);
             }
@@ -566,7 +586,7 @@ impl SparseSolver {
                 self.hierarchy = None;
                 self.hierarchy = Some(Hierarchy::new(op, self.nodes.as_deref()?).ok()?);
                 self.factorisations += 1;
-                FRESH_SOLVES.fetch_add(1, Atomic::Relaxed);
+                self.tally.fresh_factor(None);
                 timing.factorise += t.elapsed().as_secs_f64();
             }
             let hierarchy = self.hierarchy.as_mut()?;
@@ -588,8 +608,7 @@ impl SparseSolver {
             timing.solve += t.elapsed().as_secs_f64();
             self.last_cg = Some(outcome);
             if outcome.converged {
-                CG_SOLVES.fetch_add(1, Atomic::Relaxed);
-                CG_ITERATIONS.fetch_add(outcome.iterations, Atomic::Relaxed);
+                self.tally.cg_solve(outcome.iterations);
                 self.refresh = !fresh && contraction(&outcome) > MULTIGRID_REFRESH_RATE;
                 return Some((x, timing));
             }
@@ -636,8 +655,7 @@ impl SparseSolver {
         self.scratch_bytes = scratch_bytes;
         self.factor_bytes = kept.bytes();
         self.factorisations += 1;
-        FRESH_SOLVES.fetch_add(1, Atomic::Relaxed);
-        LAST_FACTOR_ENTRIES.store(len, Atomic::Relaxed);
+        self.tally.fresh_factor(Some(len));
         self.kept = ok.then_some(kept);
         ok
     }
@@ -668,7 +686,7 @@ impl SparseSolver {
         let b = Mat::from_fn(self.n, 1, |i, _| rhs[i]);
         if symmetric {
             if self.llt.is_none() {
-                if self.order.is_none() && fill_ordering() == FillOrdering::NestedDissection {
+                if self.order.is_none() && self.nested_dissection {
                     self.order = self
                         .nodes
                         .as_deref()
@@ -730,8 +748,7 @@ impl SparseSolver {
                     let (solved, scratch_bytes) = cholesky(symbolic, tangent, &b, par, t0);
                     self.scratch_bytes = scratch_bytes;
                     if let Some((x, timing)) = solved {
-                        LAST_FACTOR_ENTRIES.store(symbolic.len_val(), Atomic::Relaxed);
-                        FRESH_SOLVES.fetch_add(1, Atomic::Relaxed);
+                        self.tally.fresh_factor(Some(symbolic.len_val()));
                         return Ok((x, Factorisation::Cholesky, timing));
                     }
                 }
@@ -1261,11 +1278,13 @@ pub(crate) mod tests {
         let (pattern, values) = laplacian(30, 1e-3);
         let n = pattern.col_ptr.len() - 1;
         let b: Vec<f64> = (0..n).map(|i| ((i * 13) % 7) as f64 - 3.0).collect();
-        let mut solver = SparseSolver::new(n, None).with_method(SymmetricMethod::Multigrid);
+        let mut solver = SparseSolver::new(n, None, &SolverSettings::default(), Default::default())
+            .with_method(SymmetricMethod::Multigrid);
         let (x, kind, _) = solver.solve(&pattern, &values, &b, true, 1e-12).unwrap();
         assert_eq!(kind, Factorisation::Cholesky);
         assert_eq!(solver.factorisations(), 1);
-        let mut direct = SparseSolver::new(n, None).with_method(SymmetricMethod::Direct);
+        let mut direct = SparseSolver::new(n, None, &SolverSettings::default(), Default::default())
+            .with_method(SymmetricMethod::Direct);
         let (y, _, _) = direct.solve(&pattern, &values, &b, true, 1e-12).unwrap();
         assert!(
             relative_difference(&x, &y) < 1e-9,
@@ -1278,8 +1297,12 @@ pub(crate) mod tests {
     fn a_kept_factor_answers_as_a_fresh_one() {
         let m = 40;
         let rhs: Vec<f64> = (0..m * m).map(|i| ((i * 37) % 11) as f64 - 5.0).collect();
-        let mut kept = SparseSolver::new(m * m, None).with_method(SymmetricMethod::KeptFactorCg);
-        let mut direct = SparseSolver::new(m * m, None).with_method(SymmetricMethod::Direct);
+        let mut kept =
+            SparseSolver::new(m * m, None, &SolverSettings::default(), Default::default())
+                .with_method(SymmetricMethod::KeptFactorCg);
+        let mut direct =
+            SparseSolver::new(m * m, None, &SolverSettings::default(), Default::default())
+                .with_method(SymmetricMethod::Direct);
         for shift in [0.0, 0.01] {
             let (pattern, values) = laplacian(m, shift);
             let (x, kind, _) = kept.solve(&pattern, &values, &rhs, true, 1e-12).unwrap();
@@ -1305,7 +1328,9 @@ pub(crate) mod tests {
         let m = 10;
         let (pattern, values) = laplacian(m, -4.5);
         let rhs = vec![1.0; m * m];
-        let mut solver = SparseSolver::new(m * m, None).with_method(SymmetricMethod::KeptFactorCg);
+        let mut solver =
+            SparseSolver::new(m * m, None, &SolverSettings::default(), Default::default())
+                .with_method(SymmetricMethod::KeptFactorCg);
         let (x, kind, _) = solver.solve(&pattern, &values, &rhs, true, 1e-12).unwrap();
         assert_eq!(kind, Factorisation::Lu);
         let mut kx = vec![0.0; m * m];

@@ -14,6 +14,7 @@ use crate::boundary::{
 use crate::case::{BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, SupportMethod};
 use crate::geometry::Geometry;
 use crate::grid::{Basis, Grid};
+use crate::linsolve::SolverSettings;
 use crate::material::{DruckerPrager, Elastic, Material, MohrCoulomb, VonMises};
 use crate::newton::NewtonSettings;
 use crate::particles::MaterialPoints;
@@ -159,6 +160,8 @@ impl Simulation {
             fbar: case.analysis.volumetric == crate::case::Volumetric::Fbar,
             step_size: StepSize::default(),
             steps_done: 0,
+            solver: SolverSettings::default(),
+            solve_tally: Default::default(),
             analysed: None,
             substepping: Substepping {
                 min_fraction: case.analysis.substepping.min_fraction,

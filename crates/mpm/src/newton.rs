@@ -8,6 +8,7 @@
 use crate::report::NewtonInfo;
 
 use crate::linsolve::Factorisation;
+pub use crate::settings::NewtonSettings;
 
 /// What a solve tells as it goes, and asks whether to stop: the run's
 /// observer ([`crate::Observer`]) stands behind it.
@@ -17,46 +18,6 @@ pub trait Monitor {
     /// Asked at every iteration; `true` ends the solve with
     /// [`SolveError::Cancelled`].
     fn should_cancel(&mut self) -> bool;
-}
-
-/// Newton controls; the defaults are the case format's.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NewtonSettings {
-    /// Relative out-of-balance force at which a step has converged (1e-9).
-    pub tolerance: f64,
-    /// Linear solves allowed per load step (30).
-    pub max_iterations: usize,
-    /// A relative residual above this (or not finite) is divergence (1e8).
-    pub divergence_limit: f64,
-    /// Soft-background stiffness, relative to the stiffest material: the
-    /// fallback stabilisation, off by default (0); see
-    /// [`crate::assembly::SoftCells`].
-    pub tangent_regularisation: f64,
-    /// Search along each Newton direction (true); see [`solve`].
-    pub line_search: bool,
-    /// Ghost penalty on the faces of the cells at the material's edge,
-    /// relative to twice the largest shear modulus (1e-3; 0: none); see
-    /// [`crate::assembly::GhostFaces`].
-    pub ghost_penalty: f64,
-    /// How far a free full step of the line search may raise the
-    /// out-of-balance force, against the larger of the step's lowest and
-    /// its starting force scale (10; the model sets ten times the stiffest
-    /// material's P-wave to shear modulus ratio); see [`Search`].
-    pub free_step_growth: f64,
-}
-
-impl Default for NewtonSettings {
-    fn default() -> Self {
-        Self {
-            tolerance: 1e-9,
-            max_iterations: 30,
-            divergence_limit: 1e8,
-            tangent_regularisation: 0.0,
-            line_search: true,
-            ghost_penalty: 1e-3,
-            free_step_growth: 10.0,
-        }
-    }
 }
 
 /// A point whose trial state is not admissible.

@@ -15,6 +15,7 @@
 //! An increment that fails in 3 commits nothing and is tried again in
 //! halves from the same state ([`Simulation::load_step`], [`Substepping`]).
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::Matrix2;
@@ -28,13 +29,16 @@ use crate::boundary::loading::{BoundaryLoading, LoadedStretch};
 use crate::configuration::Configuration;
 use crate::equilibrium::{AnalysedPattern, PointState, StepEquilibrium, StepTerms, increment};
 use crate::grid::{Basis, Connectivity, Grid, NodeKey};
+use crate::linsolve::{SolveCounts, SolveTally, SolverSettings};
 use crate::material::Elastic;
-use crate::newton::{self, NewtonSettings, SolveError};
+use crate::newton::{self, SolveError};
 use crate::observer::{self, Observer, StepState};
 use crate::parallel;
 use crate::particles::MaterialPoints;
 use crate::probes::Probes;
 use crate::report::{RunReport, StepReport, StepTimings};
+use crate::settings::NewtonSettings;
+pub use crate::settings::Substepping;
 use crate::supports::{GridSupport, HeldDofs};
 
 /// Newton iterations a sub-increment may take and still count as easy:
@@ -44,16 +48,6 @@ const EASY_ITERATIONS: usize = 6;
 /// How close to its tolerance a Newton solve that stalled counts as at
 /// the round-off floor rather than failing for the increment's size.
 const ROUND_OFF_MARGIN: f64 = 100.0;
-
-/// Cutting a load step's increment when it fails.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Substepping {
-    /// The smallest sub-increment tried, as a fraction of the step's
-    /// (1/1024); 1 turns cutting off.
-    pub min_fraction: f64,
-    /// Failed tries allowed in one load step (40).
-    pub max_cutbacks: usize,
-}
 
 /// Where the step-size control stands between load steps. A step starts at
 /// the size of the last one's last sub-increment (a fraction of a step's
@@ -111,15 +105,6 @@ impl StepSize {
     }
 }
 
-impl Default for Substepping {
-    fn default() -> Self {
-        Self {
-            min_fraction: 1.0 / 1024.0,
-            max_cutbacks: 40,
-        }
-    }
-}
-
 /// A case made ready to run: points, grid, loads and supports
 /// ([`crate::model`] builds it from a case).
 pub struct Simulation {
@@ -153,6 +138,10 @@ pub struct Simulation {
     pub load_steps: usize,
     /// Load steps converged (and committed) so far.
     pub(crate) steps_done: usize,
+    /// How the linear systems are solved (the defaults unless a benchmark
+    /// chooses), and the counts of what the run's solvers did.
+    pub solver: SolverSettings,
+    pub(crate) solve_tally: Arc<SolveTally>,
     /// The last converged step's pattern and solver, for the next step.
     pub(crate) analysed: Option<AnalysedPattern>,
 }
@@ -402,7 +391,14 @@ impl Simulation {
             fbar: self.fbar.then(|| FbarCells::new(&start)),
         };
         let pattern = terms.pattern(conn);
-        StepEquilibrium::new(&start, terms, pattern, previous)
+        let solving = (&self.solver, &self.solve_tally);
+        StepEquilibrium::new(&start, terms, pattern, previous, solving)
+    }
+
+    /// What the run's linear solvers have done so far, every increment
+    /// tried counted (failed ones too).
+    pub fn solve_counts(&self) -> SolveCounts {
+        self.solve_tally.counts()
     }
 
     /// Whether a node lies in the grid's extent (with a tolerance of 1e-9 h).

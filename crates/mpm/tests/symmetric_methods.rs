@@ -1,14 +1,22 @@
 //! CG preconditioned by a kept factor, and by multigrid, answers as
 //! factorising every tangent does, through a whole large-deformation run.
-//! Its own test binary: the symmetric method is set for the whole process.
+//! Each run chooses its method ([`mpm::linsolve::SolverSettings`]) and
+//! counts its own solves, so the tests run side by side.
 
-use std::sync::Mutex;
+use mpm::linsolve::{Factorisation, SolveCounts, SolverSettings, SymmetricMethod};
+use mpm::{Case, NoObserver, RunReport, Simulation};
 
-use mpm::linsolve::{Factorisation, SymmetricMethod, set_symmetric_method, symmetric_solve_counts};
-use mpm::{Case, NoObserver, Simulation};
-
-/// The method and the solve counters are the process's: one test at a time.
-static SERIAL: Mutex<()> = Mutex::new(());
+/// `case` run to the end with its symmetric tangents solved by `method`,
+/// and its solvers' counts.
+fn run_with(case: &Case, method: SymmetricMethod) -> (RunReport, SolveCounts) {
+    let mut sim = Simulation::new(case).unwrap();
+    sim.solver = SolverSettings {
+        symmetric: Some(method),
+        ..SolverSettings::default()
+    };
+    let report = sim.run(&mut NoObserver).unwrap();
+    (report, sim.solve_counts())
+}
 
 /// AMPLE's self-weight column (`verification/column.rs`: 52% compression
 /// in 40 steps, top displacement -25.940 m exactly) with `high` cells over
@@ -26,16 +34,19 @@ fn column(high: u32) -> Case {
 }
 
 /// The top displacement of the column solved with `method`, Newton's
-/// iterations in each step, what solved each step's last system, and the
-/// first step's active DOFs.
+/// iterations in each step, what solved each step's last system, the
+/// first step's active DOFs, and the run's solve counts.
 fn run_column(
     case: &Case,
     method: SymmetricMethod,
-) -> (f64, Vec<usize>, Vec<Option<Factorisation>>, usize) {
-    set_symmetric_method(Some(method));
-    let mut sim = Simulation::new(case).unwrap();
-    let report = sim.run(&mut NoObserver).unwrap();
-    set_symmetric_method(None);
+) -> (
+    f64,
+    Vec<usize>,
+    Vec<Option<Factorisation>>,
+    usize,
+    SolveCounts,
+) {
+    let (report, counts) = run_with(case, method);
     let iterations = report.steps.iter().map(|s| s.newton.iterations).collect();
     let solvers = report
         .steps
@@ -43,7 +54,13 @@ fn run_column(
         .map(|s| s.newton.factorisation)
         .collect();
     let top = report.steps.last().unwrap().probes[0].displacement[1];
-    (top, iterations, solvers, report.steps[0].active_dofs)
+    (
+        top,
+        iterations,
+        solvers,
+        report.steps[0].active_dofs,
+        counts,
+    )
 }
 
 /// The column with 64 cells over the height (1,170 DOFs), run with each
@@ -56,13 +73,11 @@ fn run_column(
 /// tolerance (1e-9 of the force scale).
 #[test]
 fn a_kept_factor_solves_the_column_as_direct_factorisation_does() {
-    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let case = column(64);
-    let (direct_top, direct_iterations, _, _) = run_column(&case, SymmetricMethod::Direct);
-    let before = symmetric_solve_counts();
-    let (kept_top, kept_iterations, _, _) = run_column(&case, SymmetricMethod::KeptFactorCg);
-    let after = symmetric_solve_counts();
-    let (factorisations, cg_solves) = (after.0 - before.0, after.1 - before.1);
+    let (direct_top, direct_iterations, _, _, _) = run_column(&case, SymmetricMethod::Direct);
+    let (kept_top, kept_iterations, _, _, counts) =
+        run_column(&case, SymmetricMethod::KeptFactorCg);
+    let (factorisations, cg_solves) = (counts.fresh_factorisations, counts.cg_solves);
     eprintln!(
         "direct {direct_top}, kept {kept_top}; {factorisations} factorisations, {cg_solves} CG solves"
     );
@@ -86,7 +101,6 @@ fn a_kept_factor_solves_the_column_as_direct_factorisation_does() {
 /// triangle) and every one is solved by LU.
 #[test]
 fn an_unsymmetric_tangent_never_meets_the_kept_factor() {
-    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let case = serde_json::json!({
         "version": 1,
         "analysis": { "load_steps": 5 },
@@ -106,15 +120,12 @@ fn an_unsymmetric_tangent_never_meets_the_kept_factor() {
         ]
     });
     let case = Case::from_json(&case.to_string()).unwrap();
-    set_symmetric_method(Some(SymmetricMethod::KeptFactorCg));
-    let before = symmetric_solve_counts();
-    let report = Simulation::new(&case)
-        .unwrap()
-        .run(&mut NoObserver)
-        .unwrap();
-    let after = symmetric_solve_counts();
-    set_symmetric_method(None);
-    assert_eq!(after, before, "symmetric solves were tried");
+    let (report, counts) = run_with(&case, SymmetricMethod::KeptFactorCg);
+    assert_eq!(
+        (counts.fresh_factorisations, counts.cg_solves),
+        (0, 0),
+        "symmetric solves were tried"
+    );
     for step in &report.steps {
         assert_eq!(step.newton.factorisation, Some(Factorisation::Lu));
     }
@@ -129,10 +140,9 @@ fn an_unsymmetric_tangent_never_meets_the_kept_factor() {
 /// factor).
 #[test]
 fn multigrid_solves_the_column_as_direct_factorisation_does() {
-    let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
     let case = column(128);
-    let (direct_top, direct_iterations, _, dofs) = run_column(&case, SymmetricMethod::Direct);
-    let (multigrid_top, multigrid_iterations, solvers, _) =
+    let (direct_top, direct_iterations, _, dofs, _) = run_column(&case, SymmetricMethod::Direct);
+    let (multigrid_top, multigrid_iterations, solvers, _, _) =
         run_column(&case, SymmetricMethod::Multigrid);
     eprintln!("{dofs} DOFs: direct {direct_top}, multigrid {multigrid_top}");
     assert!(dofs > 3000, "{dofs} DOFs: no coarse level below the finest");

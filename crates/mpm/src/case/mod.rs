@@ -17,9 +17,8 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::boundary::Representation;
 pub use crate::geometry::{Geometry, Selector};
-use crate::newton::NewtonSettings;
 pub use crate::particles::seeding::Lattice;
-use crate::stepper::Substepping;
+use crate::settings::{NewtonSettings, Substepping};
 pub use crate::supports::{Fix, Rotation};
 
 /// The only case-format version this build reads.
@@ -379,6 +378,38 @@ pub enum BasisKind {
     /// Uniform cubic B-splines on the grid (C2), averaged likewise (5 x 5
     /// nodes a point).
     Bspline3,
+}
+
+impl BasisKind {
+    /// Every basis, in order of cost.
+    pub const ALL: [BasisKind; 4] = [
+        BasisKind::Linear,
+        BasisKind::Gimp,
+        BasisKind::Bspline2,
+        BasisKind::Bspline3,
+    ];
+}
+
+/// Its name in a case's `basis`, as the case format spells it.
+impl std::fmt::Display for BasisKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match serde_json::to_value(self) {
+            Ok(serde_json::Value::String(name)) => f.pad(&name),
+            _ => unreachable!("a basis serialises as its name"),
+        }
+    }
+}
+
+impl std::str::FromStr for BasisKind {
+    type Err = String;
+
+    /// A basis by its name in the case format.
+    fn from_str(name: &str) -> Result<Self, String> {
+        serde_json::from_value(serde_json::Value::String(name.to_string())).map_err(|_| {
+            let names: Vec<String> = Self::ALL.iter().map(ToString::to_string).collect();
+            format!("{name:?} is not a basis: one of {}", names.join(", "))
+        })
+    }
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
@@ -1011,5 +1042,19 @@ mod tests {
             assert_eq!(e.path, "supports[0].method", "{basis}");
             assert!(e.message.contains("ibm"), "{e}");
         }
+    }
+
+    #[test]
+    fn a_basis_is_named_as_a_case_names_it() {
+        let names: Vec<String> = BasisKind::ALL.iter().map(|b| b.to_string()).collect();
+        assert_eq!(names, ["linear", "gimp", "bspline2", "bspline3"]);
+        for basis in BasisKind::ALL {
+            assert_eq!(basis.to_string().parse::<BasisKind>(), Ok(basis));
+            let case: BasisKind = serde_json::from_value(serde_json::json!(basis)).unwrap();
+            assert_eq!(case, basis);
+        }
+        assert_eq!(format!("{:<8}|", BasisKind::Gimp), "gimp    |");
+        let e = "quartic".parse::<BasisKind>().unwrap_err();
+        assert!(e.contains("linear, gimp, bspline2, bspline3"), "{e}");
     }
 }

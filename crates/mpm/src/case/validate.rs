@@ -470,59 +470,67 @@ impl Body {
                 format!("must be zero or positive, got {rho}"),
             ));
         }
-        if let MaterialSpec::VonMises {
-            yield_stress,
-            hardening,
-            ..
-        } = self.material
-        {
-            positive(&format!("{m}.yield_stress"), yield_stress)?;
-            if !(hardening >= 0.0 && hardening.is_finite()) {
-                return Err(CaseError::new(
-                    format!("{m}.hardening"),
-                    format!("must be zero or positive, got {hardening}"),
-                ));
+        // Every model named, so that a new one asks here for its checks.
+        match self.material {
+            MaterialSpec::Hencky { .. } | MaterialSpec::LinearElastic { .. } => {}
+            MaterialSpec::VonMises {
+                yield_stress,
+                hardening,
+                ..
+            } => {
+                positive(&format!("{m}.yield_stress"), yield_stress)?;
+                if !(hardening >= 0.0 && hardening.is_finite()) {
+                    return Err(CaseError::new(
+                        format!("{m}.hardening"),
+                        format!("must be zero or positive, got {hardening}"),
+                    ));
+                }
             }
-        }
-        if let MaterialSpec::DruckerPrager {
-            cohesion,
-            friction_angle,
-            dilation_angle,
-            ..
-        }
-        | MaterialSpec::MohrCoulomb {
-            cohesion,
-            friction_angle,
-            dilation_angle,
-            ..
-        } = self.material
-        {
-            let phi = friction_angle;
-            if !(cohesion >= 0.0 && cohesion.is_finite()) || (cohesion == 0.0 && phi == 0.0) {
-                return Err(CaseError::new(
-                    format!("{m}.cohesion"),
-                    format!(
-                        "must be zero or positive, and positive without friction, got {cohesion}"
-                    ),
-                ));
+            MaterialSpec::DruckerPrager {
+                cohesion,
+                friction_angle,
+                dilation_angle,
+                ..
             }
-            if !(0.0..=MAX_FRICTION_ANGLE).contains(&phi) {
-                return Err(CaseError::new(
-                    format!("{m}.friction_angle"),
-                    format!("must be in [0, {MAX_FRICTION_ANGLE}] degrees, got {phi}"),
-                ));
-            }
-            if let Some(psi) = dilation_angle
-                && !(0.0..=phi).contains(&psi)
-            {
-                return Err(CaseError::new(
-                    format!("{m}.dilation_angle"),
-                    format!("must be in [0, friction_angle = {phi}] degrees, got {psi}"),
-                ));
-            }
+            | MaterialSpec::MohrCoulomb {
+                cohesion,
+                friction_angle,
+                dilation_angle,
+                ..
+            } => check_friction(&m, cohesion, friction_angle, dilation_angle)?,
         }
         Ok(())
     }
+}
+
+/// A frictional model's strength: cohesion, friction and dilation angles.
+fn check_friction(
+    m: &str,
+    cohesion: f64,
+    phi: f64,
+    dilation_angle: Option<f64>,
+) -> Result<(), CaseError> {
+    if !(cohesion >= 0.0 && cohesion.is_finite()) || (cohesion == 0.0 && phi == 0.0) {
+        return Err(CaseError::new(
+            format!("{m}.cohesion"),
+            format!("must be zero or positive, and positive without friction, got {cohesion}"),
+        ));
+    }
+    if !(0.0..=MAX_FRICTION_ANGLE).contains(&phi) {
+        return Err(CaseError::new(
+            format!("{m}.friction_angle"),
+            format!("must be in [0, {MAX_FRICTION_ANGLE}] degrees, got {phi}"),
+        ));
+    }
+    if let Some(psi) = dilation_angle
+        && !(0.0..=phi).contains(&psi)
+    {
+        return Err(CaseError::new(
+            format!("{m}.dilation_angle"),
+            format!("must be in [0, friction_angle = {phi}] degrees, got {psi}"),
+        ));
+    }
+    Ok(())
 }
 
 impl Selector {
