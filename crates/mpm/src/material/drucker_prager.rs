@@ -74,8 +74,8 @@ pub(super) fn drucker_prager(
     j_start: f64,
     want_tangent: bool,
 ) -> Response {
-    let Elastic { lambda, mu } = m.elastic;
-    let bulk = lambda + 2.0 * mu / 3.0;
+    let Elastic { mu, .. } = m.elastic;
+    let bulk = m.elastic.bulk();
     let trial = Trial::new(state, df);
     let (volumetric, deviator) = trial.split();
     let (unit, norm) = unit(deviator.map(|e| 2.0 * mu * e));
@@ -114,8 +114,8 @@ fn to_cone(
     j_trial: f64,
     dgamma: f64,
 ) -> Returned {
-    let Elastic { lambda, mu } = m.elastic;
-    let bulk = lambda + 2.0 * mu / 3.0;
+    let Elastic { mu, .. } = m.elastic;
+    let bulk = m.elastic.bulk();
     let theta = 1.0 - mu * dgamma / j_trial;
     let p = bulk * (volumetric - m.eta_flow * dgamma);
     let a = mu + bulk * m.eta * m.eta_flow;
@@ -143,8 +143,8 @@ fn to_cone(
 /// the volume change past the apex's are plastic, and the stress no longer
 /// moves with the strain (perfect plasticity).
 fn to_apex(m: &DruckerPrager, elastic: &Returned, volumetric: f64, deviator_norm: f64) -> Returned {
-    let Elastic { lambda, mu } = m.elastic;
-    let bulk = lambda + 2.0 * mu / 3.0;
+    let Elastic { mu, .. } = m.elastic;
+    let bulk = m.elastic.bulk();
     let p = m.xi * m.cohesion / m.eta;
     let plastic_volume = volumetric - p / bulk;
     let plastic_deviator = deviator_norm / (2.0 * mu);
@@ -196,8 +196,8 @@ mod tests {
     fn a_stretch_past_yield_returns_to_the_cone_as_solved_by_hand() {
         for (phi, psi) in [(20.0, 20.0), (30.0, 0.0), (0.0, 0.0)] {
             let m = soil(phi, psi);
-            let Elastic { lambda, mu } = m.elastic;
-            let bulk = lambda + 2.0 * mu / 3.0;
+            let Elastic { mu, .. } = m.elastic;
+            let bulk = m.elastic.bulk();
             let l: f64 = 1.002;
             let r = drucker_prager(
                 &m,

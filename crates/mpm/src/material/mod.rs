@@ -104,6 +104,11 @@ impl Elastic {
         }
     }
 
+    /// The bulk modulus `K = lambda + 2 mu / 3`.
+    pub fn bulk(&self) -> f64 {
+        self.lambda + 2.0 * self.mu / 3.0
+    }
+
     /// Plane-strain stress of an in-plane strain (the out-of-plane strain is
     /// zero): `s = lambda tr(e) I + 2 mu e`, `s_zz = lambda tr(e)`.
     pub(crate) fn stress(&self, e: &Matrix2<f64>) -> (Matrix2<f64>, f64) {

@@ -48,8 +48,8 @@ pub(super) fn von_mises(
     j_start: f64,
     want_tangent: bool,
 ) -> Response {
-    let Elastic { lambda, mu } = m.elastic;
-    let kappa = lambda + 2.0 * mu / 3.0;
+    let Elastic { mu, .. } = m.elastic;
+    let kappa = m.elastic.bulk();
     let trial = Trial::new(state, df);
     let (volumetric, deviator) = trial.split();
     let (unit, norm) = unit(deviator.map(|e| 2.0 * mu * e));
