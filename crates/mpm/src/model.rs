@@ -15,7 +15,7 @@ use crate::case::{BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, Supp
 use crate::geometry::Geometry;
 use crate::grid::{Basis, Grid};
 use crate::linsolve::SolverSettings;
-use crate::material::{DruckerPrager, Elastic, Material, MohrCoulomb, VonMises};
+use crate::material::{DruckerPrager, Elastic, Material, MohrCoulomb, StiffnessScales, VonMises};
 use crate::newton::NewtonSettings;
 use crate::particles::MaterialPoints;
 use crate::particles::seeding::{self, Density, FillSize};
@@ -130,7 +130,8 @@ impl Simulation {
             .map(|l| (nearest_point(&points, l.at), l.force))
             .collect();
         let newton = &case.analysis.newton;
-        let free_step_growth = 10.0 * p_wave_to_shear(&points);
+        let stiffness = StiffnessScales::of(&points.materials);
+        let free_step_growth = 10.0 * stiffness.p_wave_to_shear;
         let sim = Self {
             grid,
             basis: basis(case.basis),
@@ -160,6 +161,7 @@ impl Simulation {
             fbar: case.analysis.volumetric == crate::case::Volumetric::Fbar,
             step_size: StepSize::default(),
             steps_done: 0,
+            stiffness,
             solver: SolverSettings::default(),
             solve_tally: Default::default(),
             analysed: None,
@@ -304,21 +306,6 @@ fn boundary_loops(case: &Case, points: &MaterialPoints) -> Vec<BoundaryLoop> {
 }
 
 /// The constitutive model of a material spec.
-/// The largest ratio of P-wave to shear modulus, `(lambda + 2 mu) / mu`,
-/// over the materials (2 at nu = 0, 5001 at nu = 0.4999): how much more a
-/// spurious volume change costs than a shear, which bounds how far a
-/// converging Newton step may raise the residual (`newton::Search`).
-fn p_wave_to_shear(points: &MaterialPoints) -> f64 {
-    points
-        .materials
-        .iter()
-        .map(|m| {
-            let c = m.elastic();
-            (c.lambda + 2.0 * c.mu) / c.mu
-        })
-        .fold(1.0, f64::max)
-}
-
 fn material(spec: &MaterialSpec) -> Material {
     let (e, nu, _) = spec.constants();
     let constants = Elastic::from_young_poisson(e, nu);

@@ -30,7 +30,7 @@ use crate::configuration::Configuration;
 use crate::equilibrium::{AnalysedPattern, PointState, StepEquilibrium, StepTerms, increment};
 use crate::grid::{Basis, Connectivity, Grid, NodeKey};
 use crate::linsolve::{SolveCounts, SolveTally, SolverSettings};
-use crate::material::Elastic;
+use crate::material::StiffnessScales;
 use crate::newton::{self, SolveError};
 use crate::observer::{self, Observer, StepState};
 use crate::parallel;
@@ -138,6 +138,8 @@ pub struct Simulation {
     pub load_steps: usize,
     /// Load steps converged (and committed) so far.
     pub(crate) steps_done: usize,
+    /// The materials' stiffnesses the stabilisation scales by.
+    pub(crate) stiffness: StiffnessScales,
     /// How the linear systems are solved (the defaults unless a benchmark
     /// chooses), and the counts of what the run's solvers did.
     pub solver: SolverSettings,
@@ -440,7 +442,8 @@ impl Simulation {
         if ratio == 0.0 {
             return None;
         }
-        Some(SoftCells::new(start, self.basis, &self.stiffest()?, ratio))
+        let stiffest = self.stiffness.stiffest?;
+        Some(SoftCells::new(start, self.basis, &stiffest, ratio))
     }
 
     /// The ghost penalty on the faces of the cells at the material's edge,
@@ -450,23 +453,8 @@ impl Simulation {
         if gamma == 0.0 {
             return None;
         }
-        let shear = self
-            .points
-            .materials
-            .iter()
-            .map(|m| m.elastic().mu)
-            .fold(0.0, f64::max);
+        let shear = self.stiffness.largest_shear;
         Some(GhostFaces::new(start, self.basis, 2.0 * shear, gamma))
-    }
-
-    /// The elastic constants of the material with the largest P-wave
-    /// modulus `lambda + 2 mu`.
-    fn stiffest(&self) -> Option<Elastic> {
-        self.points
-            .materials
-            .iter()
-            .map(|m| m.elastic())
-            .max_by(|a, b| (a.lambda + 2.0 * a.mu).total_cmp(&(b.lambda + 2.0 * b.mu)))
     }
 
     /// Body force and point loads, scaled by the load factor.
