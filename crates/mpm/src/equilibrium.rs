@@ -293,14 +293,14 @@ impl<'a> StepEquilibrium<'a> {
             symmetric_points,
             &mut k,
         );
+        if let (Some(fbar), Some(trial)) = (&self.fbar, &self.fbar_trial) {
+            fbar.add_to(self.conn, self.points, trial, &self.pattern, &mut k);
+        }
         if let Some(soft) = &self.soft {
             soft.add_to(&self.pattern, &mut k);
         }
         if let Some(ghost) = &self.ghost {
             ghost.add_to(&self.pattern, &mut k);
-        }
-        if let (Some(fbar), Some(trial)) = (&self.fbar, &self.fbar_trial) {
-            fbar.add_to(self.conn, self.points, trial, &self.pattern, &mut k);
         }
         self.band.add_stiffness(&self.pattern, &mut k);
         for (row, col, value) in self.loading.stiffness(&self.u) {
