@@ -44,7 +44,8 @@ impl StoredStep {
                 boundaries: null(),
             };
         }
-        let columns = PointColumns::selected(state.points, output.fields.as_deref());
+        let fields = mpm::model::point_fields(output);
+        let columns = PointColumns::selected(state.points, fields.as_deref());
         Self {
             report,
             points: to_raw_value(&columns).expect("points serialise"),

@@ -321,7 +321,8 @@ impl ResultWriter {
             return Ok(());
         }
         let files = StepFiles::new(report.step);
-        let columns = PointColumns::selected(state.points, self.output.fields.as_deref());
+        let fields = mpm::model::point_fields(&self.output);
+        let columns = PointColumns::selected(state.points, fields.as_deref());
         let boundaries = state.boundaries();
         let document = StepDocument {
             report,

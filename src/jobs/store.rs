@@ -192,6 +192,27 @@ macro_rules! on_pool {
     };
 }
 
+/// In one transaction on `$pool`: the [`update_held`] statement `$update`
+/// bound to `$binds`, the job `$id` and its owner `$owner`; then, if that
+/// owner still held the job, `$then` (statements on `$tx`). Returns from
+/// the enclosing function with whether the owner held the job.
+macro_rules! if_held {
+    ($pool:ident, $update:expr, [$($bind:expr),*], $id:expr, $owner:expr, |$tx:ident| $then:block) => {{
+        let mut $tx = $pool.begin().await?;
+        let held = sqlx::query($update)
+            $(.bind($bind))*
+            .bind($id)
+            .bind($owner)
+            .execute(&mut *$tx)
+            .await?
+            .rows_affected()
+            == 1;
+        if held $then
+        $tx.commit().await?;
+        Ok(held)
+    }};
+}
+
 #[derive(Clone)]
 pub struct Store {
     pool: Pool,
@@ -709,17 +730,7 @@ impl Store {
             2,
         );
         on_pool!(self, |pool| {
-            let mut tx = pool.begin().await?;
-            let held = sqlx::query(progress)
-                .bind(step)
-                .bind(iterations)
-                .bind(id)
-                .bind(owner)
-                .execute(&mut *tx)
-                .await?
-                .rows_affected()
-                == 1;
-            if held {
+            if_held!(pool, progress, [step, iterations], id, owner, |tx| {
                 sqlx::query(
                     "INSERT INTO steps (job_id, step, report, points, boundaries) VALUES ($1, $2, $3, $4, $5) \
                      ON CONFLICT (job_id, step) DO UPDATE SET report = excluded.report, \
@@ -745,9 +756,7 @@ impl Store {
                     .execute(&mut *tx)
                     .await?;
                 }
-            }
-            tx.commit().await?;
-            Ok(held)
+            })
         })
     }
 
@@ -769,25 +778,19 @@ impl Store {
             3,
         );
         on_pool!(self, |pool| {
-            let mut tx = pool.begin().await?;
-            let held = sqlx::query(end)
-                .bind(status.as_str())
-                .bind(solve_seconds)
-                .bind(error)
-                .bind(id)
-                .bind(owner)
-                .execute(&mut *tx)
-                .await?
-                .rows_affected()
-                == 1;
-            if held {
-                sqlx::query("DELETE FROM checkpoints WHERE job_id = $1")
-                    .bind(id)
-                    .execute(&mut *tx)
-                    .await?;
-            }
-            tx.commit().await?;
-            Ok(held)
+            if_held!(
+                pool,
+                end,
+                [status.as_str(), solve_seconds, error],
+                id,
+                owner,
+                |tx| {
+                    sqlx::query("DELETE FROM checkpoints WHERE job_id = $1")
+                        .bind(id)
+                        .execute(&mut *tx)
+                        .await?;
+                }
+            )
         })
     }
 
@@ -868,15 +871,7 @@ impl Store {
             0,
         );
         on_pool!(self, |pool| {
-            let mut tx = pool.begin().await?;
-            let held = sqlx::query(reset)
-                .bind(id)
-                .bind(owner)
-                .execute(&mut *tx)
-                .await?
-                .rows_affected()
-                == 1;
-            if held {
+            if_held!(pool, reset, [], id, owner, |tx| {
                 sqlx::query("DELETE FROM steps WHERE job_id = $1 AND step > 0")
                     .bind(id)
                     .execute(&mut *tx)
@@ -885,9 +880,7 @@ impl Store {
                     .bind(id)
                     .execute(&mut *tx)
                     .await?;
-            }
-            tx.commit().await?;
-            Ok(held)
+            })
         })
     }
 

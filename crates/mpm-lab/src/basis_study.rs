@@ -142,7 +142,7 @@ fn case(setting: &Setting) -> Value {
     let mut case = mpm::case::builtin::json("cantilever").expect("built in");
     case["basis"] = json!(basis);
     if !ghost {
-        case["analysis"]["newton"] =
+        case["analysis"]["stabilisation"] =
             json!({ "ghost_penalty": 0.0, "tangent_regularisation": 1e-6 });
     }
     case["analysis"]["load_steps"] = steps.into();

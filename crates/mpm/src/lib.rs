@@ -25,6 +25,8 @@ pub mod case;
 pub mod checkpoint;
 pub mod configuration;
 pub mod equilibrium;
+#[cfg(test)]
+mod fixtures;
 pub mod geometry;
 pub mod grid;
 pub mod krylov;
@@ -46,6 +48,7 @@ pub mod stepper;
 pub mod supports;
 pub mod triangular;
 pub mod triangulation;
+pub mod update;
 pub mod vtk;
 
 pub use case::{Case, CaseError, CaseErrorKind};

@@ -11,17 +11,18 @@ use crate::boundary::traction::Traction;
 use crate::boundary::{
     BoundaryLoop, Representation, find_loops, selected_segments, set_offsets, snap_to_edge,
 };
-use crate::case::{BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, SupportMethod};
+use crate::case::{self, BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, SupportMethod};
 use crate::geometry::Geometry;
 use crate::grid::{Basis, Grid};
 use crate::linsolve::SolverSettings;
 use crate::material::{DruckerPrager, Elastic, Material, MohrCoulomb, StiffnessScales, VonMises};
 use crate::newton::NewtonSettings;
 use crate::particles::MaterialPoints;
-use crate::particles::seeding::{self, Density, FillSize};
+use crate::particles::seeding::{self, Density, FillSize, Lattice};
 use crate::probes::Probes;
+use crate::report::PointField;
 use crate::stepper::{Simulation, StepSize, Substepping};
-use crate::supports::{GridSupport, HeldDofs};
+use crate::supports::{Fix, GridSupport, HeldDofs, Rotation};
 
 /// Loop segments per loop, `(loop index, segments)`, that a selector picks.
 type Selection = Vec<(usize, Vec<usize>)>;
@@ -46,7 +47,8 @@ impl Seeded {
         let points = material_points(case);
         let loops = boundary_loops(case, &points);
         let select = |path: String, on| {
-            let on_edge = case.boundary.representation == Representation::Edge;
+            let on_edge =
+                Representation::from(case.boundary.representation) == Representation::Edge;
             let segments = selected_segments(on, &loops, &points, case.grid.cell_size, on_edge);
             if segments.is_empty() {
                 return Err(CaseError::new(
@@ -112,14 +114,14 @@ impl Simulation {
                 None => grid_supports.push(GridSupport {
                     index,
                     on: s.on,
-                    fix: s.fix,
+                    fix: s.fix.into(),
                 }),
                 Some(segments) => ibm_supports.push(IbmSupport {
                     index,
                     segments,
-                    fix: s.fix,
+                    fix: s.fix.into(),
                     displacement: s.displacement.unwrap_or([0.0, 0.0]),
-                    rotation: s.rotation,
+                    rotation: s.rotation.map(Into::into),
                 }),
             }
         }
@@ -130,6 +132,7 @@ impl Simulation {
             .map(|l| (nearest_point(&points, l.at), l.force))
             .collect();
         let newton = &case.analysis.newton;
+        let stabilisation = case.analysis.stabilisation_settings();
         let stiffness = StiffnessScales::of(&points.materials);
         let free_step_growth = 10.0 * stiffness.p_wave_to_shear;
         let sim = Self {
@@ -152,9 +155,9 @@ impl Simulation {
             settings: NewtonSettings {
                 tolerance: newton.tolerance,
                 max_iterations: newton.max_iterations as usize,
-                tangent_regularisation: newton.tangent_regularisation,
+                tangent_regularisation: stabilisation.tangent_regularisation,
                 line_search: newton.line_search,
-                ghost_penalty: newton.ghost_penalty,
+                ghost_penalty: stabilisation.ghost_penalty,
                 free_step_growth,
                 ..Default::default()
             },
@@ -260,7 +263,7 @@ fn material_points(case: &Case) -> MaterialPoints {
             &body.geometry,
             density(body, case.grid.cell_size),
             case.grid.origin,
-            body.points.lattice,
+            body.points.lattice.into(),
         );
         let (_, _, rho) = body.material.constants();
         mp.add_body(material(&body.material), rho, &seeds);
@@ -273,9 +276,9 @@ fn material_points(case: &Case) -> MaterialPoints {
 /// on the exact edge (`edge` representation); from the exact edge itself
 /// for a body of patches or polar rings ([`seeding::follows_edge`]).
 fn boundary_loops(case: &Case, points: &MaterialPoints) -> Vec<BoundaryLoop> {
-    let representation = case.boundary.representation;
+    let representation = Representation::from(case.boundary.representation);
     let on_edge: Vec<bool> = (case.bodies.iter())
-        .map(|b| seeding::follows_edge(&b.geometry, b.points.lattice))
+        .map(|b| seeding::follows_edge(&b.geometry, b.points.lattice.into()))
         .collect();
     let mut loops: Vec<BoundaryLoop> =
         find_loops(&points.lattice, &points.material, &points.reference, |b| {
@@ -364,8 +367,73 @@ pub fn fill_size(body: &Body, grid: &GridSpec) -> FillSize {
         &body.geometry,
         density(body, grid.cell_size),
         grid.origin,
-        body.points.lattice,
+        body.points.lattice.into(),
     )
+}
+
+/// The schema's choices, as the solver's modules name them: the case
+/// format keeps its own types, so a solver module can change without
+/// changing the format.
+impl From<case::Representation> for Representation {
+    fn from(r: case::Representation) -> Self {
+        match r {
+            case::Representation::Edge => Representation::Edge,
+            case::Representation::Points => Representation::Points,
+        }
+    }
+}
+
+impl From<case::Lattice> for Lattice {
+    fn from(l: case::Lattice) -> Self {
+        match l {
+            case::Lattice::Body => Lattice::Body,
+            case::Lattice::Grid => Lattice::Grid,
+        }
+    }
+}
+
+impl From<case::Fix> for Fix {
+    fn from(f: case::Fix) -> Self {
+        match f {
+            case::Fix::X => Fix::X,
+            case::Fix::Y => Fix::Y,
+            case::Fix::Xy => Fix::Xy,
+            case::Fix::Normal => Fix::Normal,
+        }
+    }
+}
+
+impl From<case::Rotation> for Rotation {
+    fn from(r: case::Rotation) -> Self {
+        Rotation {
+            angle: r.angle,
+            center: r.center,
+        }
+    }
+}
+
+impl From<case::PointField> for PointField {
+    fn from(f: case::PointField) -> Self {
+        match f {
+            case::PointField::Position => PointField::Position,
+            case::PointField::Displacement => PointField::Displacement,
+            case::PointField::Stress => PointField::Stress,
+            case::PointField::Volume => PointField::Volume,
+            case::PointField::Jacobian => PointField::Jacobian,
+            case::PointField::Body => PointField::Body,
+            case::PointField::PlasticStrain => PointField::PlasticStrain,
+            case::PointField::Yielding => PointField::Yielding,
+        }
+    }
+}
+
+/// The point columns a case's output asks for (`None`: all of them), for
+/// [`crate::report::PointColumns::selected`].
+pub fn point_fields(output: &case::OutputSpec) -> Option<Vec<PointField>> {
+    output
+        .fields
+        .as_ref()
+        .map(|fields| fields.iter().map(|&f| f.into()).collect())
 }
 
 fn basis(kind: BasisKind) -> Basis {
@@ -387,7 +455,7 @@ fn nearest_point(points: &MaterialPoints, x: [f64; 2]) -> usize {
 
 #[cfg(test)]
 mod tests {
-    use crate::case::Case;
+    use crate::fixtures;
     use crate::stepper::Simulation;
 
     /// The paper's fixed point (0, 1) on grid nodes with 1.5 m cells
@@ -396,21 +464,13 @@ mod tests {
     #[test]
     fn a_grid_support_that_holds_no_node_is_refused() {
         let with_origin = |origin: [f64; 2]| {
-            let case = serde_json::json!({
-                "version": 1,
-                "analysis": { "load_steps": 1 },
-                "grid": { "cell_size": 1.5, "origin": origin },
-                "bodies": [{
-                    "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [10.0, 2.0] } },
-                    "points": { "count": [56, 16] },
-                    "material": { "model": "hencky", "youngs_modulus": 1e6, "poisson_ratio": 0.25, "density": 0.0 }
-                }],
-                "supports": [
-                    { "on": { "x": 0.0 }, "fix": "x" },
-                    { "on": { "x": 0.0, "y": 1.0 }, "fix": "xy" }
-                ]
-            });
-            Simulation::new(&Case::from_json(&case.to_string()).unwrap())
+            let mut case = fixtures::block([10.0, 2.0], [56, 16], 1.5, origin);
+            case["bodies"][0]["material"]["poisson_ratio"] = 0.25.into();
+            case["supports"] = serde_json::json!([
+                { "on": { "x": 0.0 }, "fix": "x" },
+                { "on": { "x": 0.0, "y": 1.0 }, "fix": "xy" }
+            ]);
+            Simulation::new(&fixtures::case(&case))
         };
         let e = with_origin([0.0, 0.0]).err().expect("refused");
         assert_eq!(e.path, "supports[1].on", "{e}");

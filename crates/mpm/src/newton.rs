@@ -20,12 +20,7 @@ pub trait Monitor {
     fn should_cancel(&mut self) -> bool;
 }
 
-/// A point whose trial state is not admissible.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct InvertedPoint {
-    pub point: usize,
-    pub jacobian: f64,
-}
+pub use crate::particles::InvertedPoint;
 
 /// Why a solve stopped without an answer. Every variant says where.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

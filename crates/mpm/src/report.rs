@@ -156,11 +156,9 @@ pub struct RunReport {
     pub steps: Vec<StepReport>,
 }
 
-/// A column of [`PointColumns`], as a case's `output.fields` names it.
-#[derive(
-    Debug, Clone, Copy, Serialize, serde::Deserialize, PartialEq, Eq, schemars::JsonSchema,
-)]
-#[serde(rename_all = "snake_case")]
+/// A column of [`PointColumns`] (a case's `output.fields` names them:
+/// `crate::model::point_fields`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PointField {
     Position,
     Displacement,

@@ -8,7 +8,7 @@
 //!    pattern ([`StepEquilibrium`]);
 //! 3. Newton-Raphson with a line search for the incremental nodal
 //!    displacements ([`newton`]);
-//! 4. reactions, then move the points, probes and IBM anchors with the
+//! 4. reactions, then move the points ([`update`]), probes and IBM anchors with the
 //!    converged grid displacement and commit the points' deformation,
 //!    history and stress.
 //!
@@ -18,28 +18,25 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use nalgebra::Matrix2;
-use rayon::prelude::*;
-
 use crate::assembly;
-use crate::assembly::{FbarCells, GhostFaces, SoftCells};
+use crate::assembly::{FbarCells, GhostFaces, SoftCells, StepTerm};
 use crate::boundary::BoundaryLoop;
 use crate::boundary::ibm::{Anchor, BandTerms};
 use crate::boundary::loading::{BoundaryLoading, LoadedStretch};
 use crate::configuration::Configuration;
-use crate::equilibrium::{AnalysedPattern, PointState, StepEquilibrium, StepTerms, increment};
-use crate::grid::{Basis, Connectivity, Grid, NodeKey};
+use crate::equilibrium::{AnalysedPattern, StepEquilibrium, StepTerms};
+use crate::grid::{Basis, Connectivity, Grid, NodeKey, increment};
 use crate::linsolve::{SolveCounts, SolveTally, SolverSettings};
 use crate::material::StiffnessScales;
 use crate::newton::{self, SolveError};
 use crate::observer::{self, Observer, StepState};
-use crate::parallel;
 use crate::particles::MaterialPoints;
 use crate::probes::Probes;
 use crate::report::{RunReport, StepReport, StepTimings};
 use crate::settings::NewtonSettings;
 pub use crate::settings::Substepping;
 use crate::supports::{GridSupport, HeldDofs};
+use crate::update;
 
 /// Newton iterations a sub-increment may take and still count as easy:
 /// two easy ones in a row and the next is twice as long.
@@ -309,7 +306,7 @@ impl Simulation {
         let (u, newton) = newton::solve(&mut eq, &self.settings, step, observer)?;
         clock.lap();
 
-        let reactions = eq.reactions(&self.anchors, &u, self.n_supports);
+        let reactions = eq.reactions(&u, self.n_supports);
         let applied_load = eq.applied_load();
         let active_dofs = eq.n_free_dofs();
         let non_finite = |quantity: &str| SolveError::NonFinite {
@@ -324,13 +321,17 @@ impl Simulation {
         }
         let converged = eq.into_converged();
         self.analysed = Some(converged.analysed);
-        let (states, band) = (converged.states, converged.band);
-        self.update_points(&conn, &u, &states);
+        let states = converged.states;
+        update::commit(&mut self.points, &conn, &u, &states);
         if let Some(p) = self.points.first_non_finite() {
             return Err(non_finite(&format!("state of material point {p}")));
         }
         self.probes.advect(&self.grid, self.basis, &conn, &u);
-        self.advance_anchors(&band, &conn, &u);
+        for carried in converged.carried {
+            if let Ok(band) = carried.downcast::<BandTerms>() {
+                self.advance_anchors(&band, &conn, &u);
+            }
+        }
         let timings = StepTimings {
             grid: grid_seconds,
             update: clock.lap(),
@@ -383,14 +384,38 @@ impl Simulation {
             points: &self.points,
         };
         let loops = &self.loops;
+        // In the order their stiffness is added to the tangent.
+        let mut terms: Vec<Box<dyn StepTerm + 'a>> = Vec::new();
+        if let Some(soft) = self.soft_cells(&start) {
+            terms.push(Box::new(soft));
+        }
+        if let Some(ghost) = self.ghost_faces(&start) {
+            terms.push(Box::new(ghost));
+        }
+        // The band always: it moves the anchors, those without a band
+        // point this step with their material points.
+        terms.push(Box::new(BandTerms::new(
+            &start,
+            loops,
+            &self.anchors,
+            self.band_width,
+            load_factor,
+        )));
+        let loading = BoundaryLoading::new(&start, loops, &self.boundary_loads, load_factor);
+        if !loading.is_empty() {
+            terms.push(Box::new(loading));
+        }
         let terms = StepTerms {
             held: HeldDofs::find(&self.grid_supports, &self.grid, conn),
-            f_ext: self.external_force(conn, load_factor),
-            loading: BoundaryLoading::new(&start, loops, &self.boundary_loads, load_factor),
-            band: BandTerms::new(&start, loops, &self.anchors, self.band_width, load_factor),
-            soft: self.soft_cells(&start),
-            ghost: self.ghost_faces(&start),
+            f_ext: assembly::external_force(
+                conn,
+                &self.points,
+                self.gravity,
+                &self.point_loads,
+                load_factor,
+            ),
             fbar: self.fbar.then(|| FbarCells::new(&start)),
+            terms,
         };
         let pattern = terms.pattern(conn);
         let solving = (&self.solver, &self.solve_tally);
@@ -457,49 +482,6 @@ impl Simulation {
         Some(GhostFaces::new(start, self.basis, 2.0 * shear, gamma))
     }
 
-    /// Body force and point loads, scaled by the load factor.
-    fn external_force(&self, conn: &Connectivity, load_factor: f64) -> Vec<f64> {
-        let g = self.gravity.map(|g| g * load_factor);
-        let mut f = if g == [0.0, 0.0] {
-            vec![0.0; conn.n_dofs()]
-        } else {
-            assembly::body_force(conn, &self.points, g)
-        };
-        for &(p, force) in &self.point_loads {
-            for l in conn.point_links(p) {
-                for c in 0..2 {
-                    f[2 * l.node as usize + c] += load_factor * l.n * force[c];
-                }
-            }
-        }
-        f
-    }
-
-    /// Moves each point with the grid displacement and commits its state.
-    fn update_points(&mut self, conn: &Connectivity, u: &[f64], states: &[PointState]) {
-        let mp = &mut self.points;
-        (
-            &mut mp.position,
-            &mut mp.deformation,
-            &mut mp.history,
-            &mut mp.stress,
-            &mut mp.yielding,
-        )
-            .into_par_iter()
-            .enumerate()
-            .with_min_len(parallel::BOOKKEEPING)
-            .for_each(|(p, (x, f, history, stress, yielding))| {
-                let (dx, grad_u) = increment(conn.point_links(p), u);
-                let df = Matrix2::identity() + grad_u;
-                x[0] += dx[0];
-                x[1] += dx[1];
-                *f = df * *f;
-                *yielding = states[p].history.plastic_strain > history.plastic_strain;
-                *history = states[p].history;
-                *stress = states[p].cauchy;
-            });
-    }
-
     /// Moves the IBM anchors with the converged increment; an anchor off
     /// the active nodes moves with its material point.
     fn advance_anchors(&mut self, band: &BandTerms, conn: &Connectivity, u: &[f64]) {
@@ -552,6 +534,7 @@ impl Stopwatch {
 mod tests {
     use super::*;
     use crate::case::Case;
+    use crate::fixtures;
     use crate::newton::Equilibrium;
 
     /// A size cut at a hard spot grows back once steps pass cleanly, one
@@ -626,26 +609,18 @@ mod tests {
     #[test]
     fn band_width_sets_the_conditioning() {
         let case = |delta: Option<f64>| {
-            let mut c = serde_json::json!({
-                "version": 1,
-                "analysis": { "load_steps": 1 },
-                "grid": { "cell_size": 0.25, "origin": [0.1, 0.07] },
-                "basis": "gimp",
-                "bodies": [{
-                    "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [1.0, 1.0] } },
-                    "points": { "count": [8, 8] },
-                    "material": { "model": "linear_elastic", "youngs_modulus": 1e6, "poisson_ratio": 0.3, "density": 0.0 }
-                }],
-                "supports": [
-                    { "on": { "x": 0.0 }, "fix": "normal", "method": "ibm" },
-                    { "on": { "y": 0.0 }, "fix": "normal", "method": "ibm" },
-                    { "on": { "x": 1.0 }, "fix": "x", "method": "ibm", "displacement": [0.01, 0.0] }
-                ]
-            });
+            let mut c = fixtures::block([1.0, 1.0], [8, 8], 0.25, [0.1, 0.07]);
+            c["basis"] = "gimp".into();
+            c["bodies"][0]["material"]["model"] = "linear_elastic".into();
+            c["supports"] = serde_json::json!([
+                { "on": { "x": 0.0 }, "fix": "normal", "method": "ibm" },
+                { "on": { "y": 0.0 }, "fix": "normal", "method": "ibm" },
+                { "on": { "x": 1.0 }, "fix": "x", "method": "ibm", "displacement": [0.01, 0.0] }
+            ]);
             if let Some(d) = delta {
                 c["boundary"] = serde_json::json!({ "band_width": d });
             }
-            Case::from_json(&c.to_string()).unwrap()
+            fixtures::case(&c)
         };
         let mut grid = case(None);
         grid.grid.origin = [0.0, 0.0];
@@ -687,22 +662,16 @@ mod tests {
             ("fbar", 1e-2, "hencky"),
             ("fbar", 0.0, "linear_elastic"),
         ] {
-            let case = serde_json::json!({
-                "version": 1,
-                "analysis": { "load_steps": 1, "volumetric": volumetric,
-                              "newton": { "ghost_penalty": ghost } },
-                "grid": { "cell_size": 0.5, "origin": [0.1, 0.13] },
-                "basis": "gimp",
-                "bodies": [{
-                    "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [2.0, 1.0] } },
-                    "points": { "count": [7, 5] },
-                    "material": { "model": model, "youngs_modulus": 1e6, "poisson_ratio": 0.45, "density": 0.0 }
-                }],
-                "loads": { "boundary": [ { "on": { "y": 1.0 }, "pressure": 2e4 } ] },
-                "supports": [ { "on": { "x": 0.1 }, "fix": "xy" } ]
-            });
-            let case = Case::from_json(&case.to_string()).unwrap();
-            let sim = Simulation::new(&case).unwrap();
+            let mut case = fixtures::block([2.0, 1.0], [7, 5], 0.5, [0.1, 0.13]);
+            case["analysis"]["volumetric"] = volumetric.into();
+            case["analysis"]["stabilisation"] = serde_json::json!({ "ghost_penalty": ghost });
+            case["basis"] = "gimp".into();
+            case["bodies"][0]["material"]["model"] = model.into();
+            case["bodies"][0]["material"]["poisson_ratio"] = 0.45.into();
+            case["loads"] =
+                serde_json::json!({ "boundary": [ { "on": { "y": 1.0 }, "pressure": 2e4 } ] });
+            case["supports"] = serde_json::json!([ { "on": { "x": 0.1 }, "fix": "xy" } ]);
+            let sim = fixtures::simulation(&case);
             let conn = sim.reset_grid();
             let mut eq = sim.assemble(&conn, 1.0, None);
             let n = conn.n_dofs();

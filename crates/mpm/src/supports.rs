@@ -4,14 +4,12 @@
 //! hold ([`Fix`]) and prescribed rotations are shared with the implicit
 //! boundary method ([`crate::boundary::ibm`]).
 
-use serde::{Deserialize, Serialize};
-
 use crate::geometry::Selector;
 use crate::grid::{Connectivity, Grid};
 
-/// Which displacement components a support holds.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
+/// Which displacement components a support holds (the case's
+/// `crate::case::Fix`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Fix {
     /// Horizontal displacement held (a roller on a wall normal to x).
     X,
@@ -33,8 +31,7 @@ impl Fix {
 }
 
 /// A rigid rotation of the boundary it applies to.
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rotation {
     /// Counter-clockwise angle in degrees at the last load step.
     pub angle: f64,

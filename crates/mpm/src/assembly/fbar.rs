@@ -47,9 +47,10 @@ use rayon::prelude::*;
 
 use super::Pattern;
 use crate::configuration::Configuration;
-use crate::grid::Connectivity;
-use crate::material::Response;
-use crate::particles::MaterialPoints;
+use crate::grid::{Connectivity, increment};
+use crate::material::{Material, Response};
+use crate::parallel;
+use crate::particles::{InvertedPoint, MaterialPoints};
 
 /// The averaging cells of a step: which points each holds, and their
 /// weights.
@@ -280,4 +281,83 @@ impl FbarTrial {
             + size_of_val(self.b.as_slice())
             + size_of_val(self.v.as_slice())
     }
+}
+/// Whether point `p` has the small-strain model, which F-bar averages by
+/// its own volumetric strain.
+fn small_strain(mp: &MaterialPoints, p: usize) -> bool {
+    matches!(
+        mp.materials[mp.material[p] as usize],
+        Material::LinearElastic(_)
+    )
+}
+
+/// Point `p`'s volume change for F-bar's average, from its displacement
+/// gradient `g`: as `dJ - 1 = tr g + det g`, so the volumetric strains of
+/// small increments stay exact to round-off, which matters where the bulk
+/// modulus is thousands of times the shear modulus. The small-strain model
+/// averages its own volumetric strain, `tr g`.
+fn volume_growth(mp: &MaterialPoints, p: usize, g: &Matrix2<f64>) -> f64 {
+    g.trace()
+        + if small_strain(mp, p) {
+            0.0
+        } else {
+            g.determinant()
+        }
+}
+
+/// F-bar's first pass at `u`: every cell's average volume change (see
+/// the module docs).
+pub fn trial_averages(
+    fbar: &FbarCells,
+    conn: &Connectivity,
+    mp: &MaterialPoints,
+    u: &[f64],
+) -> Vec<f64> {
+    let growth: Vec<f64> = (0..mp.len())
+        .into_par_iter()
+        .with_min_len(parallel::BOOKKEEPING)
+        .map(|p| volume_growth(mp, p, &increment(conn.point_links(p), u).1))
+        .collect();
+    fbar.averages(&growth)
+}
+
+/// A point's share of F-bar's coupling term ([`FbarCells::adjust`]).
+pub type FbarShare = (Matrix2<f64>, Matrix2<f64>);
+
+/// Point `p`'s response to its `dF_bar` at `u`, given its cell's
+/// `averages`, with its share of the coupling term; or the point, if `u`
+/// or its cell's average inverts it.
+pub fn point_response(
+    fbar: &FbarCells,
+    averages: &[f64],
+    conn: &Connectivity,
+    mp: &MaterialPoints,
+    u: &[f64],
+    p: usize,
+) -> Result<(Response, FbarShare), InvertedPoint> {
+    let g = &increment(conn.point_links(p), u).1;
+    let j_start = mp.deformation[p].determinant();
+    let (a, b) = (volume_growth(mp, p, g), fbar.of(averages, p));
+    let (dj, dj_bar) = (1.0 + g.trace() + g.determinant(), 1.0 + b);
+    for jacobian in [j_start * dj, j_start * dj_bar] {
+        if jacobian.is_nan() || jacobian <= 0.0 {
+            return Err(InvertedPoint { point: p, jacobian });
+        }
+    }
+    let material = &mp.materials[mp.material[p] as usize];
+    if small_strain(mp, p) {
+        // B-bar, F-bar's linearisation: the volumetric strain replaced by
+        // the cell's, g_bar = g + (b - a) / 2 I.
+        let grad_bar = g + Matrix2::identity() * ((b - a) / 2.0);
+        let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
+        let share = fbar.adjust_small_strain(p, &mut response);
+        return Ok((response, share));
+    }
+    let df = Matrix2::identity() + g;
+    let alpha = (dj_bar / dj).sqrt();
+    // alpha dF - I, with alpha - 1 = (b - a) / (dJ (alpha + 1)).
+    let grad_bar = Matrix2::identity() * ((b - a) / (dj * (alpha + 1.0))) + g * alpha;
+    let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
+    let share = fbar.adjust(p, &mut response, &df, dj, dj_bar);
+    Ok((response, share))
 }

@@ -1,4 +1,4 @@
-//! Internal and body forces on the active nodes.
+//! Internal and external forces on the active nodes.
 
 use nalgebra::Matrix2;
 
@@ -34,4 +34,30 @@ pub fn body_force(conn: &Connectivity, points: &MaterialPoints, gravity: [f64; 2
             f[a + 1] += m * l.n * gravity[1];
         }
     })
+}
+
+/// The loads that do not move with the body, scaled by the load factor:
+/// gravity `g` on every point's mass and each `(point, force)` of
+/// `point_loads` on its point's nodes.
+pub fn external_force(
+    conn: &Connectivity,
+    points: &MaterialPoints,
+    gravity: [f64; 2],
+    point_loads: &[(usize, [f64; 2])],
+    load_factor: f64,
+) -> Vec<f64> {
+    let g = gravity.map(|g| g * load_factor);
+    let mut f = if g == [0.0, 0.0] {
+        vec![0.0; conn.n_dofs()]
+    } else {
+        body_force(conn, points, g)
+    };
+    for &(p, force) in point_loads {
+        for l in conn.point_links(p) {
+            for c in 0..2 {
+                f[2 * l.node as usize + c] += load_factor * l.n * force[c];
+            }
+        }
+    }
+    f
 }

@@ -23,7 +23,7 @@
 //! `nu = 0`): the jumps are shear-like, and a bulk modulus near
 //! incompressibility would lock the edges again.
 
-use super::Pattern;
+use super::{Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
 use rayon::prelude::*;
 
@@ -93,14 +93,20 @@ impl GhostFaces {
             weight: gamma * m / 3.0,
         }
     }
+}
+
+impl StepTerm for GhostFaces {
+    fn side(&self) -> Side {
+        Side::Stabilisation
+    }
 
     /// The node groups each face couples (for the stiffness pattern).
-    pub fn coupling_groups(&self) -> Vec<Vec<u32>> {
+    fn coupling_groups(&self) -> Vec<Vec<u32>> {
         self.faces.iter().map(|f| f.to_vec()).collect()
     }
 
     /// Adds the penalty's force `K u` to `f`.
-    pub fn add_force(&self, u: &[f64], f: &mut [f64]) {
+    fn add_force(&self, u: &[f64], f: &mut [f64]) {
         for nodes in &self.faces {
             for c in 0..2 {
                 let second = |line: &[u32]| -> f64 {
@@ -119,8 +125,8 @@ impl GhostFaces {
     }
 
     /// Adds the penalty's stiffness to tangent values in `pattern`'s layout
-    /// (which must hold [`GhostFaces::coupling_groups`]).
-    pub fn add_to(&self, pattern: &Pattern, values: &mut [f64]) {
+    /// (which must hold its coupling groups).
+    fn add_stiffness(&self, _u: &[f64], pattern: &Pattern, values: &mut [f64]) {
         for nodes in &self.faces {
             for (p, &a) in nodes.iter().enumerate() {
                 for (q, &b) in nodes.iter().enumerate() {

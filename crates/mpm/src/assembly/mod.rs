@@ -15,13 +15,15 @@ pub mod ghost_faces;
 pub mod pattern;
 pub mod soft_cells;
 pub mod stiffness;
+pub mod term;
 
 pub use fbar::{FbarCells, FbarTrial};
-pub use forces::{body_force, internal_force};
+pub use forces::{body_force, external_force, internal_force};
 pub use ghost_faces::GhostFaces;
 pub use pattern::{NodeAdjacency, Pattern, constrain};
 pub use soft_cells::SoftCells;
 pub use stiffness::stiffness;
+pub use term::{Side, StepTerm};
 
 use rayon::prelude::*;
 

@@ -396,8 +396,7 @@ mod tests {
     use std::collections::HashMap;
 
     use super::Pattern;
-    use crate::case::Case;
-    use crate::stepper::Simulation;
+    use crate::fixtures;
 
     /// The assembly's schedule: every point that links to a node is in one
     /// tile, and no node is linked from two tiles of one colour, for the
@@ -408,19 +407,12 @@ mod tests {
     #[test]
     fn tiles_of_one_colour_share_no_node() {
         for basis in ["gimp", "bspline3"] {
-            let case = serde_json::json!({
-                "version": 1,
-                "analysis": { "load_steps": 1 },
-                "grid": { "cell_size": 0.5, "origin": [0.1, 0.13] },
-                "basis": basis,
-                "bodies": [{
-                    "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [24.0, 24.0] } },
-                    "points": { "count": [96, 96] },
-                    "material": { "model": "hencky", "youngs_modulus": 1e6, "poisson_ratio": 0.3, "density": 1.0 }
-                }],
-                "supports": [ { "on": { "y": 0.0 }, "fix": "xy", "method": "ibm" } ]
-            });
-            let sim = Simulation::new(&Case::from_json(&case.to_string()).unwrap()).unwrap();
+            let mut case = fixtures::block([24.0, 24.0], [96, 96], 0.5, [0.1, 0.13]);
+            case["basis"] = basis.into();
+            case["bodies"][0]["material"]["density"] = 1.0.into();
+            case["supports"] =
+                serde_json::json!([ { "on": { "y": 0.0 }, "fix": "xy", "method": "ibm" } ]);
+            let sim = fixtures::simulation(&case);
             let conn = sim.reset_grid();
             let tiles = Pattern::build(&conn, &[]).tiles;
             let mut seen = vec![0; conn.n_points()];

@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 
-use super::Pattern;
+use super::{Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
 use crate::grid::{Basis, node_key};
 use crate::material::Elastic;
@@ -62,9 +62,15 @@ impl SoftCells {
             k_cell: bilinear_cell_stiffness(ratio * stiffest.lambda, ratio * stiffest.mu),
         }
     }
+}
+
+impl StepTerm for SoftCells {
+    fn side(&self) -> Side {
+        Side::Stabilisation
+    }
 
     /// Adds the soft cells' force `K_soft u` to `f`.
-    pub fn add_force(&self, u: &[f64], f: &mut [f64]) {
+    fn add_force(&self, u: &[f64], f: &mut [f64]) {
         for corners in &self.cells {
             for (ca, &a) in corners.iter().enumerate() {
                 for i in 0..2 {
@@ -83,7 +89,7 @@ impl SoftCells {
     /// Adds the soft cells' stiffness to tangent values in `pattern`'s
     /// layout. Corners of a cell that a point's domain overlaps all link to
     /// that point, so every block exists in the pattern.
-    pub fn add_to(&self, pattern: &Pattern, values: &mut [f64]) {
+    fn add_stiffness(&self, _u: &[f64], pattern: &Pattern, values: &mut [f64]) {
         for corners in &self.cells {
             for (cb, &b) in corners.iter().enumerate() {
                 for (ca, &a) in corners.iter().enumerate() {

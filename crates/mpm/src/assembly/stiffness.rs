@@ -139,8 +139,7 @@ mod tests {
 
     use super::{COPIES_ENTRIES, TILES_A_THREAD, stiffness, sum_tiles};
     use crate::assembly::Pattern;
-    use crate::case::Case;
-    use crate::stepper::Simulation;
+    use crate::fixtures;
 
     /// A scene of few tiles sums its points by threads' copies of the
     /// values; its tangent is the tiles' sum, to the round-off of adding
@@ -150,18 +149,10 @@ mod tests {
     /// another's links fails, checked), unsymmetric and symmetric.
     #[test]
     fn threads_copies_give_the_tiles_sum() {
-        let case = serde_json::json!({
-            "version": 1,
-            "analysis": { "load_steps": 1 },
-            "grid": { "cell_size": 1.0, "origin": [0.1, 0.13] },
-            "basis": "gimp",
-            "bodies": [{
-                "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [6.0, 3.0] } },
-                "points": { "count": [12, 6] },
-                "material": { "model": "hencky", "youngs_modulus": 1e6, "poisson_ratio": 0.3, "density": 1.0 }
-            }]
-        });
-        let sim = Simulation::new(&Case::from_json(&case.to_string()).unwrap()).unwrap();
+        let mut case = fixtures::block([6.0, 3.0], [12, 6], 1.0, [0.1, 0.13]);
+        case["basis"] = "gimp".into();
+        case["bodies"][0]["material"]["density"] = 1.0.into();
+        let sim = fixtures::simulation(&case);
         let conn = sim.reset_grid();
         let pattern = Pattern::build(&conn, &[]);
         let threads = rayon::current_num_threads();

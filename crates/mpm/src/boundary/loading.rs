@@ -14,10 +14,11 @@
 
 use rayon::prelude::*;
 
-use super::bspline::{DataTangent, MovedPoint, Point, data_tangents, local_segment};
 use super::current_ring;
+use super::curve::{DataTangent, MovedPoint, Point, data_tangents, local_segment};
 use super::detection::BoundaryLoop;
 use super::traction::{SegmentQuadrature, Traction};
+use crate::assembly::{Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
 use crate::grid::{Connectivity, Grid, node_key};
 use crate::particles::MaterialPoints;
@@ -256,7 +257,7 @@ impl<'a> BoundaryLoading<'a> {
     /// data point, its material point's nodes and the active nodes within a
     /// cell of the segments it shapes. The stiffness pattern must contain
     /// every pair within a group.
-    pub fn coupling_groups(&self) -> Vec<Vec<u32>> {
+    fn node_groups(&self) -> Vec<Vec<u32>> {
         let zero = vec![0.0; self.conn.n_dofs()];
         let mut groups = Vec::new();
         for (i, s) in self.stretches.iter().enumerate() {
@@ -300,5 +301,30 @@ impl<'a> BoundaryLoading<'a> {
             }
         }
         groups
+    }
+}
+/// The boundary loads as a step term: tractions on the body, whose
+/// stiffness is not symmetric once they move with the boundary.
+impl StepTerm for BoundaryLoading<'_> {
+    fn side(&self) -> Side {
+        Side::Load
+    }
+
+    fn coupling_groups(&self) -> Vec<Vec<u32>> {
+        self.node_groups()
+    }
+
+    fn add_force(&self, u: &[f64], f: &mut [f64]) {
+        self.add_forces(u, f);
+    }
+
+    fn add_stiffness(&self, u: &[f64], pattern: &Pattern, values: &mut [f64]) {
+        for (row, col, value) in self.stiffness(u) {
+            pattern.add(values, row, col, value);
+        }
+    }
+
+    fn symmetric(&self) -> bool {
+        self.is_empty()
     }
 }

@@ -1,8 +1,8 @@
 //! The material boundary: the outer layer of material points, ordered into
 //! loops once ([`detection`]), interpolated by a local cubic B-spline after
-//! every step ([`bspline`]).
+//! every step ([`curve`]).
 
-pub mod bspline;
+pub mod curve;
 pub mod detection;
 pub mod edge_detection;
 pub mod ibm;
@@ -10,20 +10,18 @@ pub mod loading;
 pub mod quadrature;
 pub mod traction;
 
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
-pub use bspline::{BSplineData, ClosedCurve};
+pub use curve::{BSplineData, ClosedCurve};
 pub use detection::{BoundaryLoop, find_loops};
 
 use crate::geometry::{Geometry, Selector};
 use crate::particles::MaterialPoints;
 use crate::reference_edge::{EdgeIndex, PointIndex, distance};
 
-/// Where the boundary curve's data points are.
-#[derive(
-    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
-)]
-#[serde(rename_all = "snake_case")]
+/// Where the boundary curve's data points are (the case's
+/// `crate::case::Representation`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Representation {
     /// On the material's edge: each outer point pushed out to the edge of
     /// its domain (half a spacing), mapped by its deformation gradient.
@@ -54,7 +52,7 @@ pub fn set_offsets(
                 if ring.len() < 3 {
                     vec![[0.0, 0.0]; ring.len()]
                 } else {
-                    bspline::data_normals(&ring)
+                    curve::data_normals(&ring)
                         .into_iter()
                         .zip(&l.points)
                         .map(|((n_in, n_out), &p)| {
@@ -353,25 +351,18 @@ mod tests {
     use proptest::prelude::*;
 
     use crate::case::Case;
+    use crate::fixtures;
     use crate::stepper::Simulation;
 
     /// The paper's cantilever (10 m x 2 m) with an IBM fixed point on its
     /// left edge, `count` points, cells of `h`.
     fn pinned_at(y: f64, count: [u32; 2], h: f64) -> Result<Simulation, String> {
-        let case = serde_json::json!({
-            "version": 1,
-            "analysis": { "load_steps": 1 },
-            "grid": { "cell_size": h },
-            "bodies": [{
-                "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [10.0, 2.0] } },
-                "points": { "count": count },
-                "material": { "model": "hencky", "youngs_modulus": 1e6, "poisson_ratio": 0.25, "density": 0.0 }
-            }],
-            "supports": [
-                { "on": { "x": 0.0 }, "fix": "normal", "method": "ibm" },
-                { "on": { "x": 0.0, "y": y }, "fix": "xy", "method": "ibm" }
-            ]
-        });
+        let mut case = fixtures::block([10.0, 2.0], count, h, [0.0, 0.0]);
+        case["bodies"][0]["material"]["poisson_ratio"] = 0.25.into();
+        case["supports"] = serde_json::json!([
+            { "on": { "x": 0.0 }, "fix": "normal", "method": "ibm" },
+            { "on": { "x": 0.0, "y": y }, "fix": "xy", "method": "ibm" }
+        ]);
         let case = Case::from_json(&case.to_string()).map_err(|e| e.to_string())?;
         Simulation::new(&case).map_err(|e| e.to_string())
     }

@@ -12,7 +12,7 @@
 //! constraint given to the hats would act on another field (and leave the
 //! outer ring of nodes, which the hats never reach, unbalanced).
 
-use super::bspline::{Point, bezier};
+use super::curve::{Point, bezier};
 use crate::grid::{Basis, Grid, NodeKey, NodeWeight, Support};
 
 /// Gauss-Legendre nodes on [0, 1] and weights (summing to 1), 4 points.

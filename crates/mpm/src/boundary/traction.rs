@@ -13,7 +13,7 @@
 //! inactive corner (rare: the curve bulging past the material's cells) gives
 //! that corner's share to the active ones, in proportion.
 
-use super::bspline::{Point, bezier, bezier_derivative};
+use super::curve::{Point, bezier, bezier_derivative};
 use super::quadrature::{gauss_points, hat_shares};
 use crate::grid::{Basis, Grid, NodeKey};
 
@@ -108,7 +108,7 @@ impl SegmentQuadrature {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::boundary::bspline::ClosedCurve;
+    use crate::boundary::curve::ClosedCurve;
     use crate::grid::node_key;
 
     /// Adds the nodal forces of `traction`, scaled by `factor`, on `segments`

@@ -15,11 +15,8 @@ mod validate;
 
 use serde::{Deserialize, Serialize};
 
-pub use crate::boundary::Representation;
 pub use crate::geometry::{Geometry, Selector};
-pub use crate::particles::seeding::Lattice;
 use crate::settings::{NewtonSettings, Substepping};
-pub use crate::supports::{Fix, Rotation};
 
 /// The only case-format version this build reads.
 pub const CASE_VERSION: u32 = 1;
@@ -168,7 +165,21 @@ pub struct OutputSpec {
     /// The point columns to store (default: all); `position` is always
     /// stored.
     #[serde(default)]
-    pub fields: Option<Vec<crate::report::PointField>>,
+    pub fields: Option<Vec<PointField>>,
+}
+
+/// A column of the points' output, as `output.fields` names it.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum PointField {
+    Position,
+    Displacement,
+    Stress,
+    Volume,
+    Jacobian,
+    Body,
+    PlasticStrain,
+    Yielding,
 }
 
 fn default_every() -> u32 {
@@ -196,6 +207,64 @@ impl OutputSpec {
         // Step 0, the multiples of `every`, and the last if it is not one.
         1 + load_steps / every + usize::from(!load_steps.is_multiple_of(every))
     }
+}
+
+/// Where the boundary curve's data points are.
+#[derive(
+    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Representation {
+    /// On the material's edge: each outer point pushed out to the edge of
+    /// its domain (half a spacing), mapped by its deformation gradient.
+    #[default]
+    Edge,
+    /// Through the outer material points themselves (the paper's choice),
+    /// half a point spacing inside the material's edge.
+    Points,
+}
+
+/// Which lattice a body's points sit on.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Lattice {
+    /// The body's own: rectangles and quadrilaterals mapped, sectors,
+    /// circles and annuli polar, polygons cut into triangles and each
+    /// triangle into three mapped quadrilaterals. The points' cells tile
+    /// the body and its edges are rows of points.
+    #[default]
+    Body,
+    /// The grid's, for any shape: the sites of a square lattice aligned
+    /// with the grid that fall inside, each the volume of its square; a
+    /// slanted or curved edge is a staircase.
+    Grid,
+}
+
+/// Which displacement components a support holds.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Fix {
+    /// Horizontal displacement held (a roller on a wall normal to x).
+    X,
+    /// Vertical displacement held (a roller on a floor normal to y).
+    Y,
+    /// Both held.
+    Xy,
+    /// The component normal to the boundary held (a roller on a boundary at
+    /// any angle, or curved). Implicit boundary method only.
+    Normal,
+}
+
+/// A rigid rotation of the boundary it applies to.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Rotation {
+    /// Counter-clockwise angle in degrees at the last load step.
+    pub angle: f64,
+    /// Centre (m), in the reference configuration.
+    pub center: [f64; 2],
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default, schemars::JsonSchema)]
@@ -229,6 +298,8 @@ pub struct Analysis {
     pub load_steps: u32,
     #[serde(default)]
     pub newton: NewtonSpec,
+    #[serde(default)]
+    pub stabilisation: StabilisationSpec,
     #[serde(default)]
     pub substepping: SubsteppingSpec,
     /// How a point's volume change enters its stress: its own (`standard`)
@@ -291,21 +362,64 @@ pub struct NewtonSpec {
     /// [`NewtonSettings`]'s.
     #[serde(default = "default_max_iterations")]
     pub max_iterations: u32,
-    /// Stiffness of the soft background over the cells the material
-    /// touches, relative to the stiffest material (default: [`NewtonSettings`]'s;
-    /// 0 turns it off). It keeps the solve regular when a point alone
-    /// reaches new nodes, and stiffens each step's increment by a relative
-    /// amount of its size.
-    #[serde(default = "default_tangent_regularisation")]
-    pub tangent_regularisation: f64,
+    /// Deprecated: read as `analysis.stabilisation.tangent_regularisation`,
+    /// where it has moved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tangent_regularisation: Option<f64>,
     /// Search along each Newton direction, cutting steps that do not reduce
     /// the out-of-balance force or that invert a point (default true).
     #[serde(default = "default_line_search")]
     pub line_search: bool,
+    /// Deprecated: read as `analysis.stabilisation.ghost_penalty`, where it
+    /// has moved.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ghost_penalty: Option<f64>,
+}
+
+/// Stabilisation of each step's tangent where the material reaches a cell
+/// only in part.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct StabilisationSpec {
     /// Ghost penalty on the faces of the cells at the material's edge,
-    /// relative to twice the largest shear modulus (default 0: off).
+    /// relative to twice the largest shear modulus (default:
+    /// [`NewtonSettings`]'s, 1e-3; 0 turns it off).
     #[serde(default = "default_ghost_penalty")]
     pub ghost_penalty: f64,
+    /// Stiffness of the soft background over the cells the material
+    /// touches, relative to the stiffest material (default:
+    /// [`NewtonSettings`]'s, 0: off). It keeps the solve regular when a
+    /// point alone reaches new nodes, and stiffens each step's increment by
+    /// a relative amount of its size.
+    #[serde(default = "default_tangent_regularisation")]
+    pub tangent_regularisation: f64,
+}
+
+impl Default for StabilisationSpec {
+    fn default() -> Self {
+        Self {
+            ghost_penalty: default_ghost_penalty(),
+            tangent_regularisation: default_tangent_regularisation(),
+        }
+    }
+}
+
+impl Analysis {
+    /// The stabilisation the run uses: `stabilisation`'s, or a key still
+    /// given at its old place in `newton` ([`Case::from_json`] refuses a
+    /// case that gives a key in both).
+    pub fn stabilisation_settings(&self) -> StabilisationSpec {
+        StabilisationSpec {
+            ghost_penalty: self
+                .newton
+                .ghost_penalty
+                .unwrap_or(self.stabilisation.ghost_penalty),
+            tangent_regularisation: self
+                .newton
+                .tangent_regularisation
+                .unwrap_or(self.stabilisation.tangent_regularisation),
+        }
+    }
 }
 
 fn default_tolerance() -> f64 {
@@ -329,9 +443,9 @@ impl Default for NewtonSpec {
         Self {
             tolerance: default_tolerance(),
             max_iterations: default_max_iterations(),
-            tangent_regularisation: default_tangent_regularisation(),
+            tangent_regularisation: None,
             line_search: default_line_search(),
-            ghost_penalty: default_ghost_penalty(),
+            ghost_penalty: None,
         }
     }
 }
@@ -648,6 +762,50 @@ mod tests {
 
     fn error_for(v: serde_json::Value) -> CaseError {
         Case::from_json(&v.to_string()).unwrap_err()
+    }
+
+    /// The stabilisation moved from `analysis.newton` to
+    /// `analysis.stabilisation`: a case that gives it at the old place runs
+    /// with it, one that gives a key at both is refused at the old place,
+    /// and a bad value is named where it was given.
+    #[test]
+    fn the_stabilisation_is_still_read_at_its_old_place() {
+        let settings = |v: serde_json::Value| {
+            Case::from_json(&v.to_string())
+                .unwrap()
+                .analysis
+                .stabilisation_settings()
+        };
+        let mut old = column_json();
+        old["analysis"]["newton"] =
+            serde_json::json!({"ghost_penalty": 0.02, "tangent_regularisation": 1e-6});
+        let mut new = column_json();
+        new["analysis"]["stabilisation"] =
+            serde_json::json!({"ghost_penalty": 0.02, "tangent_regularisation": 1e-6});
+        let expected = StabilisationSpec {
+            ghost_penalty: 0.02,
+            tangent_regularisation: 1e-6,
+        };
+        assert_eq!(settings(old.clone()), expected);
+        assert_eq!(settings(new.clone()), expected);
+        assert_eq!(
+            settings(column_json()),
+            StabilisationSpec {
+                ghost_penalty: 1e-3,
+                tangent_regularisation: 0.0,
+            }
+        );
+        let mut both = new.clone();
+        both["analysis"]["newton"] = serde_json::json!({"ghost_penalty": 0.02});
+        let e = error_for(both);
+        assert_eq!(e.path, "analysis.newton.ghost_penalty", "{}", e.message);
+        old["analysis"]["newton"]["tangent_regularisation"] = (-1.0).into();
+        assert_eq!(
+            error_for(old).path,
+            "analysis.newton.tangent_regularisation"
+        );
+        new["analysis"]["stabilisation"]["ghost_penalty"] = (-1.0).into();
+        assert_eq!(error_for(new).path, "analysis.stabilisation.ghost_penalty");
     }
 
     #[test]

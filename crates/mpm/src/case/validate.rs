@@ -29,6 +29,24 @@ pub const MAX_MAGNITUDE: f64 = 1e15;
 /// The least a body may measure across, in cells.
 const MIN_BODY_CELLS: f64 = 1e-6;
 
+/// A stabilisation key given at its old place in `analysis.newton` and at
+/// its new one in `analysis.stabilisation`: the case says two things.
+fn given_once(value: &Value) -> Result<(), CaseError> {
+    for key in ["ghost_penalty", "tangent_regularisation"] {
+        let old = value.pointer(&format!("/analysis/newton/{key}"));
+        let new = value.pointer(&format!("/analysis/stabilisation/{key}"));
+        if old.is_some() && new.is_some() {
+            return Err(CaseError::new(
+                format!("analysis.newton.{key}"),
+                format!(
+                    "has moved to analysis.stabilisation.{key}, which the case also gives: keep that one"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// What serde cannot refuse, found in the JSON tree; the first names its
 /// path.
 /// - `null`: serde reads it as the field left out, so a case given with
@@ -113,6 +131,7 @@ impl Case {
         })?;
         if let Ok(value) = serde_json::from_str::<Value>(text) {
             reject_unfit(&value, &mut String::new())?;
+            given_once(&value)?;
         }
         case.validate()?;
         Ok(case)
@@ -143,11 +162,25 @@ impl Case {
                 "must be at least 1",
             ));
         }
-        if !(a.newton.ghost_penalty >= 0.0 && a.newton.ghost_penalty.is_finite()) {
-            return Err(CaseError::new(
-                "analysis.newton.ghost_penalty",
-                "must be a finite number, 0 or more",
-            ));
+        for (key, moved, value) in [
+            (
+                "ghost_penalty",
+                a.newton.ghost_penalty,
+                a.stabilisation.ghost_penalty,
+            ),
+            (
+                "tangent_regularisation",
+                a.newton.tangent_regularisation,
+                a.stabilisation.tangent_regularisation,
+            ),
+        ] {
+            let (path, value) = match moved {
+                Some(v) => (format!("analysis.newton.{key}"), v),
+                None => (format!("analysis.stabilisation.{key}"), value),
+            };
+            if !(value >= 0.0 && value.is_finite()) {
+                return Err(CaseError::new(path, "must be a finite number, 0 or more"));
+            }
         }
         let sub = &a.substepping;
         if !(sub.min_fraction > 0.0 && sub.min_fraction <= 1.0) {

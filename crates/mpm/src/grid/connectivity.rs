@@ -3,6 +3,7 @@
 //! (numbered `0..n` in key order). Every Newton iteration of the step reuses
 //! it.
 
+use nalgebra::Matrix2;
 use rayon::prelude::*;
 
 use super::{Basis, Grid, LatticeIndex, NodeKey, NodeWeight, Support, node_indices};
@@ -128,4 +129,21 @@ impl Connectivity {
     pub fn n_points(&self) -> usize {
         self.offsets.len() - 1
     }
+}
+/// Displacement `sum_a N_a u_a` and displacement gradient
+/// `grad_u = sum_a u_a (x) g_a` of a point (`dF = I + grad_u`).
+#[inline]
+pub fn increment(links: &[Link], u: &[f64]) -> ([f64; 2], Matrix2<f64>) {
+    let mut dx = [0.0; 2];
+    let mut df = Matrix2::zeros();
+    for l in links {
+        let ua = [u[2 * l.node as usize], u[2 * l.node as usize + 1]];
+        for i in 0..2 {
+            dx[i] += l.n * ua[i];
+            for j in 0..2 {
+                df[(i, j)] += ua[i] * l.grad[j];
+            }
+        }
+    }
+    (dx, df)
 }

@@ -5,10 +5,9 @@
 
 pub mod basis;
 pub mod connectivity;
-pub mod quadrilateral_domain;
 
 pub use basis::{Basis, NodeWeight, Support};
-pub use connectivity::{Connectivity, Link};
+pub use connectivity::{Connectivity, Link, increment};
 
 /// A lattice node packed into one integer; ordering is by `i`, then `j`.
 pub type NodeKey = u64;

@@ -28,7 +28,7 @@
 
 use nalgebra::Matrix2;
 
-use super::return_map::{InvariantModuli, Moduli, Returned, Trial, respond, unit};
+use super::return_map::{InvariantModuli, Moduli, Predictor, Returned, respond};
 use super::{Elastic, History, Response};
 
 /// The model's constants.
@@ -76,9 +76,13 @@ pub(super) fn drucker_prager(
 ) -> Response {
     let Elastic { mu, .. } = m.elastic;
     let bulk = m.elastic.bulk();
-    let trial = Trial::new(state, df);
-    let (volumetric, deviator) = trial.split();
-    let (unit, norm) = unit(deviator.map(|e| 2.0 * mu * e));
+    let Predictor {
+        trial,
+        volumetric,
+        deviator,
+        unit,
+        norm,
+    } = Predictor::new(state, df, mu);
     let j_trial = norm / 2f64.sqrt();
     let p_trial = bulk * volumetric;
     let strength = m.xi * m.cohesion;

@@ -172,6 +172,33 @@ pub(super) fn respond(
     }
 }
 
+/// The elastic predictor of the invariant return maps: the trial state
+/// at `df` from `state`, its volumetric and deviatoric logarithmic
+/// strains, and the unit direction and norm of its deviatoric Kirchhoff
+/// stress `2 mu e_dev` (shear modulus `mu`).
+pub(super) struct Predictor {
+    pub trial: Trial,
+    pub volumetric: f64,
+    pub deviator: [f64; 3],
+    pub unit: [f64; 3],
+    pub norm: f64,
+}
+
+impl Predictor {
+    pub fn new(state: &History, df: &Matrix2<f64>, mu: f64) -> Self {
+        let trial = Trial::new(state, df);
+        let (volumetric, deviator) = trial.split();
+        let (unit, norm) = unit(deviator.map(|e| 2.0 * mu * e));
+        Self {
+            trial,
+            volumetric,
+            deviator,
+            unit,
+            norm,
+        }
+    }
+}
+
 /// `v / |v|`, or zero for a zero vector.
 pub(super) fn unit(v: [f64; 3]) -> ([f64; 3], f64) {
     let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();

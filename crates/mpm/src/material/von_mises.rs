@@ -25,7 +25,7 @@
 
 use nalgebra::Matrix2;
 
-use super::return_map::{InvariantModuli, Moduli, Returned, Trial, respond, unit};
+use super::return_map::{InvariantModuli, Moduli, Predictor, Returned, respond};
 use super::{Elastic, History, Response};
 
 /// The model's constants.
@@ -50,9 +50,13 @@ pub(super) fn von_mises(
 ) -> Response {
     let Elastic { mu, .. } = m.elastic;
     let kappa = m.elastic.bulk();
-    let trial = Trial::new(state, df);
-    let (volumetric, deviator) = trial.split();
-    let (unit, norm) = unit(deviator.map(|e| 2.0 * mu * e));
+    let Predictor {
+        trial,
+        volumetric,
+        deviator,
+        unit,
+        norm,
+    } = Predictor::new(state, df, mu);
     let q_trial = (1.5f64).sqrt() * norm;
     let yield_now = m.yield_stress + m.hardening * state.plastic_strain;
     let mut moduli = InvariantModuli::elastic(kappa, mu);

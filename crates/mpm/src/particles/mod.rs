@@ -9,6 +9,14 @@ use crate::grid::Support;
 use crate::material::{CauchyStress, History, Material};
 use seeding::{Domain, SeedPoint};
 
+/// A point whose trial state is not admissible: the increment inverts it
+/// (its Jacobian is not positive).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InvertedPoint {
+    pub point: usize,
+    pub jacobian: f64,
+}
+
 #[derive(Debug, Clone, Default)]
 pub struct MaterialPoints {
     /// Current position.

@@ -96,19 +96,8 @@ impl Domain {
     }
 }
 
-/// Which lattice a body's points sit on.
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Default,
-    serde::Serialize,
-    serde::Deserialize,
-    schemars::JsonSchema,
-)]
-#[serde(rename_all = "snake_case")]
+/// Which lattice a body's points sit on (the case's `crate::case::Lattice`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Lattice {
     /// The body's own: rectangles and quadrilaterals mapped, sectors,
     /// circles and annuli polar, polygons cut into triangles and each

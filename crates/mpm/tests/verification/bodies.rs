@@ -177,7 +177,7 @@ fn turned_patch(angle: f64, origin: [f64; 2], basis: &str) -> (f64, usize) {
 /// error. That error is about 0.3 delta / h of the boundary strain
 /// (`ibm.rs`, measured 3.05e-3 upright at the default delta = h / 100), so
 /// the bound is 5e-3. Each point's GIMP domain is its own turned cell
-/// (`grid::quadrilateral_domain`), which tiles the block; with the
+/// (`grid::basis::quadrilateral_domain`), which tiles the block; with the
 /// axis-aligned squares of the upright fill instead, the worst errors were
 /// 3.9e-2 to 9.1e-2 at 30 and 45 degrees and did not fall with h. The
 /// B-splines averaged over the same turned cells (clipped at their knot

@@ -223,8 +223,8 @@ fn the_ghost_penalty_halves_the_bspline_columns_error() {
             let mut case = ibm_column(n);
             case["basis"] = basis.into();
             let (with, top_with, _) = stress_error_of(&case);
-            case["analysis"]["newton"]["ghost_penalty"] = 0.0.into();
-            case["analysis"]["newton"]["tangent_regularisation"] = 1e-6.into();
+            case["analysis"]["stabilisation"]["ghost_penalty"] = 0.0.into();
+            case["analysis"]["stabilisation"]["tangent_regularisation"] = 1e-6.into();
             let (without, top_without, _) = stress_error_of(&case);
             eprintln!(
                 "{basis}, {n} cells: error {with:.3e} with the penalty, {without:.3e} without; top {top_with:.3} m, {top_without:.3} m"
@@ -288,7 +288,7 @@ fn small_strain_column_matches_linear_theory() {
 /// `cells` cells, bilinear, in one step, with the given stabilisations.
 fn linear_column(cells: usize, ghost: f64, soft: f64) -> serde_json::Value {
     let mut case = column(cells);
-    case["analysis"]["newton"] =
+    case["analysis"]["stabilisation"] =
         serde_json::json!({"ghost_penalty": ghost, "tangent_regularisation": soft});
     case["basis"] = "linear".into();
     case["analysis"]["load_steps"] = 1.into();

@@ -1,4 +1,4 @@
-//! Ghost stabilisation (`analysis.newton.ghost_penalty`): the answer must
+//! Ghost stabilisation (`analysis.stabilisation.ghost_penalty`): the answer must
 //! not depend on how many load steps reach it, nor on the penalty's value.
 //!
 //! For a hyperelastic body under loads that depend only on the final load
@@ -17,7 +17,7 @@ fn tip(steps: u32, ghost: f64, soft: f64) -> f64 {
     case["grid"]["cell_size"] = 0.25.into();
     case["basis"] = "gimp".into();
     case["analysis"]["load_steps"] = steps.into();
-    case["analysis"]["newton"] =
+    case["analysis"]["stabilisation"] =
         serde_json::json!({"ghost_penalty": ghost, "tangent_regularisation": soft});
     let (_, report) = run(&case);
     report.steps.last().unwrap().probes[0].displacement[1]

@@ -16,8 +16,9 @@ fn tip_corner_crossing(regularisation: f64, ghost: f64) -> Result<(), SolveError
     let mut case = example("cantilever-grid");
     case["grid"]["cell_size"] = 0.1.into();
     case["analysis"]["load_steps"] = 400.into();
-    case["analysis"]["newton"] = serde_json::json!({
-        "tangent_regularisation": regularisation, "ghost_penalty": ghost, "line_search": false
+    case["analysis"]["newton"] = serde_json::json!({ "line_search": false });
+    case["analysis"]["stabilisation"] = serde_json::json!({
+        "tangent_regularisation": regularisation, "ghost_penalty": ghost
     });
     case["analysis"]["substepping"] = serde_json::json!({"min_fraction": 1.0});
     let case = Case::from_json(&case.to_string()).unwrap();

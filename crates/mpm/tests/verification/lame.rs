@@ -103,7 +103,7 @@ fn error_rows(basis: &str) -> Vec<(f64, f64, f64)> {
 }
 
 /// GIMP converges to Lame's solution. Each point's domain is its own
-/// polar cell, turned with it (`grid::quadrilateral_domain`), and the
+/// polar cell, turned with it (`grid::basis::quadrilateral_domain`), and the
 /// boundary curve's data points lie on the arcs and radial sides
 /// (`boundary::snap_to_edge`). Measured (h = 0.25, 0.125, 0.0625; relative
 /// errors): u_r(a) 2.0e-3, 2.1e-3, 5.5e-5; u_r(b) 4.0e-3, 4.5e-4, 1.9e-4;

@@ -203,7 +203,7 @@ const COOK_REFERENCE_COMPRESSIBLE: f64 = 22.6104;
 /// linear reference) and the answer is scaled by 1e4.
 ///
 /// Each point's GIMP domain is its own mapped cell
-/// (`grid::quadrilateral_domain`). Measured, h = 2, 1, 0.5: standard
+/// (`grid::basis::quadrilateral_domain`). Measured, h = 2, 1, 0.5: standard
 /// 5.983, 6.802, 7.292 (-23%, -12%, -6.2%); F-bar 7.700, 7.738, 7.755
 /// (-0.92%, -0.43%, -0.20%). F-bar converges from below at an order of
 /// 1.1 (the reference's own meshes see 1.07: the corner (0, 44) is

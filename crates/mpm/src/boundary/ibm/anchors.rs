@@ -3,7 +3,7 @@
 
 use nalgebra::Matrix2;
 
-use crate::boundary::bspline::{bezier, bezier_derivative, local_segment};
+use crate::boundary::curve::{bezier, bezier_derivative, local_segment};
 use crate::boundary::detection::BoundaryLoop;
 use crate::boundary::quadrature::gauss_points;
 use crate::boundary::reference_ring;

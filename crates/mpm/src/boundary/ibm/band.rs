@@ -3,15 +3,16 @@
 //! the bilinear shape functions of the step, and the ghost ties of the
 //! nodes beyond the supported boundary.
 
+use std::any::Any;
 use std::collections::BTreeMap;
 
 use nalgebra::{Matrix2, Vector2};
 
 use super::anchors::Anchor;
-use super::ghost::{self, GHOST_STENCIL, GhostTie, nodes_beyond};
-use crate::assembly::Pattern;
-use crate::boundary::bspline::{bezier_derivative, local_segment};
+use super::ghost_ties::{self, GHOST_STENCIL, GhostTie, nodes_beyond};
+use crate::assembly::{Pattern, Side, StepTerm};
 use crate::boundary::current_ring;
+use crate::boundary::curve::{bezier_derivative, local_segment};
 use crate::boundary::detection::BoundaryLoop;
 use crate::boundary::quadrature::hat_shares;
 use crate::configuration::Configuration;
@@ -25,6 +26,8 @@ pub const DEFAULT_BAND_WIDTH: f64 = 1e-2;
 #[derive(Debug, Clone)]
 struct BandPoint {
     anchor: usize,
+    /// The case's support its anchor stands for.
+    support: usize,
     /// Its shares of the active nodes are `shares[first..last]`.
     first: usize,
     last: usize,
@@ -93,6 +96,7 @@ impl BandTerms {
             let stiffness = held * a_nn * held * (length * 4.0 / (3.0 * band_width));
             terms.points.push(BandPoint {
                 anchor: i,
+                support: a.support,
                 first,
                 last: terms.shares.len(),
                 stiffness,
@@ -102,31 +106,12 @@ impl BandTerms {
                 },
             });
         }
-        terms.ghosts = ghost::ties(start, loops, anchors, &beyond, &rings);
+        terms.ghosts = ghost_ties::ties(start, loops, anchors, &beyond, &rings);
         terms
     }
 
     pub fn is_empty(&self) -> bool {
         self.points.is_empty()
-    }
-
-    /// Node groups the band and the ghost ties couple (for the stiffness
-    /// pattern).
-    pub fn coupling_groups(&self) -> Vec<Vec<u32>> {
-        self.points
-            .iter()
-            .map(|b| {
-                self.shares[b.first..b.last]
-                    .iter()
-                    .map(|&(a, _)| a as u32)
-                    .collect()
-            })
-            .chain(
-                self.ghosts
-                    .iter()
-                    .map(|g| g.nodes.iter().map(|&a| a as u32).collect()),
-            )
-            .collect()
     }
 
     /// The grid's displacement increment `u` at a band point.
@@ -146,9 +131,59 @@ impl BandTerms {
         b.stiffness * Vector2::new(v[0] - b.target[0], v[1] - b.target[1])
     }
 
+    /// Moves the anchors with the converged increment `u`. An anchor that
+    /// found no active node this step (it has drifted off the cells the
+    /// material touches) moves with its material point instead, given as
+    /// that point's displacement over the step in `point_moved`.
+    pub fn advance(
+        &self,
+        anchors: &mut [Anchor],
+        u: &[f64],
+        point_moved: impl Fn(usize) -> [f64; 2],
+    ) {
+        let mut carried = vec![false; anchors.len()];
+        for b in &self.points {
+            let v = self.increment(b, u);
+            let a = &mut anchors[b.anchor];
+            a.moved[0] += v[0];
+            a.moved[1] += v[1];
+            carried[b.anchor] = true;
+        }
+        for (a, _) in anchors.iter_mut().zip(carried).filter(|(_, c)| !c) {
+            let v = point_moved(a.point);
+            a.moved[0] += v[0];
+            a.moved[1] += v[1];
+        }
+    }
+}
+
+impl StepTerm for BandTerms {
+    fn side(&self) -> Side {
+        Side::Support
+    }
+
+    /// Node groups the band and the ghost ties couple (for the stiffness
+    /// pattern).
+    fn coupling_groups(&self) -> Vec<Vec<u32>> {
+        self.points
+            .iter()
+            .map(|b| {
+                self.shares[b.first..b.last]
+                    .iter()
+                    .map(|&(a, _)| a as u32)
+                    .collect()
+            })
+            .chain(
+                self.ghosts
+                    .iter()
+                    .map(|g| g.nodes.iter().map(|&a| a as u32).collect()),
+            )
+            .collect()
+    }
+
     /// Adds the band's internal force `N_a K (u_h - target)` and the ghost
     /// ties' `c_a K (u_I - 2 u_J + u_K)` to `f`.
-    pub fn add_forces(&self, u: &[f64], f: &mut [f64]) {
+    fn add_force(&self, u: &[f64], f: &mut [f64]) {
         for b in &self.points {
             let force = self.force(b, u);
             for &(a, n) in &self.shares[b.first..b.last] {
@@ -171,14 +206,14 @@ impl BandTerms {
     /// for residuals when nothing else loads the body; the band forces
     /// themselves are `h / delta` times larger, and measuring against them
     /// would let the material's balance go that much looser.
-    pub fn load_norm(&self, n_dofs: usize) -> f64 {
+    fn force_scale(&self, n_dofs: usize) -> f64 {
         let mut f = vec![0.0; n_dofs];
-        self.add_forces(&vec![0.0; n_dofs], &mut f);
+        self.add_force(&vec![0.0; n_dofs], &mut f);
         self.material_scale * f.iter().map(|v| v * v).sum::<f64>().sqrt()
     }
 
     /// Adds the band's stiffness `N_a N_b K` to tangent values.
-    pub fn add_stiffness(&self, pattern: &Pattern, values: &mut [f64]) {
+    fn add_stiffness(&self, _u: &[f64], pattern: &Pattern, values: &mut [f64]) {
         for b in &self.points {
             let shares = &self.shares[b.first..b.last];
             for &(a, na) in shares {
@@ -218,13 +253,7 @@ impl BandTerms {
     /// the DOFs that are free. On a DOF a grid support holds, the band
     /// pushes against that support, not the body, and the grid support's
     /// reaction (from the material's forces) is the body's side of it.
-    pub fn reactions(
-        &self,
-        anchors: &[Anchor],
-        u: &[f64],
-        fixed: &[bool],
-        n: usize,
-    ) -> Vec<[f64; 2]> {
+    fn reactions(&self, u: &[f64], fixed: &[bool], n: usize) -> Option<Vec<[f64; 2]>> {
         let mut out = vec![[0.0; 2]; n];
         let mut take = |support: usize, a: usize, share: f64, force: Vector2<f64>| {
             for c in 0..2 {
@@ -236,7 +265,7 @@ impl BandTerms {
         for b in &self.points {
             let force = self.force(b, u);
             for &(a, share) in &self.shares[b.first..b.last] {
-                take(anchors[b.anchor].support, a, share, force);
+                take(b.support, a, share, force);
             }
         }
         for tie in &self.ghosts {
@@ -245,32 +274,11 @@ impl BandTerms {
                 take(tie.support, a, c, force);
             }
         }
-        out
+        Some(out)
     }
 
-    /// Moves the anchors with the converged increment `u`. An anchor that
-    /// found no active node this step (it has drifted off the cells the
-    /// material touches) moves with its material point instead, given as
-    /// that point's displacement over the step in `point_moved`.
-    pub fn advance(
-        &self,
-        anchors: &mut [Anchor],
-        u: &[f64],
-        point_moved: impl Fn(usize) -> [f64; 2],
-    ) {
-        let mut carried = vec![false; anchors.len()];
-        for b in &self.points {
-            let v = self.increment(b, u);
-            let a = &mut anchors[b.anchor];
-            a.moved[0] += v[0];
-            a.moved[1] += v[1];
-            carried[b.anchor] = true;
-        }
-        for (a, _) in anchors.iter_mut().zip(carried).filter(|(_, c)| !c) {
-            let v = point_moved(a.point);
-            a.moved[0] += v[0];
-            a.moved[1] += v[1];
-        }
+    fn into_carried(self: Box<Self>) -> Option<Box<dyn Any>> {
+        Some(self)
     }
 }
 

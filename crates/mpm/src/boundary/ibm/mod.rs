@@ -35,15 +35,15 @@
 //! Nodes just beyond a supported boundary, which GIMP domains reach as the
 //! body deforms, get a tiny stiffness but a force proportional to the
 //! point's stress; their equilibrium would ask that stress to vanish, which
-//! at a support it cannot. They get a ghost tie ([`ghost`]), which makes
+//! at a support it cannot. They get a ghost tie ([`ghost_ties`]), which makes
 //! them follow the linear continuation of the field inside.
 //!
 //! The stages: [`anchors()`] once per run ([`anchors`]), then every load
-//! step [`BandTerms`] ([`band`]) with the ghost ties ([`ghost`]).
+//! step [`BandTerms`] ([`band`]) with the ghost ties ([`ghost_ties`]).
 
 pub mod anchors;
 pub mod band;
-pub mod ghost;
+pub mod ghost_ties;
 
 pub use anchors::{Anchor, IbmSupport, anchors};
 pub use band::{BandTerms, DEFAULT_BAND_WIDTH};

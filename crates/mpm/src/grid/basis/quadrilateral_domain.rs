@@ -18,9 +18,10 @@
 //! So `sum S_i = 1`, `sum grad S_i = 0`, `sum x_i (x) grad S_i = I`, and
 //! cells that tile the body give interior nodes a zero net force under a
 //! uniform stress, whatever the angle: the patch test. On an axis-aligned
-//! rectangle this is the tensor product of [`super::basis`] (tested).
+//! rectangle this is the tensor product of [`super`] (tested).
 
-use super::{Basis, Grid, NodeWeight, node_key};
+use super::{Basis, NodeWeight};
+use crate::grid::{Grid, node_key};
 
 /// The most vertices a convex quadrilateral clipped to a rectangle has.
 const MAX_VERTICES: usize = 8;

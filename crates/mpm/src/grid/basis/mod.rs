@@ -1,25 +1,18 @@
-//! Shape functions of the background grid, tensor products of 1D functions:
-//! - `Linear`: the bilinear finite-element hat `max(0, 1 - |d|/h)`.
-//! - `BSpline2`, `BSpline3`: the uniform quadratic and cubic B-splines
-//!   centred on the nodes (C1 and C2; 3 and 4 nodes per direction at a
-//!   point; Steffen, Kirby & Berzins 2008), averaged over the point's
-//!   domain as GIMP averages the hat: up to 4 and 5 nodes per direction.
-//!   The nodal values are the field's B-spline coefficients: linear fields
-//!   are reproduced with the nodes' own values, `x^2` with `x_i^2 - h^2/4`
-//!   (quadratic) or `x_i^2 - h^2/3` (cubic). Evaluated at a point (a zero
-//!   domain), as the boundary's quadrature does, they are the B-splines
-//!   themselves. The average, not the value at the point, is what
-//!   converges: at the point, a body whose edge cuts the functions'
-//!   supports leaves an error of a few 1e-3 that no refinement removes
-//!   (the column, docs/bsplines.md).
-//! - `Gimp`: the hat convolved with the point's characteristic function of
-//!   half-width `lp` (generalised interpolation MPM). The convolution is
-//!   written with the hat's antiderivative `H`, `S(d) = (H(d+lp) - H(d-lp)) /
-//!   2lp`, which is valid for any `lp` (not only `lp <= h/2`). A point
-//!   whose cell is not an axis-aligned rectangle has its hats averaged over
-//!   that cell instead ([`super::quadrilateral_domain`]).
+//! Shape functions of the background grid, tensor products of 1D
+//! functions, a family per file:
+//! - `Linear` and `Gimp`: the finite-element hat, and its average over a
+//!   point's domain ([`hat`]);
+//! - `BSpline2`, `BSpline3`: the uniform quadratic and cubic B-splines,
+//!   averaged the same way ([`bspline`]).
+//!
+//! A point whose domain is not an axis-aligned rectangle has either family
+//! averaged over its own cell ([`quadrilateral_domain`]).
 
-use super::{Grid, NodeKey, node_key, quadrilateral_domain};
+mod bspline;
+mod hat;
+pub mod quadrilateral_domain;
+
+use super::{Grid, NodeKey, node_key};
 
 /// One node's contribution at a point: `N` and its gradient.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -169,120 +162,14 @@ impl Basis {
     pub(super) fn eval_1d(&self, h: f64, x: f64, lp: f64) -> Weights1d {
         let mut w = Weights1d::default();
         match self {
-            Basis::Linear => {
-                let c = (x / h).floor();
-                let xi = x / h - c;
-                let c = c as i64;
-                w.push((c, 1.0 - xi, -1.0 / h));
-                w.push((c + 1, xi, 1.0 / h));
-            }
+            Basis::Linear => hat::linear_1d(h, x, &mut w),
+            Basis::Gimp => hat::gimp_1d(h, x, lp, &mut w),
             Basis::BSpline2 | Basis::BSpline3 => {
-                let f = if *self == Basis::BSpline2 {
-                    quadratic_bspline
-                } else {
-                    cubic_bspline
-                };
-                let reach = self.half_support();
-                let xi = x / h;
-                let l = lp / h; // the domain's half-width in cells (0: at the point)
-                let first = (xi - l - reach).ceil() as i64;
-                let last = (xi + l + reach).floor() as i64;
-                for i in first..=last {
-                    let d = xi - i as f64;
-                    let (n, dn) = if l > 0.0 {
-                        // The mean over [d - l, d + l]; its derivative as the
-                        // domain moves is the difference of the ends.
-                        (
-                            mean(&|t| f(t).0, d - l, d + l),
-                            (f(d + l).0 - f(d - l).0) / (2.0 * l),
-                        )
-                    } else {
-                        f(d)
-                    };
-                    if n > 0.0 || dn != 0.0 {
-                        w.push((i, n.max(0.0), dn / h));
-                    }
-                }
-            }
-            Basis::Gimp => {
-                let lp = lp.min(h); // a wider domain would need more than four nodes
-                let first = ((x - lp - h) / h).ceil() as i64;
-                let last = ((x + lp + h) / h).floor() as i64;
-                for i in first..=last {
-                    let d = x - h * i as f64;
-                    let s = (hat_integral(d + lp, h) - hat_integral(d - lp, h)) / (2.0 * lp);
-                    let ds = (hat(d + lp, h) - hat(d - lp, h)) / (2.0 * lp);
-                    if s > 0.0 || ds != 0.0 {
-                        w.push((i, s.max(0.0), ds));
-                    }
-                }
+                bspline::bspline_1d(self.degree(), h, x, lp, &mut w)
             }
         }
         w
     }
-}
-
-/// The mean of `g`, a polynomial between multiples of one half (the knots
-/// of both B-splines, in cells from their node), over `[a, b]`: 3-point
-/// Gauss on each piece, exact to degree 5.
-fn mean(g: &dyn Fn(f64) -> f64, a: f64, b: f64) -> f64 {
-    const GAUSS3: [(f64, f64); 3] = [
-        (-0.774_596_669_241_483_4, 5.0 / 9.0),
-        (0.0, 8.0 / 9.0),
-        (0.774_596_669_241_483_4, 5.0 / 9.0),
-    ];
-    let mut total = 0.0;
-    let mut left = a;
-    let mut knot = (2.0 * a).floor() / 2.0 + 0.5;
-    while left < b {
-        let right = knot.min(b);
-        let (c, r) = ((left + right) / 2.0, (right - left) / 2.0);
-        total += GAUSS3
-            .iter()
-            .map(|&(t, wt)| wt * r * g(c + r * t))
-            .sum::<f64>();
-        left = right;
-        knot += 0.5;
-    }
-    total / (b - a)
-}
-
-/// The quadratic B-spline centred at 0 on unit knots, and its derivative:
-/// `3/4 - d^2` for `|d| <= 1/2`, `(3/2 - |d|)^2 / 2` out to `3/2`.
-fn quadratic_bspline(d: f64) -> (f64, f64) {
-    let a = d.abs();
-    if a <= 0.5 {
-        (0.75 - d * d, -2.0 * d)
-    } else if a < 1.5 {
-        let r = 1.5 - a;
-        (0.5 * r * r, -r * d.signum())
-    } else {
-        (0.0, 0.0)
-    }
-}
-
-/// The cubic B-spline centred at 0 on unit knots, and its derivative:
-/// `2/3 - d^2 + |d|^3 / 2` for `|d| <= 1`, `(2 - |d|)^3 / 6` out to 2.
-fn cubic_bspline(d: f64) -> (f64, f64) {
-    let a = d.abs();
-    if a <= 1.0 {
-        (2.0 / 3.0 - d * d + 0.5 * a * a * a, -2.0 * d + 1.5 * d * a)
-    } else if a < 2.0 {
-        let r = 2.0 - a;
-        (r * r * r / 6.0, -0.5 * r * r * d.signum())
-    } else {
-        (0.0, 0.0)
-    }
-}
-
-fn hat(s: f64, h: f64) -> f64 {
-    (1.0 - s.abs() / h).max(0.0)
-}
-
-/// `H(s) = integral of hat from 0 to s`.
-fn hat_integral(s: f64, h: f64) -> f64 {
-    let a = s.abs().min(h);
-    s.signum() * (a - a * a / (2.0 * h))
 }
 
 /// A fixed-capacity list, so shape-function evaluation never allocates.
