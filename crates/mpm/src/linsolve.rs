@@ -12,8 +12,8 @@
 //! a limit point). Cholesky orders the unknowns by nested dissection of the
 //! grid's active nodes (`ordering.rs`) when it is given them, and runs on
 //! rayon's threads for the largest systems; LU keeps faer's COLAMD and
-//! sequential mode (which measured about 1.8x faster than its rayon mode
-//! at 1e5 unknowns on this 2-core machine).
+//! sequential mode (faster than its rayon mode where measured). The
+//! thresholds below were measured: docs/scale.md, "Measured choices".
 //!
 //! From [`KEPT_FACTOR_FROM_DOFS`] unknowns up, a symmetric tangent is not
 //! factorised at every Newton iteration: CG solves it to the accuracy
@@ -141,9 +141,8 @@ pub enum Factorisation {
 }
 
 /// From this many unknowns up, Cholesky factorises on rayon's threads:
-/// measured on the GIMP column (2 cores, `mpm bench-row`, one run each),
-/// sequential was 1.28x faster at 48k DOFs and parallel 1.15x faster at
-/// 479k; the crossover lies between, and this splits the difference.
+/// the crossover on the GIMP column lies between 48k and 479k DOFs, and
+/// this splits the difference.
 const PARALLEL_FROM_DOFS: usize = 150_000;
 
 /// A linear solver bound to one sparsity pattern.
@@ -210,11 +209,7 @@ const CG_MAX_ITERATIONS_STALE: usize = 20;
 /// solve. A fresh factor costs as much as 7 (1e5 column points) to 13
 /// (1e6) CG iterations; at 0.15 a stale factor needs about 7 iterations
 /// to Newton's 1e-6 where a fresh one needs 1 or 2, so over the two or
-/// three solves left in a step a refresh about pays for itself. Measured
-/// on the column's first two steps: stale factors converge at 0.07-0.09
-/// an iteration and are not refreshed at 1e5 or 1e6 points; at 0.063 the
-/// 1e5 column refreshed one and spent 0.97 s factorising and solving
-/// against 0.90 s.
+/// three solves left in a step a refresh about pays for itself.
 const REFRESH_RATE: f64 = 0.15;
 
 /// CG's residual reduction per product with `K`, on average: its
@@ -260,12 +255,9 @@ pub enum SymmetricMethod {
 }
 
 /// From this many unknowns up, symmetric tangents are solved by
-/// [`SymmetricMethod::KeptFactorCg`]: measured (`mpm bench`, 2 cores, first
-/// two load steps, two runs, BENCHMARKS.md) it takes 28-31% off the GIMP
-/// column's step at 479k DOFs and 18-20% at 48k, and changes the bilinear
-/// cantilever's by -3% to +9% (noise level), with 2-15% less peak memory
-/// at 0.5M DOFs. At 5k DOFs it was 7% slower on both in one run and 15%
-/// faster on the column in the other. Below it every answer is the direct
+/// [`SymmetricMethod::KeptFactorCg`], which takes a fifth to a third off
+/// the GIMP column's step from 48k DOFs, ties on the bilinear cantilever,
+/// and lowers the peak memory of both. Below it every answer is the direct
 /// solve's.
 const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
 
@@ -273,16 +265,9 @@ const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
 /// [`SymmetricMethod::Multigrid`], whose memory grows linearly where the
 /// kept factor's grows faster (620 bytes a point at 0.5M DOFs, 818 at
 /// 4.8M on the GIMP column), and which alone brings 1e6 GIMP column
-/// points under 1 GiB. Measured (`mpm bench-row`, 2 cores, first two load
-/// steps, alternating runs; BENCHMARKS.md, docs/scale.md): on the seventh
-/// session's host multigrid was faster from 0.14M DOFs (0.14M column:
-/// 1.08-1.15 s a step against 1.11-1.19; 0.15M cantilever: 0.75-0.81
-/// against 0.92-1.18; 0.48M column: 4.5-4.6 against 6.2-6.6), and slower
-/// at 0.05M (the size table's 0.90 against 0.78 s); on the sixth
-/// session's host it was 10% slower at 0.48M and 10% faster at 4.8M. CG's
-/// iterations grow slowly with size (71, 64 and 97 over the first two
-/// steps at 1e5, 1e6 and 1e7 points) where the factorisation grows as
-/// DOFs^1.3.
+/// points under 1 GiB. It was faster than the kept factor from about
+/// 0.14M DOFs, slower at 0.05M: CG's iterations grow slowly with size
+/// where the factorisation grows as DOFs^1.3.
 const MULTIGRID_FROM_DOFS: usize = 150_000;
 
 /// The method a solver of `n` unknowns uses by default.
@@ -790,8 +775,7 @@ fn with_inverse(order: Vec<usize>) -> (Vec<usize>, Vec<usize>) {
 /// A tangent's cancelling terms leave such "zeros" (3.1M entries of the
 /// 1e6 column's first tangent are below 1e-20; 27k are subnormal in single
 /// precision), and their products fill the factor with subnormal numbers,
-/// on which x86 arithmetic is orders of magnitude slower: that
-/// factorisation took 6.4-8.4 s against 2.4-3.1 s for the next step's.
+/// on which x86 arithmetic is orders of magnitude slower (docs/scale.md).
 fn single_precision(tangent: Tangent<'_>) -> impl Fn(usize, usize, f64) -> f32 {
     let scale: Vec<f64> = (0..tangent.n())
         .map(|col| tangent.diagonal(col).abs().sqrt())
