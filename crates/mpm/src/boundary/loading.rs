@@ -303,6 +303,7 @@ impl<'a> BoundaryLoading<'a> {
         groups
     }
 }
+
 /// The boundary loads as a step term: tractions on the body, whose
 /// stiffness is not symmetric once they move with the boundary.
 impl StepTerm for BoundaryLoading<'_> {

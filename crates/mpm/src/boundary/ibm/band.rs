@@ -110,10 +110,6 @@ impl BandTerms {
         terms
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.points.is_empty()
-    }
-
     /// The grid's displacement increment `u` at a band point.
     fn increment(&self, b: &BandPoint, u: &[f64]) -> [f64; 2] {
         let mut v = [0.0; 2];
