@@ -6,6 +6,7 @@ use axum::http::{HeaderMap, header};
 use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 
+use super::extract::drain;
 use super::{ApiError, AppState};
 
 /// Lets a request through when no token is configured or it carries
@@ -50,10 +51,11 @@ pub async fn require_same_origin(request: Request, next: Next) -> Response {
                     host(header::HeaderName::from_static("x-forwarded-host")),
                 )
             {
-                return ApiError::CrossOrigin {
+                let refused = ApiError::CrossOrigin {
                     origin: origin.to_string(),
-                }
-                .into_response();
+                };
+                drain(request.into_body()).await;
+                return refused.into_response();
             }
         }
     }

@@ -6,7 +6,7 @@ use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::extract::{FromRequest, Request, State};
 
-use super::extract::{IdPath, Params, integer};
+use super::extract::{IdPath, Params, drain, integer};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
@@ -24,7 +24,10 @@ use crate::jobs::{
 /// holds its memory meanwhile.
 pub async fn submit(State(state): State<AppState>, request: Request) -> Result<Response, ApiError> {
     let headers = request.headers().clone();
-    json_content_type(&headers)?;
+    if let Err(refused) = json_content_type(&headers) {
+        drain(request.into_body()).await;
+        return Err(refused);
+    }
     let limit = state.config.limits.client_timeout;
     let body = tokio::time::timeout(limit, Bytes::from_request(request, &state))
         .await
