@@ -303,6 +303,44 @@ impl Selector {
         }
     }
 
+    /// Whether `p` lies on the selector's lines (`x`, `y`, the circle, the
+    /// segment's line extended past its ends) to within `tol`, whatever
+    /// its ranges.
+    pub fn on_lines(&self, p: [f64; 2], tol: f64) -> bool {
+        let on = |v: Option<f64>, c: f64| v.is_none_or(|v| (c - v).abs() <= tol);
+        let on_circle = match (self.center, self.radius) {
+            (Some(c), Some(r)) => ((p[0] - c[0]).hypot(p[1] - c[1]) - r).abs() <= tol,
+            _ => true,
+        };
+        let on_line = self.segment.is_none_or(|[a, b]| {
+            let (d, r) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
+            (r[0] * d[1] - r[1] * d[0]).abs() / d[0].hypot(d[1]) <= tol
+        });
+        on(self.x, p[0]) && on(self.y, p[1]) && on_circle && on_line
+    }
+
+    /// Whether `p` lies within the selector's ranges (`x_between`,
+    /// `y_between`, and between the segment's ends along it) to within
+    /// `tol`, wherever its lines are.
+    pub fn within_ranges(&self, p: [f64; 2], tol: f64) -> bool {
+        let within = |r: Option<[f64; 2]>, c: f64| {
+            r.is_none_or(|[a, b]| c >= a.min(b) - tol && c <= a.max(b) + tol)
+        };
+        let along = self.segment.is_none_or(|[a, b]| {
+            let (d, r) = ([b[0] - a[0], b[1] - a[1]], [p[0] - a[0], p[1] - a[1]]);
+            let length = d[0].hypot(d[1]);
+            let s = (r[0] * d[0] + r[1] * d[1]) / length;
+            s >= -tol && s <= length + tol
+        });
+        within(self.x_between, p[0]) && within(self.y_between, p[1]) && along
+    }
+
+    /// Whether the selector has ranges, so that a stretch it picks can end
+    /// inside a segment of the boundary curve.
+    pub fn has_ranges(&self) -> bool {
+        self.x_between.is_some() || self.y_between.is_some() || self.segment.is_some()
+    }
+
     /// Whether `p` is selected; `tol` is the distance that counts as "on" a
     /// line or inside a range.
     pub fn contains(&self, p: [f64; 2], tol: f64) -> bool {

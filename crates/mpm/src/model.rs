@@ -9,7 +9,8 @@ use crate::boundary::ibm::{self, IbmSupport};
 use crate::boundary::loading::LoadedStretch;
 use crate::boundary::traction::Traction;
 use crate::boundary::{
-    BoundaryLoop, Representation, find_loops, selected_segments, set_offsets, snap_to_edge,
+    BoundaryLoop, Piece, Representation, find_loops, selected_pieces, selected_segments,
+    set_offsets, snap_to_edge,
 };
 use crate::case::{self, BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, SupportMethod};
 use crate::geometry::Geometry;
@@ -27,6 +28,10 @@ use crate::supports::{Fix, GridSupport, HeldDofs, Rotation};
 /// Loop segments per loop, `(loop index, segments)`, that a selector picks.
 type Selection = Vec<(usize, Vec<usize>)>;
 
+/// The pieces of curve per loop, `(loop index, pieces)`, that a support's
+/// selector holds.
+type Held = Vec<(usize, Vec<Piece>)>;
+
 /// What a case's bodies make before any load step: the material points,
 /// their boundary loops, and the loop segments each boundary selector picks.
 /// Seeding is where reading a case costs time and memory, and the one check
@@ -37,8 +42,9 @@ pub struct Seeded {
     pub loops: Vec<BoundaryLoop>,
     /// Per boundary load of the case.
     loads: Vec<Selection>,
-    /// Per support of the case; `None` for the grid-node ones.
-    supports: Vec<Option<Selection>>,
+    /// Per support of the case, the pieces of curve it holds; `None` for
+    /// the grid-node ones.
+    supports: Vec<Option<Held>>,
 }
 
 impl Seeded {
@@ -46,26 +52,32 @@ impl Seeded {
     pub fn new(case: &Case) -> Result<Self, CaseError> {
         let points = material_points(case);
         let loops = boundary_loops(case, &points);
-        let select = |path: String, on| {
-            let on_edge =
-                Representation::from(case.boundary.representation) == Representation::Edge;
-            let segments = selected_segments(on, &loops, &points, case.grid.cell_size, on_edge);
-            if segments.is_empty() {
-                return Err(CaseError::new(
-                    path,
-                    "selects no stretch of any body's boundary (it must pass within about \
-                     a point spacing of two neighbouring outer points)",
-                ));
-            }
-            Ok(segments)
+        let on_edge = Representation::from(case.boundary.representation) == Representation::Edge;
+        let h = case.grid.cell_size;
+        let none_selected = |path: String| {
+            CaseError::new(
+                path,
+                "selects no stretch of any body's boundary (it must pass within about \
+                 a point spacing of two neighbouring outer points)",
+            )
         };
         let loads = (case.loads.boundary.iter().enumerate())
-            .map(|(i, load)| select(format!("loads.boundary[{i}].on"), &load.on))
+            .map(|(i, load)| {
+                let segments = selected_segments(&load.on, &loops, &points, h, on_edge);
+                (!segments.is_empty())
+                    .then_some(segments)
+                    .ok_or_else(|| none_selected(format!("loads.boundary[{i}].on")))
+            })
             .collect::<Result<_, _>>()?;
         let supports = (case.supports.iter().enumerate())
             .map(|(i, s)| match s.method {
                 SupportMethod::Grid => Ok(None),
-                SupportMethod::Ibm => select(format!("supports[{i}].on"), &s.on).map(Some),
+                SupportMethod::Ibm => {
+                    let pieces = selected_pieces(&s.on, &loops, &points, h, on_edge);
+                    (!pieces.is_empty())
+                        .then_some(Some(pieces))
+                        .ok_or_else(|| none_selected(format!("supports[{i}].on")))
+                }
             })
             .collect::<Result<_, _>>()?;
         Ok(Self {
@@ -116,12 +128,14 @@ impl Simulation {
                     on: s.on,
                     fix: s.fix.into(),
                 }),
-                Some(segments) => ibm_supports.push(IbmSupport {
+                Some(pieces) => ibm_supports.push(IbmSupport {
                     index,
-                    segments,
+                    pieces,
                     fix: s.fix.into(),
                     displacement: s.displacement.unwrap_or([0.0, 0.0]),
                     rotation: s.rotation.map(Into::into),
+                    averaged: (s.constraint == case::Constraint::Averaged)
+                        .then_some((ibm::AVERAGED_PIECE_CELLS * case.grid.cell_size, s.on)),
                 }),
             }
         }

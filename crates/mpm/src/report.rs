@@ -117,9 +117,30 @@ pub struct StepReport {
     /// force). Zero when absent from a stored step.
     #[serde(default)]
     pub applied_load: [f64; 2],
+    /// How the implicit-boundary supports' reactions are spread along
+    /// their stretches: one entry per constraint of the band (a quadrature
+    /// point of a pointwise support, a piece of an averaged one), in the
+    /// order of the case's supports. Empty when absent from a stored step.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub support_tractions: Vec<SupportTraction>,
     /// What the step's data weighed (for benchmarks; not stored).
     #[serde(skip)]
     pub memory: StepMemory,
+}
+
+/// The traction an implicit-boundary support exerts on the body at one of
+/// its constraints: its force over the length of boundary the constraint
+/// stands for, at the (length-weighted) mean place of that length.
+#[derive(Debug, Clone, Copy, Serialize, serde::Deserialize, PartialEq)]
+pub struct SupportTraction {
+    /// Index of the support in the case.
+    pub support: usize,
+    /// Current position (m).
+    pub at: [f64; 2],
+    /// Length of boundary it stands for (m).
+    pub length: f64,
+    /// Force per unit length on the body (Pa).
+    pub traction: [f64; 2],
 }
 
 impl StepReport {

@@ -162,6 +162,7 @@ impl Simulation {
             probes: self.probes.reports(),
             reactions: vec![[0.0; 2]; self.n_supports],
             applied_load: [0.0; 2],
+            support_tractions: Vec::new(),
             memory: Default::default(),
         };
         (report, self.step_state())
@@ -327,10 +328,18 @@ impl Simulation {
             return Err(non_finite(&format!("state of material point {p}")));
         }
         self.probes.advect(&self.grid, self.basis, &conn, &u);
+        let mut support_tractions = Vec::new();
         for carried in converged.carried {
             if let Ok(band) = carried.downcast::<BandTerms>() {
+                support_tractions = band.tractions(&u);
                 self.advance_anchors(&band, &conn, &u);
             }
+        }
+        if !support_tractions
+            .iter()
+            .all(|t| t.at.iter().chain(&t.traction).all(|v| v.is_finite()))
+        {
+            return Err(non_finite("support tractions"));
         }
         let timings = StepTimings {
             grid: grid_seconds,
@@ -352,6 +361,7 @@ impl Simulation {
             probes: self.probes.reports(),
             reactions,
             applied_load,
+            support_tractions,
             memory: converged.memory,
         })
     }

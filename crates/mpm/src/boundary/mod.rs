@@ -218,29 +218,170 @@ pub fn selected_segments(
     h: f64,
     on_edge: bool,
 ) -> Vec<(usize, Vec<usize>)> {
+    per_loop(loops, points, h, on_edge, |ring, tol| {
+        match selector.point() {
+            Some(x) => nearest_segments(ring, x, |k| tol.reach(k) + 1e-9 * h),
+            None => (0..ring.len())
+                .filter(|&k| tol.ends_pass(ring, k, |p, t| selector.contains(p, t)))
+                .collect(),
+        }
+    })
+}
+
+/// `pick(reference ring, tolerance)` on every loop, as `(loop index,
+/// picked)` for the loops where it picks anything.
+fn per_loop<T>(
+    loops: &[BoundaryLoop],
+    points: &MaterialPoints,
+    h: f64,
+    on_edge: bool,
+    pick: impl Fn(&[[f64; 2]], &SegmentTolerance) -> Vec<T>,
+) -> Vec<(usize, Vec<T>)> {
     loops
         .iter()
         .enumerate()
         .filter_map(|(l, lp)| {
-            let n = lp.points.len();
             let ring = reference_ring(lp, points);
-            let reach = |k: usize| 1.5 * points.domain[lp.points[k]].reach();
-            let picked = |k: usize| {
-                let j = (k + 1) % n;
-                let tol = if on_edge {
-                    reach(k).min(reach(j)).min(0.1 * distance(ring[k], ring[j]))
-                } else {
-                    reach(k).min(reach(j))
-                } + 1e-9 * h;
-                selector.contains(ring[k], tol) && selector.contains(ring[j], tol)
-            };
-            let segments: Vec<usize> = match selector.point() {
-                Some(x) => nearest_segments(&ring, x, |k| reach(k) + 1e-9 * h),
-                None => (0..n).filter(|&k| picked(k)).collect(),
-            };
-            (!segments.is_empty()).then_some((l, segments))
+            let picked = pick(&ring, &SegmentTolerance::new(lp, &ring, points, h, on_edge));
+            (!picked.is_empty()).then_some((l, picked))
         })
         .collect()
+}
+
+/// The part `t` (parameters on the segment, `t[0] < t[1]`) of one segment
+/// of a loop's curve that a selection holds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Piece {
+    pub segment: usize,
+    pub t: [f64; 2],
+}
+
+/// The pieces of each loop's reference curve that `selector` picks, as
+/// `(loop index, pieces)` for loops with any: [`selected_segments`], except
+/// that a selector with ranges (`x_between`, `y_between`, a `segment`'s
+/// ends) holds exactly the part of the curve within them. A segment is a
+/// candidate when both its ends lie on the selector's lines (to the
+/// tolerance of [`selected_segments`]), and its piece runs between the
+/// parameters where the curve crosses a range's end (found by sampling and
+/// bisection, to round-off). So a stretch ends where the case says, not at
+/// the last data point before it: a footing's edge between two data points
+/// is where the footing ends.
+pub fn selected_pieces(
+    selector: &Selector,
+    loops: &[BoundaryLoop],
+    points: &MaterialPoints,
+    h: f64,
+    on_edge: bool,
+) -> Vec<(usize, Vec<Piece>)> {
+    if !selector.has_ranges() || selector.point().is_some() {
+        return selected_segments(selector, loops, points, h, on_edge)
+            .into_iter()
+            .map(|(l, segments)| {
+                let whole = |segment| Piece {
+                    segment,
+                    t: [0.0, 1.0],
+                };
+                (l, segments.into_iter().map(whole).collect())
+            })
+            .collect();
+    }
+    let exact = 1e-9 * h;
+    per_loop(loops, points, h, on_edge, |ring, tol| {
+        (0..ring.len())
+            .filter(|&k| tol.ends_pass(ring, k, |p, t| selector.on_lines(p, t)))
+            .flat_map(|k| {
+                let segment = curve::local_segment(ring, k);
+                let inside = |t: f64| selector.within_ranges(curve::bezier(&segment, t), exact);
+                runs(inside)
+                    .into_iter()
+                    .map(move |t| Piece { segment: k, t })
+            })
+            .collect()
+    })
+}
+
+/// Samples per segment when looking for where a selection's range ends.
+const RANGE_SAMPLES: usize = 16;
+
+/// The intervals of `[0, 1]` where `inside` holds, ends found by
+/// bisection between samples; intervals shorter than 1e-9 are dropped.
+fn runs(inside: impl Fn(f64) -> bool) -> Vec<[f64; 2]> {
+    let crossing = |mut lo: f64, mut hi: f64| {
+        let at_lo = inside(lo);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if inside(mid) == at_lo {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    };
+    let mut out = Vec::new();
+    let mut start = inside(0.0).then_some(0.0);
+    let mut prev = 0.0;
+    for i in 1..=RANGE_SAMPLES {
+        let t = i as f64 / RANGE_SAMPLES as f64;
+        match (start, inside(t)) {
+            (None, true) => start = Some(crossing(prev, t)),
+            (Some(s), false) => {
+                out.push([s, crossing(prev, t)]);
+                start = None;
+            }
+            _ => {}
+        }
+        prev = t;
+    }
+    if let Some(s) = start {
+        out.push([s, 1.0]);
+    }
+    out.retain(|[a, b]| b - a > 1e-9);
+    out
+}
+
+/// How near a selection a segment's end data points must lie for the
+/// segment to be picked (see [`selected_segments`]).
+struct SegmentTolerance {
+    reach: Vec<f64>,
+    on_edge: bool,
+    round_off: f64,
+}
+
+impl SegmentTolerance {
+    fn new(
+        l: &BoundaryLoop,
+        ring: &[[f64; 2]],
+        points: &MaterialPoints,
+        h: f64,
+        on_edge: bool,
+    ) -> Self {
+        debug_assert_eq!(l.points.len(), ring.len());
+        Self {
+            reach: (l.points.iter())
+                .map(|&p| 1.5 * points.domain[p].reach())
+                .collect(),
+            on_edge,
+            round_off: 1e-9 * h,
+        }
+    }
+
+    fn reach(&self, k: usize) -> f64 {
+        self.reach[k]
+    }
+
+    /// Whether both ends of segment `k` pass `test(point, tolerance)`.
+    fn ends_pass(&self, ring: &[[f64; 2]], k: usize, test: impl Fn([f64; 2], f64) -> bool) -> bool {
+        let j = (k + 1) % ring.len();
+        let tol = if self.on_edge {
+            self.reach[k]
+                .min(self.reach[j])
+                .min(0.1 * distance(ring[k], ring[j]))
+        } else {
+            self.reach[k].min(self.reach[j])
+        } + self.round_off;
+        test(ring[k], tol) && test(ring[j], tol)
+    }
 }
 
 /// The segments of a closed `ring` nearest the point `x`, if their chord

@@ -88,6 +88,18 @@ pub fn gauss_points(
     grid: &Grid,
     basis: Basis,
 ) -> impl Iterator<Item = (f64, f64)> {
+    gauss_points_between(ctrl, grid, basis, [0.0, 1.0])
+}
+
+/// [`gauss_points`] on the part `range` of the segment's parameter: the
+/// pieces between knot lines clipped to it, so a stretch that ends inside
+/// a cell is integrated to its end and no further.
+pub fn gauss_points_between(
+    ctrl: &[Point; 4],
+    grid: &Grid,
+    basis: Basis,
+    range: [f64; 2],
+) -> impl Iterator<Item = (f64, f64)> {
     // Quadratic B-splines centred on the nodes have knots at the cells'
     // middles as well as on the grid lines.
     let knots = match basis {
@@ -97,9 +109,14 @@ pub fn gauss_points(
         },
         _ => *grid,
     };
-    let crossings = cell_crossings(ctrl, &knots);
-    (1..crossings.len()).flat_map(move |i| {
-        let (t0, t1) = (crossings[i - 1], crossings[i]);
+    let mut cuts: Vec<f64> = cell_crossings(ctrl, &knots)
+        .into_iter()
+        .filter(|&t| t > range[0] && t < range[1])
+        .collect();
+    cuts.insert(0, range[0]);
+    cuts.push(range[1]);
+    (1..cuts.len()).flat_map(move |i| {
+        let (t0, t1) = (cuts[i - 1], cuts[i]);
         GAUSS4
             .iter()
             .map(move |&(xi, w)| (t0 + xi * (t1 - t0), w * (t1 - t0)))

@@ -709,6 +709,27 @@ pub struct Support {
     /// boundary method only.
     #[serde(default)]
     pub rotation: Option<Rotation>,
+    /// How the boundary method holds the stretch (default `pointwise`).
+    /// Implicit boundary method only.
+    #[serde(default)]
+    pub constraint: Constraint,
+}
+
+/// How the implicit boundary method holds a support's stretch.
+#[derive(
+    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Constraint {
+    /// At every quadrature point of the boundary curve: clamps, rollers,
+    /// prescribed displacements over whole sides.
+    #[default]
+    Pointwise,
+    /// On average over pieces of the stretch about two cells long, to its
+    /// exact ends: a rigid footing or punch whose edge lies inside the
+    /// body's boundary. Held pointwise, the cell holding the edge locks
+    /// and the footing acts up to a cell wider than it is.
+    Averaged,
 }
 
 /// Where a support acts.

@@ -250,6 +250,12 @@ impl Case {
                     "normal needs \"method\": \"ibm\"",
                 ));
             }
+            if s.constraint == Constraint::Averaged && s.method == SupportMethod::Grid {
+                return Err(CaseError::new(
+                    format!("supports[{i}].constraint"),
+                    "an averaged constraint needs \"method\": \"ibm\"",
+                ));
+            }
             if let Some(d) = s.displacement {
                 finite_pair(&format!("supports[{i}].displacement"), d)?;
                 if s.method == SupportMethod::Grid {

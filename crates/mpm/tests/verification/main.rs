@@ -7,6 +7,7 @@ mod common;
 mod bodies;
 mod cantilever;
 mod column;
+mod footing;
 mod ghost;
 mod hard_cases;
 mod ibm;

@@ -3,25 +3,39 @@
 
 use nalgebra::Matrix2;
 
+use crate::boundary::Piece;
 use crate::boundary::curve::{bezier, bezier_derivative, local_segment};
 use crate::boundary::detection::BoundaryLoop;
-use crate::boundary::quadrature::gauss_points;
+use crate::boundary::quadrature::gauss_points_between;
 use crate::boundary::reference_ring;
+use crate::geometry::Selector;
 use crate::grid::{Basis, Grid};
 use crate::particles::MaterialPoints;
 use crate::supports::{Fix, Rotation};
+
+/// The length of an averaged support's pieces, in cells. One constraint
+/// per two cells of stretch is the coarsest multiplier of the classical
+/// stable choices for a bilinear field (a multiplier mesh twice the
+/// field's); a cell each locked in the measurements (docs/ibm.md).
+pub const AVERAGED_PIECE_CELLS: f64 = 2.0;
 
 /// A support imposed on the boundary curve by the implicit boundary method.
 #[derive(Debug, Clone, PartialEq)]
 pub struct IbmSupport {
     /// Its index among the case's supports (for reactions).
     pub index: usize,
-    /// The segments of each loop it holds, `(loop index, segments)`.
-    pub segments: Vec<(usize, Vec<usize>)>,
+    /// The pieces of each loop's curve it holds, `(loop index, pieces)`.
+    pub pieces: Vec<(usize, Vec<Piece>)>,
     pub fix: Fix,
     /// Prescribed displacement at load factor 1.
     pub displacement: [f64; 2],
     pub rotation: Option<Rotation>,
+    /// Held on average over pieces of about this length (m) rather than at
+    /// every quadrature point ([`AVERAGED_PIECE_CELLS`]), on the part of
+    /// the boundary within these ranges (the case's selector, moved with
+    /// the prescribed displacement); `None`: at every point, wherever the
+    /// anchors go.
+    pub averaged: Option<(f64, Selector)>,
 }
 
 /// A quadrature point of an implicit-boundary support, Lagrangian: fixed on
@@ -50,6 +64,13 @@ pub struct Anchor {
     /// Reference position and the displacement since.
     pub(super) reference: [f64; 2],
     pub(super) moved: [f64; 2],
+    /// The piece of an averaged support it belongs to, whose anchors
+    /// share one constraint; `None`: a constraint of its own.
+    pub(super) piece: Option<usize>,
+    /// An averaged support's ranges, where it holds the boundary, and
+    /// the share of its span within them at the start
+    /// ([`Anchor::share_inside`]).
+    pub(super) ranges: Option<(Selector, f64)>,
 }
 
 impl Anchor {
@@ -99,6 +120,26 @@ impl Anchor {
         })
     }
 
+    /// The share of the boundary it stands for, `span` (its length along
+    /// the current tangent), that lies within its support's ranges moved by
+    /// the support's translation at `lambda`: 1 for a support without
+    /// ranges. So a rigid footing holds the soil that is under it, on its
+    /// exact width, as the soil slides outward beneath a smooth one; the
+    /// share goes linearly from 1 to 0 as the anchor's span crosses the
+    /// edge, so the footing's load does not jump as an anchor leaves.
+    pub(super) fn share_inside(&self, lambda: f64, span: [f64; 2]) -> f64 {
+        let Some((ranges, at_start)) = &self.ranges else {
+            return 1.0;
+        };
+        let x = self.position();
+        let p = [
+            x[0] - lambda * self.prescribed[0],
+            x[1] - lambda * self.prescribed[1],
+        ];
+        // Relative to the start, whose quadrature ends at the edge exactly.
+        (overlap_share(ranges, p, span) / at_start.max(f64::MIN_POSITIVE)).min(1.0)
+    }
+
     /// Current position.
     pub fn position(&self) -> [f64; 2] {
         [
@@ -106,6 +147,37 @@ impl Anchor {
             self.reference[1] + self.moved[1],
         ]
     }
+}
+
+/// The share of a span `span` centred at `p` that lies within the ranges
+/// of `ranges` (1 for a selector without ranges): the overlap of
+/// `[c - |dc| / 2, c + |dc| / 2]` with each range, over `|dc|`, for the
+/// coordinate `c` each range measures.
+fn overlap_share(ranges: &Selector, p: [f64; 2], span: [f64; 2]) -> f64 {
+    let overlap = |c: f64, dc: f64, [lo, hi]: [f64; 2]| {
+        let (lo, hi, half) = (lo.min(hi), lo.max(hi), 0.5 * dc.abs());
+        if half <= 1e-12 * (hi - lo).max(1.0) {
+            return if c >= lo && c <= hi { 1.0 } else { 0.0 };
+        }
+        if c - half >= lo && c + half <= hi {
+            return 1.0;
+        }
+        ((c + half).min(hi) - (c - half).max(lo)).max(0.0) / (2.0 * half)
+    };
+    let mut share = 1.0;
+    if let Some(r) = ranges.x_between {
+        share *= overlap(p[0], span[0], r);
+    }
+    if let Some(r) = ranges.y_between {
+        share *= overlap(p[1], span[1], r);
+    }
+    if let Some([a, b]) = ranges.segment {
+        let length = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let e = [(b[0] - a[0]) / length, (b[1] - a[1]) / length];
+        let along = (p[0] - a[0]) * e[0] + (p[1] - a[1]) * e[1];
+        share *= overlap(along, span[0] * e[0] + span[1] * e[1], [0.0, length]);
+    }
+    share
 }
 
 /// The anchors of the implicit-boundary supports: Gauss points of the
@@ -118,17 +190,23 @@ pub fn anchors(
     basis: Basis,
 ) -> Vec<Anchor> {
     let mut out = Vec::new();
+    let mut pieces_so_far = 0;
     for s in supports {
-        for (loop_index, segments) in &s.segments {
+        for (loop_index, pieces) in &s.pieces {
+            let first = out.len();
             let (loop_index, l) = (*loop_index, &loops[*loop_index]);
             if l.points.len() < 3 {
                 continue; // no curve through one or two points
             }
             let n = l.points.len();
             let ring = reference_ring(l, points);
-            for &k in segments {
+            for &Piece {
+                segment: k,
+                t: range,
+            } in pieces
+            {
                 let segment = local_segment(&ring, k);
-                for (t, weight) in gauss_points(&segment, grid, basis) {
+                for (t, weight) in gauss_points_between(&segment, grid, basis, range) {
                     let d = bezier_derivative(&segment, t);
                     let length = (d[0] * d[0] + d[1] * d[1]).sqrt();
                     out.push(Anchor {
@@ -144,10 +222,148 @@ pub fn anchors(
                         rotation: s.rotation,
                         reference: bezier(&segment, t),
                         moved: [0.0, 0.0],
+                        piece: None,
+                        ranges: None,
                     });
+                    if let Some((_, ranges)) = s.averaged {
+                        let a = out.last_mut().expect("just pushed");
+                        let span = [weight * d[0], weight * d[1]];
+                        let at_start = overlap_share(&ranges, a.reference, span);
+                        a.ranges = Some((ranges, at_start));
+                    }
                 }
+            }
+            if let Some((length, _)) = s.averaged {
+                pieces_so_far = into_pieces(&mut out[first..], &ring, length, pieces_so_far);
             }
         }
     }
     out
+}
+
+/// Puts the anchors of one averaged support on one loop (made in the order
+/// of their segments) into pieces of about `length` of arc each, numbered
+/// from `next`: each unbroken run of segments, from its first anchor to
+/// its last, divided evenly. Returns the next free piece number.
+fn into_pieces(anchors: &mut [Anchor], ring: &[[f64; 2]], length: f64, mut next: usize) -> usize {
+    let n = ring.len();
+    let chord = |k: usize| {
+        let (a, b) = (ring[k], ring[(k + 1) % n]);
+        (b[0] - a[0]).hypot(b[1] - a[1])
+    };
+    let mut covered = vec![false; n];
+    for a in anchors.iter() {
+        covered[a.segment] = true;
+    }
+    let start = (0..n)
+        .find(|&k| covered[k] && !covered[(k + n - 1) % n])
+        .unwrap_or(0);
+    // Arc position of each segment's start, from `start` along the loop,
+    // and the run each segment belongs to.
+    let (mut arc, mut run) = (vec![0.0; n], vec![usize::MAX; n]);
+    let (mut s, mut runs) = (0.0, Vec::<[f64; 2]>::new());
+    for i in 0..n {
+        let k = (start + i) % n;
+        if covered[k] {
+            if i == 0 || !covered[(k + n - 1) % n] {
+                runs.push([s, s]);
+            }
+            run[k] = runs.len() - 1;
+            arc[k] = s;
+            s += chord(k);
+            runs.last_mut().expect("a run was started")[1] = s;
+        }
+    }
+    // Each run's anchors lie between its first and last anchor.
+    let mut span = vec![[f64::INFINITY, f64::NEG_INFINITY]; runs.len()];
+    let position = |a: &Anchor| arc[a.segment] + a.t * chord(a.segment);
+    for a in anchors.iter() {
+        let r = &mut span[run[a.segment]];
+        r[0] = r[0].min(position(a));
+        r[1] = r[1].max(position(a));
+    }
+    let bases: Vec<(usize, usize, [f64; 2])> = span
+        .iter()
+        .map(|&[lo, hi]| {
+            let m = ((hi - lo) / length).round().max(1.0) as usize;
+            let base = next;
+            next += m;
+            (base, m, [lo, hi])
+        })
+        .collect();
+    for a in anchors.iter_mut() {
+        let (base, m, [lo, hi]) = bases[run[a.segment]];
+        let x = if hi > lo {
+            m as f64 * (position(a) - lo) / (hi - lo)
+        } else {
+            0.0
+        };
+        a.piece = Some(base + (x as usize).min(m - 1));
+    }
+    next
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::boundary::curve::bezier_derivative;
+    use crate::case::{Case, builtin};
+    use crate::stepper::Simulation;
+
+    /// The built-in footing (B / 2 = 0.5 m at h = 0.25 m, two points per
+    /// cell): its outer points sit at x = 0.0625 + 0.125 k, so the edge
+    /// x = 0.5 lies halfway between the data points 0.4375 and 0.5625. The
+    /// stretch its anchors stand for is 0.5 m to round-off, not the 0.4375 m
+    /// of the whole segments within the selection.
+    #[test]
+    fn a_footing_holds_its_exact_width_between_data_points() {
+        let case = Case::from_json(builtin::get("footing").unwrap()).unwrap();
+        let sim = Simulation::new(&case).unwrap();
+        let rings: Vec<_> = (sim.loops.iter())
+            .map(|l| reference_ring(l, &sim.points))
+            .collect();
+        let length: f64 = (sim.anchors.iter())
+            .filter(|a| a.support == 0)
+            .map(|a| {
+                let d = bezier_derivative(&local_segment(&rings[a.loop_index], a.segment), a.t);
+                a.weight * d[0].hypot(d[1])
+            })
+            .sum();
+        assert!((length - 0.5).abs() < 1e-9, "{length}");
+        let last = (sim.anchors.iter())
+            .filter(|a| a.support == 0)
+            .map(|a| a.reference[0])
+            .fold(0.0, f64::max);
+        assert!(last > 0.49 && last < 0.5, "{last}");
+        // Pieces of about two cells: one over this half-width of two cells.
+        assert!(
+            (sim.anchors.iter())
+                .filter(|a| a.support == 0)
+                .all(|a| a.piece == Some(0))
+        );
+    }
+
+    /// A span's share within a range: whole inside, half across the edge,
+    /// none beyond, and a span across the range's direction counted by its
+    /// centre.
+    #[test]
+    fn an_anchor_leaves_a_range_in_proportion_to_its_span() {
+        let ranges = Selector {
+            y: Some(3.0),
+            x_between: Some([0.0, 0.5]),
+            ..Default::default()
+        };
+        let share = |x: f64, span: [f64; 2]| overlap_share(&ranges, [x, 3.0], span);
+        assert_eq!(share(0.25, [0.1, 0.0]), 1.0);
+        assert!((share(0.5, [0.1, 0.0]) - 0.5).abs() < 1e-12);
+        assert!((share(0.48, [-0.1, 0.0]) - 0.7).abs() < 1e-12);
+        assert_eq!(share(0.56, [0.1, 0.0]), 0.0);
+        assert_eq!(share(0.49, [0.0, 0.1]), 1.0);
+        assert_eq!(share(0.51, [0.0, 0.1]), 0.0);
+        let segment = Selector {
+            segment: Some([[0.0, 3.0], [0.5, 3.0]]),
+            ..Default::default()
+        };
+        assert!((overlap_share(&segment, [0.5, 3.0], [0.1, 0.0]) - 0.5).abs() < 1e-12);
+    }
 }

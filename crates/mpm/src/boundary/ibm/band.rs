@@ -17,22 +17,27 @@ use crate::boundary::detection::BoundaryLoop;
 use crate::boundary::quadrature::hat_shares;
 use crate::configuration::Configuration;
 use crate::grid::NodeKey;
+use crate::report::SupportTraction;
 use crate::supports::Fix;
 
 /// Default band width `delta` in cells (see the module docs).
 pub const DEFAULT_BAND_WIDTH: f64 = 1e-2;
 
-/// One anchor's band term in a load step.
+/// One constraint of the band in a load step: an anchor's own, or the
+/// average over the anchors of one piece of an averaged support.
 #[derive(Debug, Clone)]
 struct BandPoint {
-    anchor: usize,
-    /// The case's support its anchor stands for.
+    /// The case's support it stands for.
     support: usize,
     /// Its shares of the active nodes are `shares[first..last]`.
     first: usize,
     last: usize,
     /// `dGamma * 4 / (3 delta) * P A_nn P`.
     stiffness: Matrix2<f64>,
+    /// The length of boundary it stands for, `dGamma` (summed over a
+    /// piece), and its place there at the step's start (weighted by it).
+    length: f64,
+    at: [f64; 2],
     /// Displacement increment the boundary should make in this step.
     target: [f64; 2],
 }
@@ -42,6 +47,9 @@ struct BandPoint {
 pub struct BandTerms {
     points: Vec<BandPoint>,
     shares: Vec<(usize, f64)>,
+    /// Each anchor with active nodes and its own shares, `(anchor, first,
+    /// last)` into `shares`: what carries it at the end of the step.
+    carriers: Vec<(usize, usize, usize)>,
     ghosts: Vec<GhostTie>,
     /// `3 delta / (4 h)`: turns band forces into a cell's material forces.
     material_scale: f64,
@@ -68,6 +76,7 @@ impl BandTerms {
         let mut beyond: BTreeMap<NodeKey, usize> = BTreeMap::new();
         // The current data points of the loops with anchors.
         let mut rings: BTreeMap<usize, Vec<[f64; 2]>> = BTreeMap::new();
+        let mut pieces: BTreeMap<usize, PieceSum> = BTreeMap::new();
         for (i, a) in anchors.iter().enumerate() {
             let current = rings
                 .entry(a.loop_index)
@@ -84,7 +93,13 @@ impl BandTerms {
                 continue;
             }
             let d = bezier_derivative(&local_segment(current, a.segment), a.t);
-            let length = a.weight * (d[0] * d[0] + d[1] * d[1]).sqrt();
+            let span = [a.weight * d[0], a.weight * d[1]];
+            let inside = a.share_inside(load_factor, span);
+            terms.carriers.push((i, first, terms.shares.len()));
+            if inside <= 0.0 {
+                continue; // slid out from under an averaged support
+            }
+            let length = inside * span[0].hypot(span[1]);
             let a_nn = a.acoustic_tensor(points);
             let cells = start.basis.reach_beyond_boundary();
             for key in nodes_beyond(grid, a.position(), a.normal, cells) {
@@ -94,30 +109,73 @@ impl BandTerms {
             }
             let held = projection(a.fix, a.normal);
             let stiffness = held * a_nn * held * (length * 4.0 / (3.0 * band_width));
+            let target = {
+                let u = a.prescribed_at(load_factor);
+                [u[0] - a.moved[0], u[1] - a.moved[1]]
+            };
+            let last = terms.shares.len();
+            match a.piece {
+                None => terms.points.push(BandPoint {
+                    support: a.support,
+                    first,
+                    last,
+                    stiffness,
+                    length,
+                    at: a.position(),
+                    target,
+                }),
+                Some(piece) => {
+                    let sum = pieces.entry(piece).or_insert_with(|| PieceSum {
+                        support: a.support,
+                        ..Default::default()
+                    });
+                    for &(node, n) in &terms.shares[first..last] {
+                        *sum.shares.entry(node).or_insert(0.0) += length * n;
+                    }
+                    sum.stiffness += stiffness;
+                    let x = a.position();
+                    sum.target[0] += length * target[0];
+                    sum.target[1] += length * target[1];
+                    sum.at[0] += length * x[0];
+                    sum.at[1] += length * x[1];
+                    sum.length += length;
+                }
+            }
+        }
+        for sum in pieces.into_values() {
+            let first = terms.shares.len();
+            terms
+                .shares
+                .extend((sum.shares.into_iter()).map(|(node, share)| (node, share / sum.length)));
             terms.points.push(BandPoint {
-                anchor: i,
-                support: a.support,
+                support: sum.support,
                 first,
                 last: terms.shares.len(),
-                stiffness,
-                target: {
-                    let u = a.prescribed_at(load_factor);
-                    [u[0] - a.moved[0], u[1] - a.moved[1]]
-                },
+                stiffness: sum.stiffness,
+                length: sum.length,
+                at: [sum.at[0] / sum.length, sum.at[1] / sum.length],
+                target: [sum.target[0] / sum.length, sum.target[1] / sum.length],
             });
         }
         terms.ghosts = ghost_ties::ties(start, loops, anchors, &beyond, &rings);
         terms
     }
 
-    /// The grid's displacement increment `u` at a band point.
-    fn increment(&self, b: &BandPoint, u: &[f64]) -> [f64; 2] {
+    /// The grid's displacement increment `u` interpolated with the shares
+    /// `shares[first..last]`.
+    fn interpolate(&self, first: usize, last: usize, u: &[f64]) -> [f64; 2] {
         let mut v = [0.0; 2];
-        for &(a, n) in &self.shares[b.first..b.last] {
+        for &(a, n) in &self.shares[first..last] {
             v[0] += n * u[2 * a];
             v[1] += n * u[2 * a + 1];
         }
         v
+    }
+
+    /// The grid's displacement increment `u` at a band point (its average
+    /// over the piece, for an averaged one).
+    fn increment(&self, b: &BandPoint, u: &[f64]) -> [f64; 2] {
+        self.interpolate(b.first, b.last, u)
     }
 
     /// `K (u_h - target)` at a band point: the band's contribution to the
@@ -125,6 +183,26 @@ impl BandTerms {
     fn force(&self, b: &BandPoint, u: &[f64]) -> Vector2<f64> {
         let v = self.increment(b, u);
         b.stiffness * Vector2::new(v[0] - b.target[0], v[1] - b.target[1])
+    }
+
+    /// The traction each band constraint exerts on the body at the
+    /// converged increment `u`, `-K (u_h - target) / dGamma`, where the
+    /// constraint's place has moved to. The ghost ties' forces, which
+    /// the reactions include, are left out: they stand for no length.
+    pub fn tractions(&self, u: &[f64]) -> Vec<SupportTraction> {
+        let mut out: Vec<SupportTraction> = (self.points.iter())
+            .map(|b| {
+                let (v, force) = (self.increment(b, u), self.force(b, u));
+                SupportTraction {
+                    support: b.support,
+                    at: [b.at[0] + v[0], b.at[1] + v[1]],
+                    length: b.length,
+                    traction: [-force[0] / b.length, -force[1] / b.length],
+                }
+            })
+            .collect();
+        out.sort_by_key(|t| t.support);
+        out
     }
 
     /// Moves the anchors with the converged increment `u`. An anchor that
@@ -138,12 +216,12 @@ impl BandTerms {
         point_moved: impl Fn(usize) -> [f64; 2],
     ) {
         let mut carried = vec![false; anchors.len()];
-        for b in &self.points {
-            let v = self.increment(b, u);
-            let a = &mut anchors[b.anchor];
+        for &(i, first, last) in &self.carriers {
+            let v = self.interpolate(first, last, u);
+            let a = &mut anchors[i];
             a.moved[0] += v[0];
             a.moved[1] += v[1];
-            carried[b.anchor] = true;
+            carried[i] = true;
         }
         for (a, _) in anchors.iter_mut().zip(carried).filter(|(_, c)| !c) {
             let v = point_moved(a.point);
@@ -151,6 +229,20 @@ impl BandTerms {
             a.moved[1] += v[1];
         }
     }
+}
+
+/// The sums that make an averaged band point: the piece's constraint
+/// `int (u_h - target) dGamma = 0`, so its shares are `int N dGamma / L`.
+#[derive(Debug, Default)]
+struct PieceSum {
+    support: usize,
+    /// Per active node, `sum dGamma N`.
+    shares: BTreeMap<usize, f64>,
+    stiffness: Matrix2<f64>,
+    /// `sum dGamma target` and `sum dGamma x`.
+    target: [f64; 2],
+    at: [f64; 2],
+    length: f64,
 }
 
 impl StepTerm for BandTerms {

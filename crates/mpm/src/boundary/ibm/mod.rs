@@ -45,5 +45,5 @@ pub mod anchors;
 pub mod band;
 pub mod ghost_ties;
 
-pub use anchors::{Anchor, IbmSupport, anchors};
+pub use anchors::{AVERAGED_PIECE_CELLS, Anchor, IbmSupport, anchors};
 pub use band::{BandTerms, DEFAULT_BAND_WIDTH};
