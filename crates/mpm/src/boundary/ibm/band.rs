@@ -1,7 +1,9 @@
 //! The band terms of one load step: each anchor's penalty
 //! `(4/3) P A_nn P / delta` per unit length, integrated at the anchor with
-//! the bilinear shape functions of the step, and the ghost ties of the
-//! nodes beyond the supported boundary.
+//! the bilinear shape functions of the step (an averaged support's summed
+//! over each piece into one constraint on the piece's mean displacement,
+//! each anchor counted for the part of its span under the support), and
+//! the ghost ties of the nodes beyond the supported boundary.
 
 use std::any::Any;
 use std::collections::BTreeMap;

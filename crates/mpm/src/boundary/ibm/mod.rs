@@ -32,6 +32,13 @@
 //! displacement at the end of every step, so that each one knows how far it
 //! has moved; the step's target is the prescribed displacement minus that.
 //!
+//! A support that ends inside the body's boundary (a rigid footing) can
+//! be held on average over pieces of about two cells instead
+//! (`"constraint": "averaged"`): held at every point, the stiff penalty
+//! makes the field constant across the cell that holds the edge, and the
+//! footing acts up to a cell wider (`docs/ibm.md`, The rigid footing's
+//! edge).
+//!
 //! Nodes just beyond a supported boundary, which GIMP domains reach as the
 //! body deforms, get a tiny stiffness but a force proportional to the
 //! point's stress; their equilibrium would ask that stress to vanish, which
