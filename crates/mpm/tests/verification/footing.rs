@@ -79,9 +79,10 @@ fn a_rigid_footing_on_undrained_clay_comes_to_prandtls_load_as_the_cells_shrink(
 
 /// Where the footing's edge falls in its cell: at h = B/8, on a grid line
 /// (origin offset 0) and at 0.6 of its cell, q / c is 5.3977 and 5.3156,
-/// 1.5% apart (held pointwise the same two were 6.54 and 6.5 and, at h =
-/// 0.2 m, 5.54 against 6.30: 15%). The bound, 2.5%, is that spread with
-/// room for the rounding of where the pieces fall.
+/// 1.5% apart (held pointwise, 6.96 on the grid line and 6.54 with the
+/// edge at 0.3 of its cell; at h = 0.2 m two origins gave 5.54 against
+/// 6.30, 15%). The bound, 2.5%, is that spread with room for the rounding
+/// of where the pieces fall.
 #[test]
 fn where_the_footings_edge_falls_in_a_cell_moves_its_load_by_little() {
     let q: Vec<f64> = [0.0, 0.6]

@@ -1,7 +1,7 @@
 //! The anchors of the implicit-boundary supports: quadrature points fixed
 //! on the reference curve and carried by the grid's displacement.
 
-use nalgebra::Matrix2;
+use nalgebra::{Matrix2, Vector2};
 
 use crate::boundary::Piece;
 use crate::boundary::curve::{bezier, bezier_derivative, local_segment};
@@ -13,10 +13,10 @@ use crate::grid::{Basis, Grid};
 use crate::particles::MaterialPoints;
 use crate::supports::{Fix, Rotation};
 
-/// The length of an averaged support's pieces, in cells. One constraint
-/// per two cells of stretch is the coarsest multiplier of the classical
-/// stable choices for a bilinear field (a multiplier mesh twice the
-/// field's); a cell each locked in the measurements (docs/ibm.md).
+/// The length of an averaged support's pieces, in cells: one constraint
+/// per two cells of stretch, the classical stable choice of a multiplier
+/// mesh twice the field's. Pieces of one cell left the load 4% apart
+/// between grid origins at h = B/8, against 1.8% (docs/ibm.md).
 pub const AVERAGED_PIECE_CELLS: f64 = 2.0;
 
 /// A support imposed on the boundary curve by the implicit boundary method.
@@ -121,21 +121,21 @@ impl Anchor {
     }
 
     /// The share of the boundary it stands for, `span` (its length along
-    /// the current tangent), that lies within its support's ranges moved by
-    /// the support's translation at `lambda`: 1 for a support without
-    /// ranges. So a rigid footing holds the soil that is under it, on its
-    /// exact width, as the soil slides outward beneath a smooth one; the
-    /// share goes linearly from 1 to 0 as the anchor's span crosses the
-    /// edge, so the footing's load does not jump as an anchor leaves.
-    pub(super) fn share_inside(&self, lambda: f64, span: [f64; 2]) -> f64 {
+    /// the current tangent), that lies within its support's ranges: 1 for a
+    /// support without ranges. The anchor is placed relative to the support
+    /// by the reference position plus the part of its motion the support
+    /// does not hold (a smooth footing's soil sliding beneath it; a rough
+    /// footing's soil moves with it and stays put). So a rigid footing holds
+    /// the soil that is under it, on its exact width; the share goes
+    /// linearly from 1 to 0 as the anchor's span crosses the edge, so the
+    /// footing's load does not jump as an anchor leaves.
+    pub(super) fn share_inside(&self, span: [f64; 2]) -> f64 {
         let Some((ranges, at_start)) = &self.ranges else {
             return 1.0;
         };
-        let x = self.position();
-        let p = [
-            x[0] - lambda * self.prescribed[0],
-            x[1] - lambda * self.prescribed[1],
-        ];
+        let free = (Matrix2::identity() - projection(self.fix, self.normal))
+            * Vector2::new(self.moved[0], self.moved[1]);
+        let p = [self.reference[0] + free[0], self.reference[1] + free[1]];
         // Relative to the start, whose quadrature ends at the edge exactly.
         (overlap_share(ranges, p, span) / at_start.max(f64::MIN_POSITIVE)).min(1.0)
     }
@@ -146,6 +146,16 @@ impl Anchor {
             self.reference[0] + self.moved[0],
             self.reference[1] + self.moved[1],
         ]
+    }
+}
+
+/// The components a support holds, as a projection.
+pub(super) fn projection(fix: Fix, n: [f64; 2]) -> Matrix2<f64> {
+    match fix {
+        Fix::Xy => Matrix2::identity(),
+        Fix::X => Matrix2::new(1.0, 0.0, 0.0, 0.0),
+        Fix::Y => Matrix2::new(0.0, 0.0, 0.0, 1.0),
+        Fix::Normal => Matrix2::new(n[0] * n[0], n[0] * n[1], n[1] * n[0], n[1] * n[1]),
     }
 }
 

@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Matrix2, Vector2};
 
-use super::anchors::Anchor;
+use super::anchors::{Anchor, projection};
 use super::ghost_ties::{self, GHOST_STENCIL, GhostTie, nodes_beyond};
 use crate::assembly::{Pattern, Side, StepTerm};
 use crate::boundary::current_ring;
@@ -20,7 +20,6 @@ use crate::boundary::quadrature::hat_shares;
 use crate::configuration::Configuration;
 use crate::grid::NodeKey;
 use crate::report::SupportTraction;
-use crate::supports::Fix;
 
 /// Default band width `delta` in cells (see the module docs).
 pub const DEFAULT_BAND_WIDTH: f64 = 1e-2;
@@ -96,7 +95,7 @@ impl BandTerms {
             }
             let d = bezier_derivative(&local_segment(current, a.segment), a.t);
             let span = [a.weight * d[0], a.weight * d[1]];
-            let inside = a.share_inside(load_factor, span);
+            let inside = a.share_inside(span);
             terms.carriers.push((i, first, terms.shares.len()));
             if inside <= 0.0 {
                 continue; // slid out from under an averaged support
@@ -372,19 +371,10 @@ impl StepTerm for BandTerms {
     }
 }
 
-/// The components a support holds, as a projection.
-fn projection(fix: Fix, n: [f64; 2]) -> Matrix2<f64> {
-    match fix {
-        Fix::Xy => Matrix2::identity(),
-        Fix::X => Matrix2::new(1.0, 0.0, 0.0, 0.0),
-        Fix::Y => Matrix2::new(0.0, 0.0, 0.0, 1.0),
-        Fix::Normal => Matrix2::new(n[0] * n[0], n[0] * n[1], n[1] * n[0], n[1] * n[1]),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::supports::Fix;
 
     #[test]
     fn projections_hold_the_right_components() {
