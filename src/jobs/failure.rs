@@ -13,6 +13,11 @@ pub enum FailureKind {
     Diverged,
     /// A material point's deformation gradient lost its positive determinant.
     InvertedPoint,
+    /// A material point's trial state was otherwise not admissible however
+    /// far the step was cut (`mpm::particles::admissible`): its volume grew
+    /// or shrank more than fourfold in a step, its stress was not finite, or
+    /// its return map left the flow rule.
+    InadmissiblePoint,
     LinearSolve,
     /// Material left the grid's extent.
     LeftGrid,
@@ -114,7 +119,11 @@ impl From<SolveError> for Failure {
         let kind = match e.cause() {
             SolveError::NotConverged { .. } => FailureKind::NotConverged,
             SolveError::Diverged { .. } => FailureKind::Diverged,
-            SolveError::Inverted { .. } => FailureKind::InvertedPoint,
+            SolveError::Inadmissible {
+                reason: mpm::newton::Inadmissible::Inverted,
+                ..
+            } => FailureKind::InvertedPoint,
+            SolveError::Inadmissible { .. } => FailureKind::InadmissiblePoint,
             SolveError::LinearSolve { .. } => FailureKind::LinearSolve,
             SolveError::LeftGrid { .. } => FailureKind::LeftGrid,
             SolveError::NonFinite { .. } => FailureKind::NonFinite,
@@ -142,10 +151,11 @@ impl From<SolveError> for Failure {
 mod tests {
     use super::*;
 
-    const STORED: [FailureKind; 10] = [
+    const STORED: [FailureKind; 11] = [
         FailureKind::NotConverged,
         FailureKind::Diverged,
         FailureKind::InvertedPoint,
+        FailureKind::InadmissiblePoint,
         FailureKind::LinearSolve,
         FailureKind::LeftGrid,
         FailureKind::NonFinite,

@@ -23,9 +23,10 @@ use crate::configuration::Configuration;
 use crate::grid::{Connectivity, increment, node_coordinates};
 use crate::linsolve::{Factorisation, SolveTally, SolverSettings, SparseSolver};
 use crate::material::{CauchyStress, History, Material, Response};
-use crate::newton::{Equilibrium, InvertedPoint};
+use crate::newton::Equilibrium;
 use crate::parallel;
 use crate::particles::MaterialPoints;
+use crate::particles::admissible::{self, InadmissiblePoint};
 use crate::report::{StepMemory, StepTimings};
 use crate::supports::HeldDofs;
 
@@ -314,7 +315,7 @@ impl Equilibrium for StepEquilibrium<'_> {
 
     /// The point loop: the trial stress of every point, in parallel,
     /// summed into the internal force.
-    fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
+    fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InadmissiblePoint> {
         let t = Instant::now();
         self.assembled = false;
         self.fbar_trial = None;
@@ -336,22 +337,22 @@ impl Equilibrium for StepEquilibrium<'_> {
             self.f_int = assembly::internal_force(conn, mp, |p| stresses[p]);
             self.fbar_trial = Some(FbarTrial::new(averages, shares));
         } else {
-            // An inverted point adds nothing meanwhile, and the
+            // An inadmissible point adds nothing meanwhile, and the
             // lowest-numbered one is reported.
             let responses = self.trial_responses();
-            let inverted = AtomicUsize::new(usize::MAX);
+            let refused = AtomicUsize::new(usize::MAX);
             let f_int = assembly::internal_force(conn, mp, |p| match responses.checked(p, false) {
                 Ok(response) => response.p,
                 Err(_) => {
-                    inverted.fetch_min(p, Ordering::Relaxed);
+                    refused.fetch_min(p, Ordering::Relaxed);
                     Matrix2::zeros()
                 }
             });
-            let point = inverted.into_inner();
+            let point = refused.into_inner();
             if point != usize::MAX
-                && let Err(inverted) = responses.checked(point, false)
+                && let Err(refused) = responses.checked(point, false)
             {
-                return Err(inverted);
+                return Err(refused);
             }
             self.f_int = f_int;
         }
@@ -446,10 +447,10 @@ struct TrialResponses<'s> {
 }
 
 impl TrialResponses<'_> {
-    /// Point `p`'s response, or the point if `u` inverts it. Without
-    /// `want_tangent` its tangent may be left zero
-    /// ([`Material::respond_without_tangent`]; F-bar's point needs it).
-    fn checked(&self, p: usize, want_tangent: bool) -> Result<Response, InvertedPoint> {
+    /// Point `p`'s response, or the point if it is not admissible at `u`
+    /// ([`admissible`]). Without `want_tangent` its tangent may be left
+    /// zero ([`Material::respond_without_tangent`]; F-bar's point needs it).
+    fn checked(&self, p: usize, want_tangent: bool) -> Result<Response, InadmissiblePoint> {
         let (conn, mp) = (self.conn, self.points);
         if let Some((fbar, averages)) = self.fbar {
             return fbar::point_response(fbar, averages, conn, mp, self.u, p)
@@ -458,20 +459,19 @@ impl TrialResponses<'_> {
         let (_, grad_u) = increment(conn.point_links(p), self.u);
         let j_start = mp.deformation[p].determinant();
         let jacobian = j_start * (Matrix2::identity() + grad_u).determinant();
-        if jacobian.is_nan() || jacobian <= 0.0 {
-            return Err(InvertedPoint { point: p, jacobian });
-        }
+        admissible::check_volume(p, j_start, &[jacobian])?;
         let material = &mp.materials[mp.material[p] as usize];
-        Ok(if want_tangent {
+        let response = if want_tangent {
             material.respond(&mp.history[p], &grad_u, j_start)
         } else {
             material.respond_without_tangent(&mp.history[p], &grad_u, j_start)
-        })
+        };
+        admissible::check_response(p, jacobian, response)
     }
 
     /// Point `p`'s response at a trial state the point loop found
     /// admissible: the only ones Newton assembles a tangent at or converges
-    /// to. (A point inverted would answer its start's response.)
+    /// to. (An inadmissible point would answer its start's response.)
     fn at(&self, p: usize, want_tangent: bool) -> Response {
         self.checked(p, want_tangent).unwrap_or_else(|_| {
             let mp = self.points;

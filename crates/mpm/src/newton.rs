@@ -20,7 +20,7 @@ pub trait Monitor {
     fn should_cancel(&mut self) -> bool;
 }
 
-pub use crate::particles::InvertedPoint;
+pub use crate::particles::admissible::{Inadmissible, InadmissiblePoint};
 
 /// Why a solve stopped without an answer. Every variant says where.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -46,14 +46,18 @@ pub enum SolveError {
         /// The last finite residual of the step before it, if any.
         last_finite: Option<f64>,
     },
+    /// A trial state Newton could not get past without a point that is not
+    /// admissible (`particles::admissible`): inverted, its volume jumped,
+    /// non-finite, or off its flow rule.
     #[error(
-        "material point {point} inverted (J = {jacobian:.3e}) in load step {step} at iteration {iteration}"
+        "material point {point} {reason} (J = {jacobian:.3e}) in load step {step} at iteration {iteration}"
     )]
-    Inverted {
+    Inadmissible {
         step: usize,
         iteration: usize,
         point: usize,
         jacobian: f64,
+        reason: Inadmissible,
         /// The residual of the last admissible trial state (none at
         /// iteration 0).
         residual: Option<f64>,
@@ -122,7 +126,7 @@ impl SolveError {
             self,
             SolveError::NotConverged { .. }
                 | SolveError::Diverged { .. }
-                | SolveError::Inverted { .. }
+                | SolveError::Inadmissible { .. }
                 | SolveError::LinearSolve { .. }
         )
     }
@@ -160,7 +164,7 @@ impl SolveError {
                 Some(iteration),
                 Some(residual).filter(|r| r.is_finite()).or(last_finite),
             ),
-            SolveError::Inverted {
+            SolveError::Inadmissible {
                 step,
                 iteration,
                 residual,
@@ -181,7 +185,7 @@ pub trait Equilibrium {
     /// Updates the trial state for increment `u` and returns the
     /// out-of-balance force (zero on constrained DOFs) and the force scale it
     /// is measured against.
-    fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint>;
+    fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InadmissiblePoint>;
     /// Solves `K du = r` with the tangent at the last trial state, to a
     /// relative residual `|r - K du| / |r|` of at most `accuracy` (an
     /// iterative solver may stop there; a direct one answers exactly).
@@ -271,7 +275,7 @@ impl<'a> Search<'a> {
             let rise = 0.5 * (n * n - self.norm0 * self.norm0) - slope * alpha;
             -slope * alpha * alpha / (2.0 * rise)
         };
-        // A trial without a finite residual is halved, as an inverted one.
+        // A trial without a finite residual is halved, as an inadmissible one.
         Some(if shorter.is_finite() {
             shorter.clamp(lo, hi)
         } else {
@@ -289,7 +293,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// Each Newton direction is searched along (see [`Search`]): the full step
 /// is taken when it passes the energy slack or Armijo's decrease of the
 /// residual norm (or converges), and is cut otherwise. A trial state with
-/// an inverted point is halved. Near the solution the full step always
+/// an inadmissible point (`particles::admissible`) is halved. Near the solution the full step always
 /// passes Armijo's test, so convergence stays quadratic.
 pub fn solve<M: Monitor + ?Sized>(
     eq: &mut impl Equilibrium,
@@ -299,14 +303,17 @@ pub fn solve<M: Monitor + ?Sized>(
 ) -> Result<(Vec<f64>, NewtonInfo), SolveError> {
     let mut u = vec![0.0; eq.n_dofs()];
     let mut info = NewtonInfo::default();
-    let inverted = |iteration, p: InvertedPoint, residual| SolveError::Inverted {
+    let inadmissible = |iteration, p: InadmissiblePoint, residual| SolveError::Inadmissible {
         step,
         iteration,
         point: p.point,
         jacobian: p.jacobian,
+        reason: p.reason,
         residual,
     };
-    let (mut r, mut scale) = eq.out_of_balance(&u).map_err(|p| inverted(0, p, None))?;
+    let (mut r, mut scale) = eq
+        .out_of_balance(&u)
+        .map_err(|p| inadmissible(0, p, None))?;
     // For the free full steps: the lowest out-of-balance force of the step
     // and the force scale at its start.
     let (mut lowest, mut free_steps, scale_start) = (f64::INFINITY, FREE_STEPS, scale);
@@ -396,7 +403,7 @@ pub fn solve<M: Monitor + ?Sized>(
                 }
                 // An inadmissible trial state is halved.
                 Err(_) if settings.line_search && alpha > SHORTEST_STEP => alpha *= 0.5,
-                Err(p) => return Err(inverted(iteration + 1, p, Some(residual))),
+                Err(p) => return Err(inadmissible(iteration + 1, p, Some(residual))),
             }
         }
         u = trial;
@@ -467,7 +474,7 @@ mod tests {
         fn n_dofs(&self) -> usize {
             1
         }
-        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
+        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InadmissiblePoint> {
             self.x = self.x0 + u[0];
             Ok((vec![8.0 - self.x.powi(3)], 8.0))
         }
@@ -553,7 +560,7 @@ mod tests {
         fn n_dofs(&self) -> usize {
             1
         }
-        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
+        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InadmissiblePoint> {
             self.x = 3.0 + u[0];
             Ok((vec![-self.x.atan()], 1.0))
         }
@@ -611,7 +618,7 @@ mod tests {
         fn n_dofs(&self) -> usize {
             1
         }
-        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
+        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InadmissiblePoint> {
             self.x = 0.1 + u[0];
             let internal = self.x.powi(3);
             Ok((vec![8.0 - internal], internal.abs().max(8.0)))
@@ -681,12 +688,13 @@ mod tests {
         fn n_dofs(&self) -> usize {
             1
         }
-        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InvertedPoint> {
+        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InadmissiblePoint> {
             let x = 1.0 + u[0];
             if x > 3.0 && !self.nan_past {
-                return Err(InvertedPoint {
+                return Err(InadmissiblePoint {
                     point: 7,
                     jacobian: -1.0,
+                    reason: Inadmissible::Inverted,
                 });
             }
             self.x = x;
@@ -718,7 +726,7 @@ mod tests {
             if nan_past {
                 assert!(matches!(e, SolveError::Diverged { .. }), "{e}");
             } else {
-                assert!(matches!(e, SolveError::Inverted { .. }), "{e}");
+                assert!(matches!(e, SolveError::Inadmissible { .. }), "{e}");
             }
             assert_eq!(e.location(), (step, Some(1), Some(0.875)), "{e}");
         }

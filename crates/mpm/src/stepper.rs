@@ -657,13 +657,16 @@ mod tests {
     /// The tangent is the exact derivative of the out-of-balance force, for
     /// each term that builds it: F-bar's coupling (cells of one, two and
     /// four points of unequal volumes, GIMP, a grid cut at an offset, held
-    /// nodes, a follower pressure) and the ghost penalty. Checked through
+    /// nodes, a follower pressure), the ghost penalty and the return maps
+    /// of non-associated flow (Mohr-Coulomb and Drucker-Prager, `psi = 0`,
+    /// every point flowing). Checked through
     /// the step's own solver: for a direction `v` on the free DOFs,
     /// `K^-1 (r(u + e v) - r(u - e v)) / (2 e)` must be `-v`, at a trial
     /// state `u` away from the start, to the central difference's error
     /// (e^2 times the third derivative; e = 1e-6 of the state). Measured:
     /// 6.2e-9 (F-bar), 6.1e-10 (ghost), 1.2e-9 (both); without F-bar's
-    /// coupling term, 85.
+    /// coupling term, 85; 1.4e-7 (Mohr-Coulomb) and 1.3e-7
+    /// (Drucker-Prager), where perfect plastic flow leaves the tangent soft.
     #[test]
     fn the_tangent_is_the_derivative_of_the_residual() {
         for (volumetric, ghost, model) in [
@@ -671,13 +674,23 @@ mod tests {
             ("standard", 1e-2, "hencky"),
             ("fbar", 1e-2, "hencky"),
             ("fbar", 0.0, "linear_elastic"),
+            ("standard", 0.0, "mohr_coulomb"),
+            ("standard", 0.0, "drucker_prager"),
         ] {
             let mut case = fixtures::block([2.0, 1.0], [7, 5], 0.5, [0.1, 0.13]);
             case["analysis"]["volumetric"] = volumetric.into();
             case["analysis"]["stabilisation"] = serde_json::json!({ "ghost_penalty": ghost });
             case["basis"] = "gimp".into();
             case["bodies"][0]["material"]["model"] = model.into();
-            case["bodies"][0]["material"]["poisson_ratio"] = 0.45.into();
+            let frictional = matches!(model, "mohr_coulomb" | "drucker_prager");
+            case["bodies"][0]["material"]["poisson_ratio"] =
+                if frictional { 0.3 } else { 0.45 }.into();
+            if frictional {
+                let material = &mut case["bodies"][0]["material"];
+                material["cohesion"] = 2e3.into();
+                material["friction_angle"] = 30.0.into();
+                material["dilation_angle"] = 0.0.into();
+            }
             case["loads"] =
                 serde_json::json!({ "boundary": [ { "on": { "y": 1.0 }, "pressure": 2e4 } ] });
             case["supports"] = serde_json::json!([ { "on": { "x": 0.1 }, "fix": "xy" } ]);
@@ -700,7 +713,43 @@ mod tests {
                     })
                     .collect()
             };
-            let (u, v) = (field(0.02, -0.01), field(-0.3, 0.5));
+            // Frictional points sheared and squeezed everywhere (div u < 0,
+            // zero on the held line x = 0.1), away from the apex their flow
+            // rule cannot reach without dilation.
+            let sheared = || -> Vec<f64> {
+                (0..n)
+                    .map(|dof| {
+                        let x = sim.grid.node_position(conn.nodes[dof / 2]);
+                        let from_held = x[0] - 0.1;
+                        if dof % 2 == 0 {
+                            -0.006 * from_held
+                        } else {
+                            (0.05 - 0.003 * x[1]) * from_held
+                        }
+                    })
+                    .collect()
+            };
+            let u = if frictional {
+                sheared()
+            } else {
+                field(0.02, -0.01)
+            };
+            let v = field(-0.3, 0.5);
+            if frictional {
+                let mp = &sim.points;
+                let flowing = (0..mp.len())
+                    .filter(|&p| {
+                        let (_, grad_u) =
+                            crate::grid::connectivity::increment(conn.point_links(p), &u);
+                        let material = &mp.materials[mp.material[p] as usize];
+                        let j_start = mp.deformation[p].determinant();
+                        let response = material.respond(&mp.history[p], &grad_u, j_start);
+                        response.history.plastic_strain > 0.0
+                    })
+                    .count();
+                eprintln!("{model}: {flowing} of {} points flow at u", mp.len());
+                assert!(2 * flowing > mp.len(), "{model}: {flowing} flow");
+            }
             let e = 1e-6;
             let shifted = |eq: &mut StepEquilibrium, sign: f64| {
                 let w: Vec<f64> = u.iter().zip(&v).map(|(a, b)| a + sign * e * b).collect();

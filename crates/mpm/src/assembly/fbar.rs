@@ -50,7 +50,8 @@ use crate::configuration::Configuration;
 use crate::grid::{Connectivity, increment};
 use crate::material::{Material, Response};
 use crate::parallel;
-use crate::particles::{InvertedPoint, MaterialPoints};
+use crate::particles::MaterialPoints;
+use crate::particles::admissible::{self, InadmissiblePoint};
 
 /// The averaging cells of a step: which points each holds, and their
 /// weights.
@@ -334,22 +335,19 @@ pub fn point_response(
     mp: &MaterialPoints,
     u: &[f64],
     p: usize,
-) -> Result<(Response, FbarShare), InvertedPoint> {
+) -> Result<(Response, FbarShare), InadmissiblePoint> {
     let g = &increment(conn.point_links(p), u).1;
     let j_start = mp.deformation[p].determinant();
     let (a, b) = (volume_growth(mp, p, g), fbar.of(averages, p));
     let (dj, dj_bar) = (1.0 + g.trace() + g.determinant(), 1.0 + b);
-    for jacobian in [j_start * dj, j_start * dj_bar] {
-        if jacobian.is_nan() || jacobian <= 0.0 {
-            return Err(InvertedPoint { point: p, jacobian });
-        }
-    }
+    admissible::check_volume(p, j_start, &[j_start * dj, j_start * dj_bar])?;
     let material = &mp.materials[mp.material[p] as usize];
     if small_strain(mp, p) {
         // B-bar, F-bar's linearisation: the volumetric strain replaced by
         // the cell's, g_bar = g + (b - a) / 2 I.
         let grad_bar = g + Matrix2::identity() * ((b - a) / 2.0);
-        let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
+        let response = material.respond(&mp.history[p], &grad_bar, j_start);
+        let mut response = admissible::check_response(p, j_start * dj_bar, response)?;
         let share = fbar.adjust_small_strain(p, &mut response);
         return Ok((response, share));
     }
@@ -357,7 +355,8 @@ pub fn point_response(
     let alpha = (dj_bar / dj).sqrt();
     // alpha dF - I, with alpha - 1 = (b - a) / (dJ (alpha + 1)).
     let grad_bar = Matrix2::identity() * ((b - a) / (dj * (alpha + 1.0))) + g * alpha;
-    let mut response = material.respond(&mp.history[p], &grad_bar, j_start);
+    let response = material.respond(&mp.history[p], &grad_bar, j_start);
+    let mut response = admissible::check_response(p, j_start * dj_bar, response)?;
     let share = fbar.adjust(p, &mut response, &df, dj, dj_bar);
     Ok((response, share))
 }

@@ -28,7 +28,9 @@
 
 use nalgebra::Matrix2;
 
-use super::return_map::{InvariantModuli, Moduli, Predictor, Returned, respond};
+use super::return_map::{
+    InvariantModuli, Moduli, Predictor, Returned, off_apex_flow_rule, respond,
+};
 use super::{Elastic, History, Response};
 
 /// The model's constants.
@@ -94,6 +96,7 @@ pub(super) fn drucker_prager(
         plastic_increment: 0.0,
         unit,
         moduli: Moduli::Invariant(InvariantModuli::elastic(bulk, mu)),
+        off_flow_rule: false,
     };
     let returned = if phi_trial <= 1e-12 * scale {
         elastic
@@ -140,12 +143,16 @@ fn to_cone(
             n_tr: -root2 * mu * m.eta * bulk / a,
             tr_n: -root2 * mu * bulk * m.eta_flow / a,
         }),
+        off_flow_rule: false,
     }
 }
 
 /// The return to the apex `p = xi c / eta`: the whole trial deviator and
 /// the volume change past the apex's are plastic, and the stress no longer
-/// moves with the strain (perfect plasticity).
+/// moves with the strain (perfect plasticity). The flow rule takes that
+/// volume change only with dilation ([`off_apex_flow_rule`]; the cone's
+/// flow vectors at the apex make `sqrt(2) eta_g` of volume per unit
+/// deviatoric plastic strain, and more as their deviators cancel).
 fn to_apex(m: &DruckerPrager, elastic: &Returned, volumetric: f64, deviator_norm: f64) -> Returned {
     let Elastic { mu, .. } = m.elastic;
     let bulk = m.elastic.bulk();
@@ -159,6 +166,12 @@ fn to_apex(m: &DruckerPrager, elastic: &Returned, volumetric: f64, deviator_norm
             * (plastic_deviator.powi(2) + plastic_volume.powi(2) / 3.0).sqrt(),
         unit: elastic.unit,
         moduli: Moduli::Invariant(InvariantModuli::default()),
+        off_flow_rule: off_apex_flow_rule(
+            plastic_volume,
+            2f64.sqrt() * m.eta_flow * plastic_deviator,
+            m.eta_flow > 0.0,
+            plastic_volume.abs() + plastic_deviator,
+        ),
     }
 }
 
@@ -300,6 +313,18 @@ mod tests {
                 (radius - mohr_coulomb).abs() < 1e-6 * m.cohesion,
                 "phi {phi}: radius {radius}, Mohr-Coulomb {mohr_coulomb}"
             );
+        }
+    }
+
+    /// Past the apex without dilation the cone's flow keeps the volume, so
+    /// an expansion to the apex is off the flow rule; with dilation it is
+    /// not (the test above).
+    #[test]
+    fn without_dilation_an_expansion_to_the_apex_is_off_the_flow_rule() {
+        let expand = Matrix2::new(1.01, 0.0, 0.0, 1.008);
+        for (psi, off) in [(0.0, true), (1.0, false), (20.0, false)] {
+            let r = drucker_prager(&soil(20.0, psi), &virgin(), &expand, 1.0, true);
+            assert_eq!(r.off_flow_rule, off, "psi {psi}");
         }
     }
 

@@ -34,6 +34,7 @@ pub(super) fn hencky(
             plane: [tau[(0, 0)] / j, tau[(1, 1)] / j, tau[(0, 1)] / j],
             zz: tau_zz / j,
         },
+        off_flow_rule: false,
     }
 }
 

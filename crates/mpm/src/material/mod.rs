@@ -51,6 +51,12 @@ pub struct Response {
     /// History to keep if the step converges.
     pub history: History,
     pub cauchy: CauchyStress,
+    /// The return could not meet the model's flow rule: a trial past the
+    /// apex of a frictional model whose dilation cannot take the volume
+    /// change the apex asks (`psi = 0` with the point opening). The state
+    /// is the apex's, and the point loop refuses it
+    /// (`particles::admissible`).
+    pub off_flow_rule: bool,
 }
 
 /// What a point carries from step to step.

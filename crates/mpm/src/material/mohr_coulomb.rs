@@ -23,7 +23,7 @@
 
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector3};
 
-use super::return_map::{Moduli, Returned, Trial, respond};
+use super::return_map::{Moduli, Returned, Trial, off_apex_flow_rule, respond};
 use super::{Elastic, History, Response};
 
 /// The model's constants.
@@ -131,7 +131,9 @@ pub(super) fn mohr_coulomb(
     let scale = m.cohesion + s.abs().max();
     let tol = 1e-12 * scale;
     let main = Plane(0, 2);
-    let (stress, ep) = if m.yield_value(&s, main) <= tol {
+    let mut at_apex = false;
+    let elastic = m.yield_value(&s, main) <= tol;
+    let (stress, ep) = if elastic {
         (s, d)
     } else {
         let on_plane = m.return_to(&s, [main]);
@@ -149,10 +151,13 @@ pub(super) fn mohr_coulomb(
             _ => match m.return_to(&s, [main, edge]) {
                 Some(r) if r.valid(tol) || m.friction == 0.0 => (r.stress, r.moduli),
                 // Tresca's edges always hold; with friction, the apex.
-                _ => (
-                    Vector3::from_element(m.cohesion / m.friction.tan()),
-                    Matrix3::zeros(),
-                ),
+                _ => {
+                    at_apex = true;
+                    (
+                        Vector3::from_element(m.cohesion / m.friction.tan()),
+                        Matrix3::zeros(),
+                    )
+                }
             },
         }
     };
@@ -165,18 +170,37 @@ pub(super) fn mohr_coulomb(
             moduli[order[i]][order[j]] = ep[(i, j)];
         }
     }
+    // An elastic trial keeps its strains as they are: recovered from the
+    // stresses, they would differ by round-off, and read as plastic flow.
     let mean_part = lambda / (3.0 * lambda + 2.0 * mu) * tau.iter().sum::<f64>();
-    let elastic_strains = tau.map(|t| (t - mean_part) / (2.0 * mu));
-    let plastic = (0..3)
-        .map(|i| (trial.strains[i] - elastic_strains[i]).powi(2))
-        .sum::<f64>()
-        .sqrt();
+    let elastic_strains = if elastic {
+        trial.strains
+    } else {
+        tau.map(|t| (t - mean_part) / (2.0 * mu))
+    };
+    let plastic_strains: [f64; 3] = std::array::from_fn(|i| trial.strains[i] - elastic_strains[i]);
+    let plastic = plastic_strains.iter().map(|e| e * e).sum::<f64>().sqrt();
+    // At the apex the flow vectors of the six planes make `sin(psi)` of
+    // volume per unit principal range each (`2 sin(psi)` against `2`),
+    // and more as they cancel ([`off_apex_flow_rule`]).
+    let off_flow_rule = at_apex && {
+        let volume = plastic_strains.iter().sum::<f64>();
+        let range = plastic_strains.iter().copied().fold(f64::MIN, f64::max)
+            - plastic_strains.iter().copied().fold(f64::MAX, f64::min);
+        off_apex_flow_rule(
+            volume,
+            m.dilation.sin() * range,
+            m.dilation > 0.0,
+            volume.abs() + range,
+        )
+    };
     let returned = Returned {
         tau,
         elastic_strains,
         plastic_increment: (2.0f64 / 3.0).sqrt() * plastic,
         unit: [0.0; 3],
         moduli: Moduli::Principal(moduli),
+        off_flow_rule,
     };
     respond(state, df, j_start, &trial, &returned, want_tangent)
 }
@@ -240,6 +264,30 @@ mod tests {
         }
     }
 
+    /// An elastic trial is not plastic flow: its plastic strain stays as
+    /// it was, to the bit, so the point does not read as yielding.
+    #[test]
+    fn an_elastic_trial_accumulates_no_plastic_strain() {
+        let (state, df) = trial([1e-4, -2e-4, 3e-5]);
+        let r = mohr_coulomb(&soil(30.0, 0.0), &state, &df, 1.0, false);
+        assert_eq!(r.history.plastic_strain, 0.0);
+    }
+
+    /// Without dilation every flow vector keeps the volume, so the apex,
+    /// which an expanding trial reaches by opening, is off the flow rule;
+    /// with a little dilation the six planes' vectors together make any
+    /// expansion. A trial on the main plane without dilation is not.
+    #[test]
+    fn without_dilation_an_expansion_to_the_apex_is_off_the_flow_rule() {
+        for (psi, off) in [(0.0, true), (1.0, false), (20.0, false)] {
+            let (state, df) = trial([0.01, 0.008, 0.009]);
+            let r = mohr_coulomb(&soil(20.0, psi), &state, &df, 1.0, true);
+            assert_eq!(r.off_flow_rule, off, "psi {psi}");
+        }
+        let (state, df) = trial([0.002, -0.003, -0.0005]);
+        assert!(!mohr_coulomb(&soil(20.0, 0.0), &state, &df, 1.0, true).off_flow_rule);
+    }
+
     /// The six planes of the hexagonal pyramid, unordered.
     fn yield_values(m: &MohrCoulomb, s: &Vector3<f64>) -> Vec<(usize, usize, f64)> {
         let mut out = Vec::new();
@@ -283,6 +331,7 @@ mod tests {
                     values.iter().all(|v| v.2 < tol),
                     "{name}: outside {values:?}"
                 );
+                assert!(!r.off_flow_rule, "{name}, psi {psi}");
                 if active_planes == 0 {
                     let apex = m.cohesion / m.friction.tan();
                     assert!(
@@ -329,8 +378,9 @@ mod tests {
             ("edge s2 = s3", [0.002, -0.0024, -0.0025]),
             ("edge s1 = s2", [0.0016, 0.0014, -0.004]),
             ("apex", [0.01, 0.012, 0.01]),
+            ("confined", [0.003, -0.012, 0.0]),
         ];
-        for (phi, psi) in [(20.0, 20.0), (30.0, 10.0), (0.0, 0.0)] {
+        for (phi, psi) in [(20.0, 20.0), (30.0, 10.0), (30.0, 0.0), (0.0, 0.0)] {
             let m = soil(phi, psi);
             for (name, e) in cases {
                 if phi == 0.0 && name == "apex" {

@@ -92,6 +92,27 @@ pub(super) struct Returned {
     /// Unit trial deviator (principal components), zero if there is none.
     pub unit: [f64; 3],
     pub moduli: Moduli,
+    /// An apex return the flow rule cannot make ([`Response::off_flow_rule`]).
+    pub off_flow_rule: bool,
+}
+
+/// Whether an apex return is off its flow rule. At the apex of a
+/// frictional surface the plastic strain may point anywhere in the cone of
+/// the flow vectors of the planes (or the cone) meeting there; each adds
+/// volume at the rate the dilation sets for its shear, so the cone holds
+/// the strains whose volume change `volume` is at least `least`, the
+/// least the dilation gives their shear (Drucker-Prager: `sqrt(2) eta_g
+/// |dev|`; Mohr-Coulomb: `sin(psi)` times the principal range). Without
+/// dilation every flow vector keeps the volume, and the apex can take none:
+/// `volume` must be zero. `scale` is the size of the plastic strain the
+/// comparison is relative to.
+pub(super) fn off_apex_flow_rule(volume: f64, least: f64, dilates: bool, scale: f64) -> bool {
+    let tol = 1e-9 * scale;
+    if dilates {
+        volume < least - tol
+    } else {
+        volume.abs() > tol
+    }
 }
 
 /// The response of a returned trial state: `P`, its tangent, the history
@@ -169,6 +190,7 @@ pub(super) fn respond(
             ],
             zz: ret.tau[2] / j,
         },
+        off_flow_rule: ret.off_flow_rule,
     }
 }
 

@@ -28,5 +28,6 @@ pub(super) fn small_strain(c: &Elastic, eps_n: &Matrix2<f64>, h: &Matrix2<f64>) 
             plane: [sigma[(0, 0)], sigma[(1, 1)], sigma[(0, 1)]],
             zz,
         },
+        off_flow_rule: false,
     }
 }

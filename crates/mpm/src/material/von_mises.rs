@@ -80,6 +80,7 @@ pub(super) fn von_mises(
         plastic_increment: dgamma,
         unit,
         moduli: Moduli::Invariant(moduli),
+        off_flow_rule: false,
     };
     respond(state, df, j_start, &trial, &returned, want_tangent)
 }

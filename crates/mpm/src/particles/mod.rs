@@ -3,19 +3,12 @@
 
 use nalgebra::Matrix2;
 
+pub mod admissible;
 pub mod seeding;
 
 use crate::grid::Support;
 use crate::material::{CauchyStress, History, Material};
 use seeding::{Domain, SeedPoint};
-
-/// A point whose trial state is not admissible: the increment inverts it
-/// (its Jacobian is not positive).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct InvertedPoint {
-    pub point: usize,
-    pub jacobian: f64,
-}
 
 #[derive(Debug, Clone, Default)]
 pub struct MaterialPoints {

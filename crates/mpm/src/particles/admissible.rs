@@ -1,0 +1,145 @@
+//! What a point's trial state must be for Newton to accept it, and for a
+//! load step to be kept: the point loop asks it of every point at every
+//! trial, so that a step which inverts, explodes or breaks a point is
+//! halved by the line search and, failing that, cut.
+//!
+//! A trial state is admissible when
+//! - its Jacobian `J = J_start det(dF)` is positive (the point is not
+//!   inverted);
+//! - the step changes its volume by less than [`MAX_STEP_VOLUME_RATIO`]
+//!   either way (`1 / r < det(dF) < r`);
+//! - its stress, `P` and history are finite numbers;
+//! - the return map met the model's own flow rule
+//!   ([`Response::off_flow_rule`]).
+
+use crate::material::Response;
+
+/// The largest factor by which one load step may grow or shrink a point's
+/// volume. A soil changes volume by its elastic strain (`p / K`, a few
+/// percent at the stresses of a footing) and its dilatancy (`tan(psi)`
+/// times the step's plastic shear); a compressible elastic column squeezed
+/// by half in one step (`hard_cases.rs`) shrinks its base points by about
+/// that. A point four times or a quarter of its volume after one step is
+/// broken, not deformed: a lone point over an edge cell, pulled by nodes
+/// that nothing else holds (the explosions this guards against reach
+/// `J = 1e6`).
+pub const MAX_STEP_VOLUME_RATIO: f64 = 4.0;
+
+/// Why a point's trial state is not admissible.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Inadmissible {
+    /// `J <= 0` (or not a number).
+    Inverted,
+    /// The step changes its volume by more than [`MAX_STEP_VOLUME_RATIO`].
+    VolumeJump,
+    /// Its stress, `P` or history is not a finite number.
+    NonFinite,
+    /// The return map left the flow rule: a trial past the apex of a
+    /// frictional model whose dilation cannot take the volume change the
+    /// apex asks (`psi = 0` with the point opening).
+    OffFlowRule,
+}
+
+impl std::fmt::Display for Inadmissible {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Inadmissible::Inverted => f.write_str("inverted"),
+            Inadmissible::VolumeJump => write!(
+                f,
+                "changed volume by more than a factor of {MAX_STEP_VOLUME_RATIO} in one step"
+            ),
+            Inadmissible::NonFinite => f.write_str("has a non-finite stress"),
+            Inadmissible::OffFlowRule => f.write_str(
+                "was pulled past its yield surface's apex, which its flow rule cannot return \
+                 (dilation angle 0 with the point opening)",
+            ),
+        }
+    }
+}
+
+/// A point whose trial state is not admissible.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InadmissiblePoint {
+    pub point: usize,
+    /// Its trial Jacobian.
+    pub jacobian: f64,
+    pub reason: Inadmissible,
+}
+
+/// Point `point`'s volume at a trial: admissible when each of `jacobians`
+/// (`J_start` times the step's `det(dF)`, one per volume the point's
+/// response sees: F-bar's cell average beside its own) is positive and
+/// within [`MAX_STEP_VOLUME_RATIO`] of `j_start`.
+pub fn check_volume(
+    point: usize,
+    j_start: f64,
+    jacobians: &[f64],
+) -> Result<(), InadmissiblePoint> {
+    for &jacobian in jacobians {
+        let reason = if jacobian.is_nan() || jacobian <= 0.0 {
+            Inadmissible::Inverted
+        } else if !(jacobian / j_start).is_finite()
+            || jacobian > MAX_STEP_VOLUME_RATIO * j_start
+            || jacobian * MAX_STEP_VOLUME_RATIO < j_start
+        {
+            Inadmissible::VolumeJump
+        } else {
+            continue;
+        };
+        return Err(InadmissiblePoint {
+            point,
+            jacobian,
+            reason,
+        });
+    }
+    Ok(())
+}
+
+/// Point `point`'s response at a trial whose volume passed
+/// [`check_volume`] (`jacobian` its own): admissible when its numbers are
+/// finite and its return met the flow rule.
+pub fn check_response(
+    point: usize,
+    jacobian: f64,
+    response: Response,
+) -> Result<Response, InadmissiblePoint> {
+    let finite = response.p.iter().all(|x| x.is_finite())
+        && response.cauchy.plane.iter().all(|x| x.is_finite())
+        && response.cauchy.zz.is_finite()
+        && response.history.tensor.iter().all(|x| x.is_finite())
+        && response.history.zz.is_finite()
+        && response.history.plastic_strain.is_finite();
+    let reason = if !finite {
+        Inadmissible::NonFinite
+    } else if response.off_flow_rule {
+        Inadmissible::OffFlowRule
+    } else {
+        return Ok(response);
+    };
+    Err(InadmissiblePoint {
+        point,
+        jacobian,
+        reason,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_volume_is_admissible_within_a_factor_of_four_of_the_steps_start() {
+        assert!(check_volume(3, 0.5, &[0.5, 0.126, 1.99]).is_ok());
+        for (j, reason) in [
+            (0.0, Inadmissible::Inverted),
+            (-0.1, Inadmissible::Inverted),
+            (f64::NAN, Inadmissible::Inverted),
+            (2.01, Inadmissible::VolumeJump),
+            (0.124, Inadmissible::VolumeJump),
+            (f64::INFINITY, Inadmissible::VolumeJump),
+        ] {
+            let e = check_volume(3, 0.5, &[0.5, j]).unwrap_err();
+            assert_eq!((e.point, e.reason), (3, reason), "{j}");
+        }
+    }
+}
