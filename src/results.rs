@@ -42,7 +42,8 @@ impl StepFiles {
     }
 }
 
-/// The `.pvd` series: the VTK files of each step written, by load factor.
+/// The `.pvd` series: the VTK files of each step written, by load factor
+/// (by step for a case with stages: [`mpm::StepReport::series_time`]).
 #[derive(Default)]
 pub struct Series {
     points: Vec<(f64, String)>,
@@ -82,12 +83,82 @@ pub struct Summary<'a> {
     /// its steps are those finished before.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<serde_json::Value>,
+    /// The largest loads the finished steps carried.
+    pub peaks: Peaks<'a>,
     pub steps: Vec<StepSummary<'a>>,
+}
+
+/// The largest loads a run carried, by magnitude: its applied load (a
+/// load-controlled run's peak) and each support's reaction (a
+/// displacement-controlled run's, on the support that pushes). A run that
+/// failed past its peak has passed it in these steps; one that failed
+/// before its peak (a load-controlled collapse) gives, in its `error`, the
+/// load factor it reached.
+#[derive(Serialize, Default)]
+pub struct Peaks<'a> {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub applied_load: Option<Peak<'a>>,
+    /// One per support (of each stage, when the case has stages).
+    pub reactions: Vec<Peak<'a>>,
+}
+
+#[derive(Serialize, Clone, Copy)]
+pub struct Peak<'a> {
+    pub step: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stage: Option<&'a str>,
+    pub load_factor: f64,
+    /// The support's place among the case's (or its stage's) supports.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub support: Option<usize>,
+    /// The force (N per metre).
+    pub value: [f64; 2],
+}
+
+impl<'a> Peaks<'a> {
+    pub fn of(steps: &'a [StepReport]) -> Self {
+        let magnitude = |v: &[f64; 2]| v[0].hypot(v[1]);
+        let peak = |s: &'a StepReport, support: Option<usize>, value: [f64; 2]| Peak {
+            step: s.step,
+            stage: s.stage.as_deref(),
+            load_factor: s.load_factor,
+            support,
+            value,
+        };
+        let mut peaks = Peaks::default();
+        // Per (stage, support), the first step of the largest magnitude.
+        let mut reactions: Vec<Peak<'a>> = Vec::new();
+        for s in steps.iter().filter(|s| s.step > 0) {
+            if peaks
+                .applied_load
+                .is_none_or(|p| magnitude(&s.applied_load) > magnitude(&p.value))
+            {
+                peaks.applied_load = Some(peak(s, None, s.applied_load));
+            }
+            for (j, r) in s.reactions.iter().enumerate() {
+                let at = reactions
+                    .iter()
+                    .position(|p| p.stage == s.stage.as_deref() && p.support == Some(j));
+                match at {
+                    None => reactions.push(peak(s, Some(j), *r)),
+                    Some(i) if magnitude(r) > magnitude(&reactions[i].value) => {
+                        reactions[i] = peak(s, Some(j), *r);
+                    }
+                    Some(_) => {}
+                }
+            }
+        }
+        peaks.reactions = reactions;
+        peaks
+    }
 }
 
 #[derive(Serialize)]
 pub struct StepSummary<'a> {
     pub step: usize,
+    /// The step's stage, when the case has stages.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stage: Option<&'a str>,
     pub load_factor: f64,
     pub newton_iterations: usize,
     pub residuals: &'a [f64],
@@ -95,7 +166,8 @@ pub struct StepSummary<'a> {
     pub active_dofs: usize,
     pub timings: &'a StepTimings,
     pub probes: BTreeMap<&'a str, ProbeSummary>,
-    /// Force on each support (N/m, the order of the case's `supports`).
+    /// Force on each support (N/m, the order of the case's `supports`, or
+    /// of the step's stage's).
     pub reactions: &'a [[f64; 2]],
     pub applied_load: [f64; 2],
 }
@@ -117,11 +189,13 @@ impl<'a> Summary<'a> {
         wall_seconds: f64,
         steps: &'a [StepReport],
     ) -> Self {
+        let all = steps;
         let steps: Vec<StepSummary<'a>> = steps
             .iter()
             .filter(|s| s.step > 0)
             .map(|s| StepSummary {
                 step: s.step,
+                stage: s.stage.as_deref(),
                 load_factor: s.load_factor,
                 newton_iterations: s.newton.iterations,
                 residuals: &s.newton.residuals,
@@ -152,6 +226,7 @@ impl<'a> Summary<'a> {
             wall_seconds,
             newton_iterations: steps.iter().map(|s| s.newton_iterations).sum(),
             error: None,
+            peaks: Peaks::of(all),
             steps,
         }
     }

@@ -470,3 +470,58 @@ fn a_first_step_failing_under_loads_far_beyond_the_stiffness_hints_at_units() {
     assert!(stderr.contains("are the units SI"), "{stderr}");
     assert!(!stderr.contains("--resume"), "{stderr}");
 }
+
+/// A staged run through the command line: each step of summary.json names
+/// its stage, the series runs by step (a stage's load factor starts again
+/// at each stage), and the peaks name the largest reaction of each stage's
+/// supports and the step it came at: for the pushed top, its last.
+#[test]
+fn a_staged_run_names_its_stages_and_its_peaks() {
+    let top = |d: f64| serde_json::json!({ "on": { "y": 1.0 }, "fix": "y", "method": "ibm", "displacement": [0.0, d] });
+    let rollers = [
+        serde_json::json!({ "on": { "x": 0.0 }, "fix": "normal", "method": "ibm" }),
+        serde_json::json!({ "on": { "y": 0.0 }, "fix": "normal", "method": "ibm" }),
+    ];
+    let case = serde_json::json!({
+        "version": 1,
+        "analysis": {},
+        "grid": { "cell_size": 0.25, "origin": [0.1, 0.07] },
+        "basis": "gimp",
+        "bodies": [{
+            "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [1.0, 1.0] } },
+            "points": { "per_cell": 2 },
+            "material": { "model": "hencky", "youngs_modulus": 1e6, "poisson_ratio": 0.3, "density": 0.0 }
+        }],
+        "stages": [
+            { "name": "confine", "load_steps": 2, "supports": [rollers[0], rollers[1], top(0.0)],
+              "loads": { "boundary": [{ "on": { "x": 1.0 }, "pressure": 2.0e4 }] } },
+            { "name": "push", "load_steps": 3, "supports": [rollers[0], rollers[1], top(-0.02)] }
+        ]
+    });
+    let dir = temp_dir("staged");
+    let path = dir.join("case.json");
+    std::fs::write(&path, case.to_string()).unwrap();
+    let out = dir.join("out");
+    run_ok(&["run", path.to_str().unwrap(), "--out"], &out);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let steps = summary["steps"].as_array().unwrap();
+    let stages: Vec<&str> = steps.iter().map(|s| s["stage"].as_str().unwrap()).collect();
+    assert_eq!(stages, ["confine", "confine", "push", "push", "push"]);
+    assert_eq!(summary["load_steps"], 5);
+    let pvd = std::fs::read_to_string(out.join("points.pvd")).unwrap();
+    for k in 0..=5 {
+        assert!(pvd.contains(&format!("timestep=\"{k}\"")), "{pvd}");
+    }
+    let top_force = |s: &serde_json::Value| s["reactions"][2][1].as_f64().unwrap().abs();
+    let peak = summary["peaks"]["reactions"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["stage"] == "push" && p["support"] == 2)
+        .expect("a peak for the pushed top");
+    assert_eq!(peak["step"], 5);
+    let largest = steps[2..].iter().map(top_force).fold(0.0, f64::max);
+    assert_eq!(peak["value"][1].as_f64().unwrap().abs(), largest);
+    assert!(largest > top_force(&steps[1]));
+}

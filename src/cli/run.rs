@@ -338,7 +338,7 @@ impl ResultWriter {
         let mut vtp = BufWriter::new(File::create(self.out.join(&files.boundary))?);
         write_vtp(&mut vtp, &boundaries)?;
         vtp.flush()?;
-        self.series.add(report.load_factor, files);
+        self.series.add(report.series_time(), files);
         Ok(())
     }
 

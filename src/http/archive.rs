@@ -129,7 +129,7 @@ fn write_archive(
         steps::write_points(&step, &mut zip)?;
         start(&mut zip, &files.boundary)?;
         steps::write_boundaries(&step, &mut zip)?;
-        series.add(report.load_factor, files);
+        series.add(report.series_time(), files);
     }
     let mut pvd = Vec::new();
     series.write_points(&mut pvd).map_err(io_error)?;

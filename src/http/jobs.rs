@@ -101,7 +101,7 @@ async fn queue(state: &AppState, body: Bytes, key: Option<&str>) -> Result<Respo
                 case_json: text,
                 title: admitted.case.title.as_deref(),
                 points: admitted.points as i64,
-                load_steps: admitted.case.analysis.load_steps as i64,
+                load_steps: admitted.case.total_load_steps() as i64,
                 idempotency_key: key,
             },
             limits.max_queued as i64,

@@ -105,7 +105,7 @@ pub struct ResultView {
     /// Per probe name, one entry per finished step.
     pub probes: BTreeMap<String, Vec<ProbeSample>>,
     /// Per finished step, the force of each support (order of the case's
-    /// `supports`).
+    /// `supports`, or of its step's stage's).
     pub reactions: Vec<StepReactions>,
     pub newton: Vec<StepNewton>,
     /// Summed over the finished steps.
@@ -115,6 +115,10 @@ pub struct ResultView {
 #[derive(Debug, Serialize)]
 pub struct ProbeSample {
     pub step: usize,
+    /// The step's stage, when the case has stages (the load factor runs
+    /// over each).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stage: Option<String>,
     pub load_factor: f64,
     pub position: [f64; 2],
     pub displacement: [f64; 2],
@@ -123,6 +127,8 @@ pub struct ProbeSample {
 #[derive(Debug, Serialize)]
 pub struct StepReactions {
     pub step: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stage: Option<String>,
     pub load_factor: f64,
     pub supports: Vec<[f64; 2]>,
     /// Resultant of the applied loads; the supports balance it.
@@ -145,6 +151,7 @@ impl ResultView {
             for p in &s.probes {
                 probes.entry(p.name.clone()).or_default().push(ProbeSample {
                     step: s.step,
+                    stage: s.stage.clone(),
                     load_factor: s.load_factor,
                     position: p.position,
                     displacement: p.displacement,
@@ -159,6 +166,7 @@ impl ResultView {
                 .iter()
                 .map(|s| StepReactions {
                     step: s.step,
+                    stage: s.stage.clone(),
                     load_factor: s.load_factor,
                     supports: s.reactions.clone(),
                     applied_load: s.applied_load,

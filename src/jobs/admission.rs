@@ -77,13 +77,23 @@ pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
     Ok(Admitted { case, points })
 }
 
+/// Where a case gives its load steps: `analysis.load_steps`, or its stages.
+fn load_steps_field(case: &Case) -> &'static str {
+    if case.stages.is_empty() {
+        "analysis.load_steps"
+    } else {
+        "stages"
+    }
+}
+
 fn check_load_steps(case: &Case, limits: &Limits) -> Result<(), Rejection> {
-    if case.analysis.load_steps as usize > limits.max_load_steps {
+    let steps = case.total_load_steps();
+    if steps > limits.max_load_steps as u64 {
         return Err(Rejection::LimitExceeded {
-            path: "analysis.load_steps".into(),
+            path: load_steps_field(case).into(),
             message: format!(
-                "{} load steps exceed this service's limit of {}",
-                case.analysis.load_steps, limits.max_load_steps
+                "{steps} load steps exceed this service's limit of {}",
+                limits.max_load_steps
             ),
         });
     }
@@ -211,7 +221,7 @@ pub fn stored_bytes(case: &Case, seeded: Footprint) -> f64 {
     let points = seeded.points as f64 * STORED_BYTES_PER_POINT
         + seeded.boundary_points as f64 * STORED_BYTES_PER_BOUNDARY_POINT
         + seeded.loops as f64 * STORED_BYTES_PER_LOOP;
-    let load_steps = case.analysis.load_steps as usize;
+    let load_steps = case.total_load_steps() as usize;
     // Reports of steps 0..=n; points of step 0, every `output.every`-th
     // and the last.
     points * case.output.point_steps(load_steps) as f64 + report * (load_steps + 1) as f64
@@ -221,15 +231,15 @@ pub fn stored_bytes(case: &Case, seeded: Footprint) -> f64 {
 /// with the larger share of its own limit: the load steps or the bodies'
 /// points.
 fn check_stored_bytes(seeded: Footprint, case: &Case, limits: &Limits) -> Result<(), Rejection> {
-    let (points, steps) = (seeded.points, case.analysis.load_steps);
+    let (points, steps) = (seeded.points, case.total_load_steps());
     let bytes = stored_bytes(case, seeded);
     if bytes <= limits.max_job_bytes as f64 {
         return Ok(());
     }
-    let steps_share = f64::from(steps) / limits.max_load_steps as f64;
+    let steps_share = steps as f64 / limits.max_load_steps as f64;
     let points_share = points as f64 / limits.max_points as f64;
     let path = if steps_share >= points_share {
-        "analysis.load_steps"
+        load_steps_field(case)
     } else {
         "bodies"
     };

@@ -66,7 +66,20 @@ before(async () => {
   const thinned = structuredClone(cantilever);
   thinned.title = 'cantilever storing the points of every second step, no columns';
   thinned.output = { every: 2, fields: [] };
+  // The cantilever in two stages: half its pressure, then the rest.
+  const staged = structuredClone(cantilever);
+  staged.title = 'cantilever loaded in two stages';
+  const { loads, supports } = staged;
+  delete staged.loads;
+  delete staged.supports;
+  delete staged.analysis.load_steps;
+  const half = loads.boundary.map((l) => ({ ...l, pressure: l.pressure / 2 }));
+  staged.stages = [
+    { name: 'half', load_steps: 2, supports, loads: { boundary: half } },
+    { name: 'whole', load_steps: 2, loads },
+  ];
   jobs.cantilever = (await call('POST', '/jobs', cantilever)).id;
+  jobs.staged = (await call('POST', '/jobs', staged)).id;
   jobs.failing = (await call('POST', '/jobs', failing)).id;
   jobs.thinned = (await call('POST', '/jobs', thinned)).id;
   jobs.stillborn = (await call('POST', '/jobs', stillborn)).id;
@@ -126,6 +139,7 @@ test('the page asks for the token, refuses a wrong one and lists the jobs with t
   const rows = await page.$$eval('tr[data-job]', (trs) => trs.map((tr) => [tr.dataset.job, tr.querySelector('.status').textContent]));
   assert.deepEqual(Object.fromEntries(rows), {
     [jobs.cantilever]: 'succeeded',
+    [jobs.staged]: 'succeeded',
     [jobs.failing]: 'failed',
     [jobs.thinned]: 'succeeded',
     [jobs.stillborn]: 'failed',
@@ -233,5 +247,19 @@ test('a job that stores no columns and thins its steps still shows its body', as
   assert.equal(await page.$eval('#points', (c) => c.dataset.points), '0');
   await page.$eval('#step-slider', (s) => { s.value = 4; s.dispatchEvent(new Event('input')); });
   await page.waitForSelector('#points[data-points="896"]');
+  await page.close();
+});
+
+test('a staged job names the stage of each step and plots against the step', async () => {
+  const page = await browser.newPage();
+  await signedIn(page);
+  await page.click(`a[href="#/jobs/${jobs.staged}"]`);
+  await page.waitForSelector('#points[data-points="896"]');
+  assert.match(await page.textContent('#step-label'), /step 4 of 4, stage "whole", load factor 1/);
+  await page.$eval('#step-slider', (s) => { s.value = 2; s.dispatchEvent(new Event('input')); });
+  await page.waitForFunction(() => document.querySelector('#step-label').textContent.startsWith('step 2 of 4, stage "half", load factor 1'));
+  const axes = await page.$$eval('figure.plot', (fs) => fs.map((f) => [f.dataset.title, f.textContent]));
+  const reactions = axes.find(([t]) => t === 'reactions');
+  assert.ok(reactions && reactions[1].includes('load step'), 'the reactions run by step');
   await page.close();
 });

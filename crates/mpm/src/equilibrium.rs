@@ -552,7 +552,7 @@ mod tests {
             conn: &conn,
             points: &sim.points,
         };
-        let loading = BoundaryLoading::new(&start, &sim.loops, &sim.boundary_loads, 1.0);
+        let loading = BoundaryLoading::new(&start, &sim.loops, &sim.stages[0].boundary_loads, 1.0);
         let u: Vec<f64> = (0..conn.n_dofs())
             .map(|dof| {
                 let x = sim.grid.node_position(conn.nodes[dof / 2]);

@@ -44,6 +44,7 @@ pub mod reference_edge;
 pub mod report;
 mod resume;
 pub mod settings;
+pub mod stages;
 pub mod stepper;
 pub mod supports;
 pub mod triangular;

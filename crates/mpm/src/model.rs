@@ -4,16 +4,20 @@
 //! segments once ([`Seeded`]), then splits the supports by how they are
 //! imposed.
 
+use crate::assembly::PointLoad;
 use crate::boundary::edge_detection::loops_on_edge;
-use crate::boundary::ibm::{self, IbmSupport};
+use crate::boundary::ibm::{self, IbmMotion, IbmSupport};
 use crate::boundary::loading::LoadedStretch;
 use crate::boundary::traction::Traction;
 use crate::boundary::{
     BoundaryLoop, Piece, Representation, find_loops, selected_pieces, selected_segments,
     set_offsets, snap_to_edge,
 };
-use crate::case::{self, BasisKind, Body, Case, CaseError, GridSpec, MaterialSpec, SupportMethod};
+use crate::case::{
+    self, BasisKind, Body, Case, CaseError, GridSpec, Loads, MaterialSpec, SupportMethod,
+};
 use crate::geometry::Geometry;
+use crate::geometry::Selector;
 use crate::grid::{Basis, Grid};
 use crate::linsolve::SolverSettings;
 use crate::material::{DruckerPrager, Elastic, Material, MohrCoulomb, StiffnessScales, VonMises};
@@ -22,71 +26,298 @@ use crate::particles::MaterialPoints;
 use crate::particles::seeding::{self, Density, FillSize, Lattice};
 use crate::probes::Probes;
 use crate::report::PointField;
+use crate::stages::Stage;
 use crate::stepper::{Simulation, StepSize, Substepping};
 use crate::supports::{Fix, GridSupport, HeldDofs, Rotation};
 
-/// Loop segments per loop, `(loop index, segments)`, that a selector picks.
-type Selection = Vec<(usize, Vec<usize>)>;
-
-/// The pieces of curve per loop, `(loop index, pieces)`, that a support's
-/// selector holds.
-type Held = Vec<(usize, Vec<Piece>)>;
-
-/// What a case's bodies make before any load step: the material points,
-/// their boundary loops, and the loop segments each boundary selector picks.
-/// Seeding is where reading a case costs time and memory, and the one check
-/// left after validation: a boundary selector that picks nothing fails
-/// here, naming its field.
+/// What a case's bodies make before any load step: the material points
+/// and their boundary loops. Seeding is where reading a case costs time and
+/// memory; the one check left after validation, a boundary selector that
+/// picks nothing, is made on what it seeds ([`Seeded::segments`],
+/// [`Seeded::pieces`]), naming the field.
 pub struct Seeded {
     pub points: MaterialPoints,
     pub loops: Vec<BoundaryLoop>,
-    /// Per boundary load of the case.
-    loads: Vec<Selection>,
-    /// Per support of the case, the pieces of curve it holds; `None` for
-    /// the grid-node ones.
-    supports: Vec<Option<Held>>,
+    h: f64,
+    on_edge: bool,
 }
 
 impl Seeded {
     /// Seeds a validated case.
-    pub fn new(case: &Case) -> Result<Self, CaseError> {
+    pub fn new(case: &Case) -> Self {
         let points = material_points(case);
         let loops = boundary_loops(case, &points);
-        let on_edge = Representation::from(case.boundary.representation) == Representation::Edge;
-        let h = case.grid.cell_size;
-        let none_selected = |path: String| {
-            CaseError::new(
-                path,
-                "selects no stretch of any body's boundary (it must pass within about \
-                 a point spacing of two neighbouring outer points)",
-            )
-        };
-        let loads = (case.loads.boundary.iter().enumerate())
-            .map(|(i, load)| {
-                let segments = selected_segments(&load.on, &loops, &points, h, on_edge);
-                (!segments.is_empty())
-                    .then_some(segments)
-                    .ok_or_else(|| none_selected(format!("loads.boundary[{i}].on")))
-            })
-            .collect::<Result<_, _>>()?;
-        let supports = (case.supports.iter().enumerate())
-            .map(|(i, s)| match s.method {
-                SupportMethod::Grid => Ok(None),
-                SupportMethod::Ibm => {
-                    let pieces = selected_pieces(&s.on, &loops, &points, h, on_edge);
-                    (!pieces.is_empty())
-                        .then_some(Some(pieces))
-                        .ok_or_else(|| none_selected(format!("supports[{i}].on")))
-                }
-            })
-            .collect::<Result<_, _>>()?;
-        Ok(Self {
+        Self {
             points,
             loops,
-            loads,
-            supports,
-        })
+            h: case.grid.cell_size,
+            on_edge: Representation::from(case.boundary.representation) == Representation::Edge,
+        }
     }
+
+    fn none_selected(path: &str) -> CaseError {
+        CaseError::new(
+            path,
+            "selects no stretch of any body's boundary (it must pass within about \
+             a point spacing of two neighbouring outer points)",
+        )
+    }
+
+    /// The loop segments, `(loop index, segments)`, a boundary load's `on`
+    /// (at `path`) picks.
+    fn segments(&self, on: &Selector, path: &str) -> Result<Vec<(usize, Vec<usize>)>, CaseError> {
+        let s = selected_segments(on, &self.loops, &self.points, self.h, self.on_edge);
+        (!s.is_empty())
+            .then_some(s)
+            .ok_or_else(|| Self::none_selected(path))
+    }
+
+    /// The pieces of curve, `(loop index, pieces)`, an IBM support's `on`
+    /// (at `path`) holds.
+    fn pieces(&self, on: &Selector, path: &str) -> Result<Vec<(usize, Vec<Piece>)>, CaseError> {
+        let s = selected_pieces(on, &self.loops, &self.points, self.h, self.on_edge);
+        (!s.is_empty())
+            .then_some(s)
+            .ok_or_else(|| Self::none_selected(path))
+    }
+}
+
+/// The loads of a stage's end, each with the field it came from: gravity,
+/// point loads by `at`, boundary loads by `on` and kind.
+#[derive(Default, Clone)]
+struct LoadState {
+    gravity: [f64; 2],
+    point: Vec<([f64; 2], [f64; 2], String)>,
+    boundary: Vec<(Selector, Traction, String)>,
+}
+
+impl LoadState {
+    /// `loads` (at `prefix`) added to this state, matched by identity.
+    fn add(&mut self, loads: &Loads, prefix: &str) {
+        if let Some(g) = loads.gravity {
+            self.gravity = [self.gravity[0] + g[0], self.gravity[1] + g[1]];
+        }
+        for (i, l) in loads.point_loads.iter().enumerate() {
+            match self.point.iter_mut().find(|(at, _, _)| *at == l.at) {
+                Some((_, f, _)) => *f = [f[0] + l.force[0], f[1] + l.force[1]],
+                None => self
+                    .point
+                    .push((l.at, l.force, format!("{prefix}.point_loads[{i}]"))),
+            }
+        }
+        for (i, l) in loads.boundary.iter().enumerate() {
+            let t = match (l.traction, l.pressure) {
+                (Some(t), _) => Traction::Dead(t),
+                (None, Some(p)) => Traction::Pressure(p),
+                (None, None) => continue, // rejected by validation
+            };
+            let same = |(on, u, _): &&mut (Selector, Traction, String)| {
+                *on == l.on
+                    && matches!(
+                        (u, t),
+                        (Traction::Dead(_), Traction::Dead(_))
+                            | (Traction::Pressure(_), Traction::Pressure(_))
+                    )
+            };
+            match self.boundary.iter_mut().find(same) {
+                Some((_, u, _)) => *u = traction_sum(*u, t, 1.0),
+                None => self
+                    .boundary
+                    .push((l.on, t, format!("{prefix}.boundary[{i}].on"))),
+            }
+        }
+    }
+
+    /// The loads of stage `k`'s end, after the state `before` of the stage
+    /// before.
+    fn of_stage(case: &Case, k: usize, before: &LoadState) -> LoadState {
+        let Some(stage) = case.stages.get(k) else {
+            let mut state = LoadState::default();
+            state.add(&case.loads, "loads");
+            return state;
+        };
+        let mut state = match &stage.loads {
+            Some(targets) => {
+                let mut s = LoadState::default();
+                s.add(targets, &format!("stages[{k}].loads"));
+                s
+            }
+            None => before.clone(),
+        };
+        if let Some(increments) = &stage.load_increments {
+            state.add(increments, &format!("stages[{k}].load_increments"));
+        }
+        state
+    }
+}
+
+/// `a + w b` for tractions of one kind.
+fn traction_sum(a: Traction, b: Traction, w: f64) -> Traction {
+    match (a, b) {
+        (Traction::Dead(x), Traction::Dead(y)) => {
+            Traction::Dead([x[0] + w * y[0], x[1] + w * y[1]])
+        }
+        (Traction::Pressure(x), Traction::Pressure(y)) => Traction::Pressure(x + w * y),
+        _ => unreachable!("matched by kind"),
+    }
+}
+
+fn is_zero(t: Traction) -> bool {
+    match t {
+        Traction::Dead(x) => x == [0.0, 0.0],
+        Traction::Pressure(p) => p == 0.0,
+    }
+}
+
+/// The stages of a case, from its seeded bodies: each stage's loads split
+/// into what it holds from the stage before and what it ramps, and its
+/// supports; with the run's implicit-boundary supports (the first
+/// stage's), whose anchors the later stages move on.
+fn stages(case: &Case, seeded: &Seeded) -> Result<(Vec<Stage>, Vec<IbmSupport>), CaseError> {
+    let views = case.stage_views();
+    let mut out = Vec::with_capacity(views.len());
+    let mut ibm_supports: Vec<IbmSupport> = Vec::new();
+    let mut before = LoadState::default();
+    for (k, view) in views.iter().enumerate() {
+        let end = LoadState::of_stage(case, k, &before);
+        let mut boundary_loads = Vec::new();
+        let mut stretches = |on: &Selector, path: &str, traction: Traction, held: bool| {
+            let selection = seeded.segments(on, path)?;
+            boundary_loads.extend(selection.into_iter().map(|(loop_index, segments)| {
+                LoadedStretch {
+                    loop_index,
+                    segments,
+                    traction,
+                    held,
+                }
+            }));
+            Ok::<(), CaseError>(())
+        };
+        for (on, t, path) in &before.boundary {
+            if !is_zero(*t) {
+                stretches(on, path, *t, true)?;
+            }
+        }
+        for (on, t, path) in &end.boundary {
+            let start = before.boundary.iter().find(|(o, u, _)| {
+                o == on && std::mem::discriminant(u) == std::mem::discriminant(t)
+            });
+            match start {
+                None => stretches(on, path, *t, false)?,
+                Some((_, u, _)) => {
+                    let change = traction_sum(*t, *u, -1.0);
+                    if !is_zero(change) {
+                        stretches(on, path, change, false)?;
+                    }
+                }
+            }
+        }
+        for (on, u, path) in &before.boundary {
+            let kept = end
+                .boundary
+                .iter()
+                .any(|(o, t, _)| o == on && std::mem::discriminant(u) == std::mem::discriminant(t));
+            if !kept && !is_zero(*u) {
+                stretches(on, path, traction_sum(*u, *u, -2.0), false)?;
+            }
+        }
+        let mut point_loads = Vec::new();
+        let point = |at: [f64; 2]| nearest_point(&seeded.points, at);
+        for (at, f, _) in &before.point {
+            if *f != [0.0, 0.0] {
+                point_loads.push(PointLoad {
+                    point: point(*at),
+                    force: *f,
+                    held: true,
+                });
+            }
+        }
+        for (at, f, _) in &end.point {
+            let start = before
+                .point
+                .iter()
+                .find(|(a, _, _)| a == at)
+                .map_or([0.0; 2], |p| p.1);
+            let change = [f[0] - start[0], f[1] - start[1]];
+            if change != [0.0, 0.0] || before.point.is_empty() {
+                point_loads.push(PointLoad {
+                    point: point(*at),
+                    force: change,
+                    held: false,
+                });
+            }
+        }
+        for (at, f, _) in &before.point {
+            if !end.point.iter().any(|(a, _, _)| a == at) && *f != [0.0, 0.0] {
+                point_loads.push(PointLoad {
+                    point: point(*at),
+                    force: [-f[0], -f[1]],
+                    held: false,
+                });
+            }
+        }
+        let geostatic = case.stages.get(k).and_then(|s| s.geostatic).map(|g| g.k0);
+        // A geostatic stage's gravity is on in full: its stresses carry it.
+        let gravity = if geostatic.is_some() {
+            [end.gravity, [0.0, 0.0]]
+        } else {
+            [
+                before.gravity,
+                [
+                    end.gravity[0] - before.gravity[0],
+                    end.gravity[1] - before.gravity[1],
+                ],
+            ]
+        };
+        let mut grid_supports = Vec::new();
+        let mut ibm = vec![None; ibm_supports.len()];
+        for (index, s) in view.supports.iter().enumerate() {
+            let path = format!("{}[{index}].on", view.supports_path);
+            match s.method {
+                SupportMethod::Grid => grid_supports.push(GridSupport {
+                    index,
+                    on: s.on,
+                    fix: s.fix.into(),
+                }),
+                SupportMethod::Ibm if k == 0 => ibm_supports.push(IbmSupport {
+                    index,
+                    pieces: seeded.pieces(&s.on, &path)?,
+                    fix: s.fix.into(),
+                    displacement: s.displacement.unwrap_or([0.0, 0.0]),
+                    rotation: s.rotation.map(Into::into),
+                    averaged: (s.constraint == case::Constraint::Averaged)
+                        .then_some((ibm::AVERAGED_PIECE_CELLS * case.grid.cell_size, s.on)),
+                }),
+                SupportMethod::Ibm => {
+                    let first = &views[0].supports;
+                    let owner = (first.iter().filter(|f| f.method == SupportMethod::Ibm))
+                        .position(|f| f.same_as(s))
+                        .expect("validated: it continues one of the first stage");
+                    ibm[owner] = Some(IbmMotion {
+                        index,
+                        displacement: s.displacement.unwrap_or([0.0, 0.0]),
+                        rotation: s.rotation.map(Into::into),
+                    });
+                }
+            }
+        }
+        out.push(Stage {
+            name: (!case.stages.is_empty()).then(|| {
+                view.name
+                    .map_or_else(|| format!("stage {}", k + 1), str::to_string)
+            }),
+            load_steps: view.load_steps as usize,
+            gravity,
+            point_loads,
+            boundary_loads,
+            grid_supports,
+            ibm,
+            n_supports: view.supports.len(),
+            geostatic,
+        });
+        before = end;
+    }
+    Ok((out, ibm_supports))
 }
 
 impl Simulation {
@@ -95,56 +326,14 @@ impl Simulation {
     /// any body's boundary, or a grid-node support no node the material
     /// reaches (which could not be told before the points were generated).
     pub fn new(case: &Case) -> Result<Self, CaseError> {
-        let Seeded {
-            points,
-            loops,
-            loads,
-            supports,
-        } = Seeded::new(case)?;
+        let seeded = Seeded::new(case);
+        let (stages, ibm_supports) = stages(case, &seeded)?;
+        let Seeded { points, loops, .. } = seeded;
         let grid = Grid {
             h: case.grid.cell_size,
             origin: case.grid.origin,
         };
-        let mut boundary_loads = Vec::new();
-        for (load, selection) in case.loads.boundary.iter().zip(loads) {
-            let traction = match (load.traction, load.pressure) {
-                (Some(t), _) => Traction::Dead(t),
-                (None, Some(p)) => Traction::Pressure(p),
-                (None, None) => continue, // rejected by validation
-            };
-            boundary_loads.extend(selection.into_iter().map(|(loop_index, segments)| {
-                LoadedStretch {
-                    loop_index,
-                    segments,
-                    traction,
-                }
-            }));
-        }
-        let (mut grid_supports, mut ibm_supports) = (Vec::new(), Vec::new());
-        for ((index, s), selection) in case.supports.iter().enumerate().zip(supports) {
-            match selection {
-                None => grid_supports.push(GridSupport {
-                    index,
-                    on: s.on,
-                    fix: s.fix.into(),
-                }),
-                Some(pieces) => ibm_supports.push(IbmSupport {
-                    index,
-                    pieces,
-                    fix: s.fix.into(),
-                    displacement: s.displacement.unwrap_or([0.0, 0.0]),
-                    rotation: s.rotation.map(Into::into),
-                    averaged: (s.constraint == case::Constraint::Averaged)
-                        .then_some((ibm::AVERAGED_PIECE_CELLS * case.grid.cell_size, s.on)),
-                }),
-            }
-        }
-        let point_loads = case
-            .loads
-            .point_loads
-            .iter()
-            .map(|l| (nearest_point(&points, l.at), l.force))
-            .collect();
+        let anchors = ibm::anchors(&ibm_supports, &loops, &points, &grid, basis(case.basis));
         let newton = &case.analysis.newton;
         let stabilisation = case.analysis.stabilisation_settings();
         let stiffness = StiffnessScales::of(&points.materials);
@@ -154,18 +343,16 @@ impl Simulation {
             basis: basis(case.basis),
             extent: case.grid.extent.map(|b| (b.min, b.max)),
             probes: Probes::new(case.probes.iter().map(|p| (p.name.clone(), p.at))),
-            anchors: ibm::anchors(&ibm_supports, &loops, &points, &grid, basis(case.basis)),
+            first_stage_anchors: anchors.len(),
+            anchors,
             band_width: case
                 .boundary
                 .band_width
                 .unwrap_or(ibm::DEFAULT_BAND_WIDTH * grid.h),
             loops,
             points,
-            gravity: case.loads.gravity.unwrap_or([0.0, 0.0]),
-            point_loads,
-            boundary_loads,
-            grid_supports,
-            n_supports: case.supports.len(),
+            stages,
+            stage: 0,
             settings: NewtonSettings {
                 tolerance: newton.tolerance,
                 max_iterations: newton.max_iterations as usize,
@@ -186,9 +373,9 @@ impl Simulation {
                 min_fraction: case.analysis.substepping.min_fraction,
                 max_cutbacks: case.analysis.substepping.max_cutbacks as usize,
             },
-            load_steps: case.analysis.load_steps as usize,
+            load_steps: case.total_load_steps() as usize,
         };
-        sim.check_grid_supports()?;
+        sim.check_grid_supports(case)?;
         check_inside_extent(case, &sim.points)?;
         check_probes(case, &sim.points, &grid)?;
         Ok(sim)
@@ -198,24 +385,27 @@ impl Simulation {
     /// start: one that holds none (a point between nodes, a line between
     /// grid lines) would leave the body free there, and the run would fail
     /// later with an inverted point or a stalled Newton that does not say
-    /// why.
-    fn check_grid_supports(&self) -> Result<(), CaseError> {
-        if self.grid_supports.is_empty() {
-            return Ok(());
+    /// why. Each stage's, on the configuration the run starts from.
+    fn check_grid_supports(&self, case: &Case) -> Result<(), CaseError> {
+        let views = case.stage_views();
+        for (stage, view) in self.stages.iter().zip(&views) {
+            if stage.grid_supports.is_empty() {
+                continue;
+            }
+            let held = HeldDofs::find(&stage.grid_supports, &self.grid, &self.reset_grid());
+            if let Some(index) = held.first_idle() {
+                return Err(CaseError::new(
+                    format!("{}[{index}].on", view.supports_path),
+                    format!(
+                        "selects none of the grid nodes the material reaches (grid-node supports hold \
+                         nodes, which lie at grid.origin + k * {} m); move it onto a node or grid line, \
+                         or use \"method\": \"ibm\" to hold the boundary curve itself",
+                        self.grid.h
+                    ),
+                ));
+            }
         }
-        let held = HeldDofs::find(&self.grid_supports, &self.grid, &self.reset_grid());
-        match held.first_idle() {
-            Some(index) => Err(CaseError::new(
-                format!("supports[{index}].on"),
-                format!(
-                    "selects none of the grid nodes the material reaches (grid-node supports hold \
-                     nodes, which lie at grid.origin + k * {} m); move it onto a node or grid line, \
-                     or use \"method\": \"ibm\" to hold the boundary curve itself",
-                    self.grid.h
-                ),
-            )),
-            None => Ok(()),
-        }
+        Ok(())
     }
 }
 

@@ -87,8 +87,13 @@ pub struct ProbeReport {
 /// Summary of one converged load step.
 #[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
 pub struct StepReport {
-    /// Counts from 1.
+    /// Counts from 1, over all stages.
     pub step: usize,
+    /// The stage it belongs to, when the case has stages.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stage: Option<String>,
+    /// The load factor within its stage (from 0 at its start to 1 at its
+    /// end).
     pub load_factor: f64,
     pub newton: NewtonInfo,
     /// Sub-increments the step was solved in: 1 unless a failed increment
@@ -258,6 +263,19 @@ impl PointColumns {
             columns.yielding = mp.yielding.clone();
         }
         columns
+    }
+}
+
+impl StepReport {
+    /// What a series of steps runs along (a `.pvd`'s times): the load
+    /// factor, or the step when the case has stages, whose load factor
+    /// runs over each.
+    pub fn series_time(&self) -> f64 {
+        if self.stage.is_some() {
+            self.step as f64
+        } else {
+            self.load_factor
+        }
     }
 }
 

@@ -21,8 +21,8 @@ use std::time::Instant;
 use crate::assembly;
 use crate::assembly::{FbarCells, GhostFaces, SoftCells, StepTerm};
 use crate::boundary::BoundaryLoop;
-use crate::boundary::ibm::{Anchor, BandTerms};
-use crate::boundary::loading::{BoundaryLoading, LoadedStretch};
+use crate::boundary::ibm::{self, Anchor, BandTerms};
+use crate::boundary::loading::BoundaryLoading;
 use crate::configuration::Configuration;
 use crate::equilibrium::{AnalysedPattern, StepEquilibrium, StepTerms};
 use crate::grid::{Basis, Connectivity, Grid, NodeKey, increment};
@@ -30,12 +30,13 @@ use crate::linsolve::{SolveCounts, SolveTally, SolverSettings};
 use crate::material::StiffnessScales;
 use crate::newton::{self, SolveError};
 use crate::observer::{self, Observer, StepState};
-use crate::particles::MaterialPoints;
+use crate::particles::{MaterialPoints, geostatic};
 use crate::probes::Probes;
 use crate::report::{RunReport, StepReport, StepTimings};
 use crate::settings::NewtonSettings;
 pub use crate::settings::Substepping;
-use crate::supports::{GridSupport, HeldDofs};
+use crate::stages::{self, Stage};
+use crate::supports::HeldDofs;
 use crate::update;
 
 /// Newton iterations a sub-increment may take and still count as easy:
@@ -114,24 +115,22 @@ pub struct Simulation {
     /// Boundary loops of the material points, found once (Lagrangian).
     pub loops: Vec<BoundaryLoop>,
     pub probes: Probes,
-    pub(crate) gravity: [f64; 2],
-    /// `(point, force)`: each point load rides on its nearest material point.
-    pub(crate) point_loads: Vec<(usize, [f64; 2])>,
-    /// Loads on stretches of the boundary curves.
-    pub(crate) boundary_loads: Vec<LoadedStretch>,
+    /// The run's stages (loads and supports; one unless the case lists
+    /// stages), and the one the steps are in.
+    pub(crate) stages: Vec<Stage>,
+    pub(crate) stage: usize,
     /// Quadrature points of the supports imposed on the boundary curves by
     /// the implicit boundary method, and the band width `delta` they use.
     pub(crate) anchors: Vec<Anchor>,
+    /// How many the first stage has (released supports drop theirs).
+    pub(crate) first_stage_anchors: usize,
     pub(crate) band_width: f64,
-    /// Supports on grid nodes.
-    pub(crate) grid_supports: Vec<GridSupport>,
-    /// Number of supports in the case (grid and IBM), for reactions.
-    pub(crate) n_supports: usize,
     pub settings: NewtonSettings,
     pub substepping: Substepping,
     pub(crate) step_size: StepSize,
     /// F-bar against volumetric locking ([`crate::assembly::fbar`]).
     pub fbar: bool,
+    /// Load steps over all stages.
     pub load_steps: usize,
     /// Load steps converged (and committed) so far.
     pub(crate) steps_done: usize,
@@ -160,7 +159,8 @@ impl Simulation {
             active_nodes: 0,
             active_dofs: 0,
             probes: self.probes.reports(),
-            reactions: vec![[0.0; 2]; self.n_supports],
+            stage: self.stage_name(0),
+            reactions: vec![[0.0; 2]; self.stages[0].n_supports],
             applied_load: [0.0; 2],
             support_tractions: Vec::new(),
             memory: Default::default(),
@@ -207,8 +207,17 @@ impl Simulation {
         step: usize,
         observer: &mut dyn Observer,
     ) -> Result<StepReport, SolveError> {
-        let n = self.load_steps as f64;
-        let end = step as f64 / n;
+        let (k, before) = stages::stage_of(&self.stages, step);
+        self.enter_stage(k);
+        if let Some(k0) = self.stages[k].geostatic
+            && self.steps_done == before
+        {
+            let g = -self.stages[k].gravity[0][1];
+            geostatic::set_overburden_stresses(&mut self.points, g, k0);
+        }
+        // The step within its stage.
+        let (step_in_stage, n) = (step - before, self.stages[k].load_steps as f64);
+        let end = step_in_stage as f64 / n;
         let easy_limit = EASY_ITERATIONS.min(self.settings.max_iterations / 2);
         // Progress through the step, and the size of the next try, as
         // fractions of its increment (powers of two: exact in binary).
@@ -223,7 +232,7 @@ impl Simulation {
             let load_factor = if last {
                 end
             } else {
-                (step as f64 - 1.0 + reach) / n
+                (step_in_stage as f64 - 1.0 + reach) / n
             };
             let extent_checked_after = if done > 0.0 { step } else { step - 1 };
             match self.increment(step, extent_checked_after, load_factor, observer) {
@@ -256,7 +265,7 @@ impl Simulation {
                     {
                         return Err(SolveError::SubstepsExhausted {
                             step,
-                            load_factor: (step as f64 - 1.0 + done) / n,
+                            load_factor: (step_in_stage as f64 - 1.0 + done) / n,
                             fraction: 2.0 * size,
                             tries: cutbacks,
                             cause: Box::new(e),
@@ -307,7 +316,7 @@ impl Simulation {
         let (u, newton) = newton::solve(&mut eq, &self.settings, step, observer)?;
         clock.lap();
 
-        let reactions = eq.reactions(&u, self.n_supports);
+        let reactions = eq.reactions(&u, self.stages[self.stage].n_supports);
         let applied_load = eq.applied_load();
         let active_dofs = eq.n_free_dofs();
         let non_finite = |quantity: &str| SolveError::NonFinite {
@@ -323,15 +332,25 @@ impl Simulation {
         let converged = eq.into_converged();
         self.analysed = Some(converged.analysed);
         let states = converged.states;
-        update::commit(&mut self.points, &conn, &u, &states);
+        let moves = self.stages[self.stage].geostatic.is_none();
+        if moves {
+            update::commit(&mut self.points, &conn, &u, &states);
+        } else {
+            update::commit_in_place(&mut self.points, &states);
+        }
         if let Some(p) = self.points.first_non_finite() {
             return Err(non_finite(&format!("state of material point {p}")));
         }
-        self.probes.advect(&self.grid, self.basis, &conn, &u);
+        if moves {
+            self.probes.advect(&self.grid, self.basis, &conn, &u);
+        }
         let mut support_tractions = Vec::new();
         for carried in converged.carried {
             if let Ok(band) = carried.downcast::<BandTerms>() {
                 support_tractions = band.tractions(&u);
+                // A geostatic stage's too: the band's stretch is how its
+                // penalty carries the reactions, which the next stage
+                // starts from.
                 self.advance_anchors(&band, &conn, &u);
             }
         }
@@ -350,6 +369,7 @@ impl Simulation {
 
         Ok(StepReport {
             step,
+            stage: self.stage_name(self.stage),
             load_factor,
             newton,
             substeps: 1,
@@ -411,17 +431,18 @@ impl Simulation {
             self.band_width,
             load_factor,
         )));
-        let loading = BoundaryLoading::new(&start, loops, &self.boundary_loads, load_factor);
+        let stage = &self.stages[self.stage];
+        let loading = BoundaryLoading::new(&start, loops, &stage.boundary_loads, load_factor);
         if !loading.is_empty() {
             terms.push(Box::new(loading));
         }
         let terms = StepTerms {
-            held: HeldDofs::find(&self.grid_supports, &self.grid, conn),
+            held: HeldDofs::find(&stage.grid_supports, &self.grid, conn),
             f_ext: assembly::external_force(
                 conn,
                 &self.points,
-                self.gravity,
-                &self.point_loads,
+                stage.gravity,
+                &stage.point_loads,
                 load_factor,
             ),
             fbar: self.fbar.then(|| FbarCells::new(&start)),
@@ -430,6 +451,21 @@ impl Simulation {
         let pattern = terms.pattern(conn);
         let solving = (&self.solver, &self.solve_tally);
         StepEquilibrium::new(&start, terms, pattern, previous, solving)
+    }
+
+    /// Moves on, stage by stage, to stage `k`: its loads and supports,
+    /// and the anchors of the supports it keeps continuing from where the
+    /// stage before left them.
+    pub(crate) fn enter_stage(&mut self, k: usize) {
+        while self.stage < k {
+            self.stage += 1;
+            ibm::enter_stage(&mut self.anchors, &self.stages[self.stage].ibm);
+        }
+    }
+
+    /// Stage `k`'s name in the reports, when the case has stages.
+    fn stage_name(&self, k: usize) -> Option<String> {
+        self.stages[k].name.clone()
     }
 
     /// What the run's linear solvers have done so far, every increment

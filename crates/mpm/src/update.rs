@@ -34,3 +34,18 @@ pub fn commit(mp: &mut MaterialPoints, conn: &Connectivity, u: &[f64], states: &
             *stress = states[p].cauchy;
         });
 }
+
+/// Commits each point's state from `states` without moving it: a
+/// geostatic stage's, whose displacements are not the material's motion
+/// but the correction that brings its initial stresses into equilibrium.
+pub fn commit_in_place(mp: &mut MaterialPoints, states: &[PointState]) {
+    (&mut mp.history, &mut mp.stress, &mut mp.yielding)
+        .into_par_iter()
+        .enumerate()
+        .with_min_len(parallel::BOOKKEEPING)
+        .for_each(|(p, (history, stress, yielding))| {
+            *yielding = states[p].history.plastic_strain > history.plastic_strain;
+            *history = states[p].history;
+            *stress = states[p].cauchy;
+        });
+}

@@ -270,7 +270,8 @@ async function jobPage(id, stale) {
     // The slider moved on while this step loaded.
     if (Number(slider.value) !== k) return;
     const lf = doc.report.load_factor;
-    stepLabel.textContent = `step ${k} of ${current.job.progress.of}, load factor ${formatNumber(lf)}`;
+    const stage = doc.report.stage ? `stage "${doc.report.stage}", ` : '';
+    stepLabel.textContent = `step ${k} of ${current.job.progress.of}, ${stage}load factor ${formatNumber(lf)}`;
     if (!doc.points) {
       message.textContent = `Step ${k}'s points were not stored (the case's output.every thins them).`;
       clear(canvas);
@@ -510,22 +511,27 @@ function resultPlots(result, kase) {
   // A job that has ended will finish no more steps.
   const ended = !['queued', 'running'].includes(result.job.status);
   const empty = ended ? `no step finished (the job ${result.job.status})` : 'no finished steps yet';
+  // A staged case's load factor runs over each stage: plot against the step.
+  const staged = result.reactions.some((r) => r.stage);
+  const [xLabel, x] = staged ? ['load step', (s) => s.step] : ['load factor', (s) => s.load_factor];
   for (const [name, samples] of Object.entries(result.probes)) {
-    figures.push(linePlot(`probe ${name}`, 'load factor', 'displacement (m)', [
-      { label: 'u_x', points: samples.map((s) => [s.load_factor, s.displacement[0]]) },
-      { label: 'u_y', points: samples.map((s) => [s.load_factor, s.displacement[1]]) },
+    figures.push(linePlot(`probe ${name}`, xLabel, 'displacement (m)', [
+      { label: 'u_x', points: samples.map((s) => [x(s), s.displacement[0]]) },
+      { label: 'u_y', points: samples.map((s) => [x(s), s.displacement[1]]) },
     ], { empty }));
   }
-  const supports = kase.supports || [];
-  if (result.reactions.length && result.reactions[0].supports.length) {
+  const supports = staged ? [] : (kase.supports || []);
+  const count = Math.max(0, ...result.reactions.map((r) => r.supports.length));
+  if (count) {
     const series = [];
-    result.reactions[0].supports.forEach((_, j) => {
+    for (let j = 0; j < count; j++) {
       const name = supports[j] ? `support ${j} (${supports[j].fix})` : `support ${j}`;
       for (const [c, axis] of [[0, 'F_x'], [1, 'F_y']]) {
-        series.push({ label: `${name} ${axis}`, points: result.reactions.map((r) => [r.load_factor, r.supports[j][c]]) });
+        const points = result.reactions.filter((r) => j < r.supports.length).map((r) => [x(r), r.supports[j][c]]);
+        series.push({ label: `${name} ${axis}`, points });
       }
-    });
-    figures.push(linePlot('reactions', 'load factor', 'force per unit thickness (N/m)', series, { empty }));
+    }
+    figures.push(linePlot('reactions', xLabel, 'force per unit thickness (N/m)', series, { empty }));
   }
   figures.push(linePlot('Newton iterations per step', 'load step', 'iterations',
     [{ label: 'iterations', points: result.newton.filter((s) => s.step > 0).map((s) => [s.step, s.iterations]) }], { bars: true, empty }));

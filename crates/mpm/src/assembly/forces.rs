@@ -36,26 +36,38 @@ pub fn body_force(conn: &Connectivity, points: &MaterialPoints, gravity: [f64; 2
     })
 }
 
-/// The loads that do not move with the body, scaled by the load factor:
-/// gravity `g` on every point's mass and each `(point, force)` of
-/// `point_loads` on its point's nodes.
+/// A dead force (N per metre) on a material point: held at its full value
+/// through the stage, or ramped with the load factor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointLoad {
+    pub point: usize,
+    pub force: [f64; 2],
+    pub held: bool,
+}
+
+/// The loads that do not move with the body: gravity `g = held + t
+/// ramped` (`gravity = [held, ramped]`, `t` the load factor) on every
+/// point's mass and each point load, held or scaled by `t`, on its point's
+/// nodes.
 pub fn external_force(
     conn: &Connectivity,
     points: &MaterialPoints,
-    gravity: [f64; 2],
-    point_loads: &[(usize, [f64; 2])],
+    gravity: [[f64; 2]; 2],
+    point_loads: &[PointLoad],
     load_factor: f64,
 ) -> Vec<f64> {
-    let g = gravity.map(|g| g * load_factor);
+    let [held, ramped] = gravity;
+    let g = [0, 1].map(|c| held[c] + ramped[c] * load_factor);
     let mut f = if g == [0.0, 0.0] {
         vec![0.0; conn.n_dofs()]
     } else {
         body_force(conn, points, g)
     };
-    for &(p, force) in point_loads {
-        for l in conn.point_links(p) {
+    for load in point_loads {
+        let factor = if load.held { 1.0 } else { load_factor };
+        for l in conn.point_links(load.point) {
             for c in 0..2 {
-                f[2 * l.node as usize + c] += load_factor * l.n * force[c];
+                f[2 * l.node as usize + c] += factor * l.n * load.force[c];
             }
         }
     }

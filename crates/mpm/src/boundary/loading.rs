@@ -30,6 +30,10 @@ pub struct LoadedStretch {
     /// Segment `k` runs from the loop's data point `k` to `k + 1`.
     pub segments: Vec<usize>,
     pub traction: Traction,
+    /// Held at its full value through the stage (what the stages before
+    /// applied), rather than ramped with the load factor (its change over
+    /// this stage).
+    pub held: bool,
 }
 
 /// The boundary loads of one load step.
@@ -148,7 +152,9 @@ impl<'a> BoundaryLoading<'a> {
         let q = self.quadrature[i][k]
             .as_ref()
             .expect("loaded segments have a quadrature");
-        q.forces(segment, self.stretches[i].traction, self.load_factor, sink);
+        let stretch = &self.stretches[i];
+        let factor = if stretch.held { 1.0 } else { self.load_factor };
+        q.forces(segment, stretch.traction, factor, sink);
     }
 
     /// The loaded segments of stretch `i` whose shape depends on data point

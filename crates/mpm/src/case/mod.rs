@@ -42,6 +42,11 @@ pub struct Case {
     /// the boundary curve that each selects.
     #[serde(default)]
     pub supports: Vec<Support>,
+    /// Stages run one after another, each with its own load steps, loads
+    /// and supports (then the case has no top-level `loads`, `supports` or
+    /// `analysis.load_steps`). Without stages the case is one stage.
+    #[serde(default)]
+    pub stages: Vec<StageSpec>,
     /// Named reference points advected with the grid displacement.
     #[serde(default)]
     pub probes: Vec<Probe>,
@@ -295,6 +300,8 @@ pub struct Analysis {
     #[serde(default, rename = "type")]
     pub kind: AnalysisKind,
     /// Number of equal load increments; every load is ramped linearly.
+    /// Required unless the case has `stages`, each with its own.
+    #[serde(default)]
     pub load_steps: u32,
     #[serde(default)]
     pub newton: NewtonSpec,
@@ -666,6 +673,123 @@ pub struct Loads {
     pub boundary: Vec<BoundaryLoad>,
 }
 
+/// One stage of a staged analysis: its load steps, the loads at its end
+/// and the supports during it. Each load goes linearly, over the stage's
+/// steps, from where the stage before left it to its target here; a
+/// support holds the boundary where the stage before left it and moves it
+/// by its `displacement` (and `rotation`) over the stage.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct StageSpec {
+    /// Shown with each of its steps (default `stage 1`, `stage 2`, ...).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Number of equal load increments of the stage.
+    pub load_steps: u32,
+    /// The loads at the stage's end (targets): a load the stage before had
+    /// and this one leaves out goes to zero. A boundary load is the same
+    /// load from stage to stage when its `on` and its kind (traction or
+    /// pressure) are; a point load when its `at` is. Absent: the stage
+    /// before's loads, held.
+    #[serde(default)]
+    pub loads: Option<Loads>,
+    /// Loads added over the stage to those it starts with (increments),
+    /// after `loads`, matched as `loads` are.
+    #[serde(default)]
+    pub load_increments: Option<Loads>,
+    /// A geostatic stage (the first only): its gravity, its only load, is
+    /// on in full from its first step; the points start from the stress of
+    /// the material above them, `sigma_v` vertically and `k0 sigma_v`
+    /// horizontally and out of plane; its steps bring them to equilibrium
+    /// without moving them, so the displacements start from zero after it.
+    #[serde(default)]
+    pub geostatic: Option<GeostaticSpec>,
+    /// The supports during the stage. A support is the same one as in the
+    /// stage before when its `on`, `fix`, `method` and `constraint` are:
+    /// it holds on from where that stage left the boundary, moved by this
+    /// stage's `displacement` and `rotation` (increments). A support the
+    /// stage before had and this one leaves out is released. Absent: the
+    /// stage before's supports, held still.
+    #[serde(default)]
+    pub supports: Option<Vec<Support>>,
+}
+
+/// The initial stresses of a geostatic stage.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GeostaticSpec {
+    /// The ratio of horizontal to vertical stress (default `nu / (1 -
+    /// nu)` of each body's material, one-dimensional elastic compression).
+    #[serde(default)]
+    pub k0: Option<f64>,
+}
+
+/// A stage as the solver reads it, with or without `stages` in the case:
+/// where its fields are (`""` or `"stages[k]."`), and what it holds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StageView<'a> {
+    pub path: String,
+    pub name: Option<&'a str>,
+    pub load_steps: u32,
+    pub loads: &'a Loads,
+    pub load_increments: Option<&'a Loads>,
+    pub supports: &'a [Support],
+    /// Where its supports came from: `"supports"` or `"stages[k].supports"`
+    /// of the stage that last listed them.
+    pub supports_path: String,
+}
+
+impl Case {
+    /// The stages the case runs: its `stages`, each with the loads and
+    /// supports it inherits filled in, or the case itself as one stage.
+    pub fn stage_views(&self) -> Vec<StageView<'_>> {
+        if self.stages.is_empty() {
+            return vec![StageView {
+                path: String::new(),
+                name: None,
+                load_steps: self.analysis.load_steps,
+                loads: &self.loads,
+                load_increments: None,
+                supports: &self.supports,
+                supports_path: "supports".into(),
+            }];
+        }
+        let mut views: Vec<StageView<'_>> = Vec::new();
+        for (k, st) in self.stages.iter().enumerate() {
+            let path = format!("stages[{k}].");
+            let before = views.last();
+            let loads = match (&st.loads, before) {
+                (Some(l), _) => l,
+                (None, Some(b)) => b.loads,
+                (None, None) => &self.loads,
+            };
+            let (supports, supports_path) = match (&st.supports, before) {
+                (Some(s), _) => (s.as_slice(), format!("{path}supports")),
+                (None, Some(b)) => (b.supports, b.supports_path.clone()),
+                (None, None) => (self.supports.as_slice(), format!("{path}supports")),
+            };
+            views.push(StageView {
+                name: st.name.as_deref(),
+                load_steps: st.load_steps,
+                loads,
+                load_increments: st.load_increments.as_ref(),
+                supports,
+                supports_path,
+                path,
+            });
+        }
+        views
+    }
+
+    /// Load steps over all stages.
+    pub fn total_load_steps(&self) -> u64 {
+        self.stage_views()
+            .iter()
+            .map(|v| u64::from(v.load_steps))
+            .sum()
+    }
+}
+
 /// A load on the stretch of boundary that `on` selects in the reference
 /// configuration: exactly one of a dead `traction` `[tx, ty]` (Pa) or a
 /// follower `pressure` (Pa, positive pushes into the material, normal to
@@ -713,6 +837,17 @@ pub struct Support {
     /// Implicit boundary method only.
     #[serde(default)]
     pub constraint: Constraint,
+}
+
+impl Support {
+    /// Whether `other`, in another stage, is the same support: the same
+    /// `on`, `fix`, `method` and `constraint`.
+    pub fn same_as(&self, other: &Support) -> bool {
+        self.on == other.on
+            && self.fix == other.fix
+            && self.method == other.method
+            && self.constraint == other.constraint
+    }
 }
 
 /// How the implicit boundary method holds a support's stretch.
@@ -827,6 +962,54 @@ mod tests {
         );
         new["analysis"]["stabilisation"]["ghost_penalty"] = (-1.0).into();
         assert_eq!(error_for(new).path, "analysis.stabilisation.ghost_penalty");
+    }
+
+    /// The column as two stages: its gravity applied, then held while a
+    /// second stage adds nothing. Each misplaced or wrong field of a staged
+    /// case is named.
+    #[test]
+    fn a_staged_case_names_its_wrong_fields() {
+        let staged = || {
+            let mut v = column_json();
+            let (loads, supports) = (v["loads"].take(), v["supports"].take());
+            v.as_object_mut().unwrap().remove("loads");
+            v.as_object_mut().unwrap().remove("supports");
+            v["analysis"].as_object_mut().unwrap().remove("load_steps");
+            v["stages"] = serde_json::json!([
+                { "name": "weight", "load_steps": 2, "loads": loads, "supports": supports },
+                { "load_steps": 1 }
+            ]);
+            v
+        };
+        let case = Case::from_json(&staged().to_string()).unwrap();
+        assert_eq!(case.total_load_steps(), 3);
+        let views = case.stage_views();
+        assert_eq!(views[1].supports, views[0].supports);
+        assert_eq!(views[1].supports_path, "stages[0].supports");
+        let mut wrong = Vec::new();
+        let mut v = staged();
+        v["analysis"]["load_steps"] = 3.into();
+        wrong.push((v, "analysis.load_steps"));
+        let mut v = staged();
+        v["supports"] = v["stages"][0]["supports"].clone();
+        wrong.push((v, "supports"));
+        let mut v = staged();
+        v["stages"][1]["load_steps"] = 0.into();
+        wrong.push((v, "stages[1].load_steps"));
+        let mut v = staged();
+        v["stages"][1]["name"] = " ".into();
+        wrong.push((v, "stages[1].name"));
+        let mut v = staged();
+        v["stages"][1]["load_increments"] = serde_json::json!({ "gravity": [0.0, "x"] });
+        wrong.push((v, "stages[1].load_increments.gravity[1]"));
+        let mut v = staged();
+        v["stages"][1]["supports"] = serde_json::json!([
+            { "on": { "y": 0.0 }, "fix": "y", "method": "ibm" }
+        ]);
+        wrong.push((v, "stages[1].supports[0]"));
+        for (v, path) in wrong {
+            assert_eq!(error_for(v).path, path);
+        }
     }
 
     #[test]

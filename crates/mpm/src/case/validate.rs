@@ -149,9 +149,6 @@ impl Case {
             ));
         }
         let a = &self.analysis;
-        if a.load_steps == 0 {
-            return Err(CaseError::new("analysis.load_steps", "must be at least 1"));
-        }
         if self.output.every == 0 {
             return Err(CaseError::new("output.every", "must be at least 1"));
         }
@@ -207,99 +204,59 @@ impl Case {
             body.validate(&format!("bodies[{i}]"))?;
             self.check_body_on_grid(i, body)?;
         }
-        if let Some(g) = self.loads.gravity {
-            finite_pair("loads.gravity", g)?;
+        if self.stages.len() > MAX_STAGES {
+            return Err(CaseError::new(
+                "stages",
+                format!("at most {MAX_STAGES} stages"),
+            ));
         }
-        for (i, l) in self.loads.point_loads.iter().enumerate() {
-            finite_pair(&format!("loads.point_loads[{i}].at"), l.at)?;
-            finite_pair(&format!("loads.point_loads[{i}].force"), l.force)?;
-        }
-        for (i, l) in self.loads.boundary.iter().enumerate() {
-            let path = format!("loads.boundary[{i}]");
-            l.on.validate(&format!("{path}.on"))?;
-            match (l.traction, l.pressure) {
-                (Some(t), None) => finite_pair(&format!("{path}.traction"), t)?,
-                (None, Some(p)) if p.is_finite() => {}
-                (None, Some(_)) => {
-                    return Err(CaseError::new(format!("{path}.pressure"), "must be finite"));
-                }
-                _ => {
+        let views = self.stage_views();
+        if !self.stages.is_empty() {
+            for (field, given) in [
+                ("analysis.load_steps", a.load_steps != 0),
+                ("loads", self.loads != Loads::default()),
+                ("supports", !self.supports.is_empty()),
+            ] {
+                if given {
                     return Err(CaseError::new(
-                        path,
-                        "give exactly one of traction, pressure",
+                        field,
+                        "a case with stages gives its load steps, loads and supports in each stage",
                     ));
                 }
             }
         }
-        for (i, s) in self.supports.iter().enumerate() {
-            s.on.validate(&format!("supports[{i}].on"))?;
-            let smooth = matches!(self.basis, BasisKind::Bspline2 | BasisKind::Bspline3);
-            if s.method == SupportMethod::Grid && smooth {
-                // A B-spline's nodal unknowns are coefficients, not the
-                // field's values: fixing the nodes on a line does not fix
-                // the field on it (docs/bsplines.md: AMPLE's column at 64
-                // cells tops at -1.85 m instead of -25.94 m).
-                return Err(CaseError::new(
-                    format!("supports[{i}].method"),
-                    "the B-spline bases need \"method\": \"ibm\" (grid nodes hold their coefficients, not the field)",
-                ));
-            }
-            if s.method == SupportMethod::Grid && s.fix == Fix::Normal {
-                return Err(CaseError::new(
-                    format!("supports[{i}].fix"),
-                    "normal needs \"method\": \"ibm\"",
-                ));
-            }
-            if s.constraint == Constraint::Averaged && s.method == SupportMethod::Grid {
-                return Err(CaseError::new(
-                    format!("supports[{i}].constraint"),
-                    "an averaged constraint needs \"method\": \"ibm\"",
-                ));
-            }
-            if let Some(d) = s.displacement {
-                finite_pair(&format!("supports[{i}].displacement"), d)?;
-                if s.method == SupportMethod::Grid {
-                    return Err(CaseError::new(
-                        format!("supports[{i}].displacement"),
-                        "prescribed displacements need \"method\": \"ibm\"",
-                    ));
-                }
-                let free = match s.fix {
-                    Fix::X => Some((1, "y")),
-                    Fix::Y => Some((0, "x")),
-                    Fix::Xy | Fix::Normal => None,
+        for (k, view) in views.iter().enumerate() {
+            let stage = &view.path;
+            if view.load_steps == 0 {
+                let path = if stage.is_empty() {
+                    "analysis.load_steps".to_string()
+                } else {
+                    format!("{stage}load_steps")
                 };
-                if let Some((c, name)) = free
-                    && d[c] != 0.0
-                {
-                    return Err(CaseError::new(
-                        format!("supports[{i}].displacement"),
-                        format!(
-                            "the {name} component is not held (fix is not {name} or xy), so it cannot be prescribed"
-                        ),
-                    ));
-                }
+                return Err(CaseError::new(path, "must be at least 1"));
             }
-            if let Some(r) = s.rotation {
-                if !r.angle.is_finite() {
-                    return Err(CaseError::new(
-                        format!("supports[{i}].rotation.angle"),
-                        "must be finite",
-                    ));
+            if let Some(st) = self.stages.get(k) {
+                if st.name.as_ref().is_some_and(|n| n.trim().is_empty()) {
+                    return Err(CaseError::new(format!("{stage}name"), "must not be empty"));
                 }
-                finite_pair(&format!("supports[{i}].rotation.center"), r.center)?;
-                if s.method == SupportMethod::Grid {
-                    return Err(CaseError::new(
-                        format!("supports[{i}].rotation"),
-                        "prescribed rotations need \"method\": \"ibm\"",
-                    ));
+                if let Some(l) = &st.loads {
+                    validate_loads(&format!("{stage}loads"), l)?;
                 }
-                if s.fix != Fix::Xy {
-                    return Err(CaseError::new(
-                        format!("supports[{i}].rotation"),
-                        "a prescribed rotation needs \"fix\": \"xy\" (a roller's wall does not turn)",
-                    ));
+                if let Some(g) = &st.geostatic {
+                    geostatic(k, st, g)?;
                 }
+                if let Some(l) = &st.load_increments {
+                    validate_loads(&format!("{stage}load_increments"), l)?;
+                }
+                if let Some(s) = &st.supports {
+                    self.validate_supports(&format!("{stage}supports"), s)?;
+                }
+                if k > 0 {
+                    continues_supports(&views[k - 1], view)?;
+                }
+            } else {
+                validate_loads("loads", view.loads)?;
+                self.validate_supports("supports", view.supports)?;
             }
         }
         if let Some(b) = self.boundary.band_width {
@@ -335,6 +292,82 @@ impl Case {
 }
 
 impl Case {
+    /// A case's or a stage's supports, their fields under `prefix`.
+    fn validate_supports(&self, prefix: &str, supports: &[Support]) -> Result<(), CaseError> {
+        for (i, s) in supports.iter().enumerate() {
+            s.on.validate(&format!("{prefix}[{i}].on"))?;
+            let smooth = matches!(self.basis, BasisKind::Bspline2 | BasisKind::Bspline3);
+            if s.method == SupportMethod::Grid && smooth {
+                // A B-spline's nodal unknowns are coefficients, not the
+                // field's values: fixing the nodes on a line does not fix
+                // the field on it (docs/bsplines.md: AMPLE's column at 64
+                // cells tops at -1.85 m instead of -25.94 m).
+                return Err(CaseError::new(
+                    format!("{prefix}[{i}].method"),
+                    "the B-spline bases need \"method\": \"ibm\" (grid nodes hold their coefficients, not the field)",
+                ));
+            }
+            if s.method == SupportMethod::Grid && s.fix == Fix::Normal {
+                return Err(CaseError::new(
+                    format!("{prefix}[{i}].fix"),
+                    "normal needs \"method\": \"ibm\"",
+                ));
+            }
+            if s.constraint == Constraint::Averaged && s.method == SupportMethod::Grid {
+                return Err(CaseError::new(
+                    format!("{prefix}[{i}].constraint"),
+                    "an averaged constraint needs \"method\": \"ibm\"",
+                ));
+            }
+            if let Some(d) = s.displacement {
+                finite_pair(&format!("{prefix}[{i}].displacement"), d)?;
+                if s.method == SupportMethod::Grid {
+                    return Err(CaseError::new(
+                        format!("{prefix}[{i}].displacement"),
+                        "prescribed displacements need \"method\": \"ibm\"",
+                    ));
+                }
+                let free = match s.fix {
+                    Fix::X => Some((1, "y")),
+                    Fix::Y => Some((0, "x")),
+                    Fix::Xy | Fix::Normal => None,
+                };
+                if let Some((c, name)) = free
+                    && d[c] != 0.0
+                {
+                    return Err(CaseError::new(
+                        format!("{prefix}[{i}].displacement"),
+                        format!(
+                            "the {name} component is not held (fix is not {name} or xy), so it cannot be prescribed"
+                        ),
+                    ));
+                }
+            }
+            if let Some(r) = s.rotation {
+                if !r.angle.is_finite() {
+                    return Err(CaseError::new(
+                        format!("{prefix}[{i}].rotation.angle"),
+                        "must be finite",
+                    ));
+                }
+                finite_pair(&format!("{prefix}[{i}].rotation.center"), r.center)?;
+                if s.method == SupportMethod::Grid {
+                    return Err(CaseError::new(
+                        format!("{prefix}[{i}].rotation"),
+                        "prescribed rotations need \"method\": \"ibm\"",
+                    ));
+                }
+                if s.fix != Fix::Xy {
+                    return Err(CaseError::new(
+                        format!("{prefix}[{i}].rotation"),
+                        "a prescribed rotation needs \"fix\": \"xy\" (a roller's wall does not turn)",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// A body must start within the node indices' reach of the grid's
     /// origin, which a tiny cell size or a far body exceeds (the run would
     /// stop before its first step with the material off the grid).
@@ -626,6 +659,99 @@ fn check_annulus(path: &str, center: [f64; 2], inner: f64, outer: f64) -> Result
     Ok(())
 }
 
+/// A case's or a stage's loads, their fields under `prefix`.
+fn validate_loads(prefix: &str, loads: &Loads) -> Result<(), CaseError> {
+    if let Some(g) = loads.gravity {
+        finite_pair(&format!("{prefix}.gravity"), g)?;
+    }
+    for (i, l) in loads.point_loads.iter().enumerate() {
+        finite_pair(&format!("{prefix}.point_loads[{i}].at"), l.at)?;
+        finite_pair(&format!("{prefix}.point_loads[{i}].force"), l.force)?;
+    }
+    for (i, l) in loads.boundary.iter().enumerate() {
+        let path = format!("{prefix}.boundary[{i}]");
+        l.on.validate(&format!("{path}.on"))?;
+        match (l.traction, l.pressure) {
+            (Some(t), None) => finite_pair(&format!("{path}.traction"), t)?,
+            (None, Some(p)) if p.is_finite() => {}
+            (None, Some(_)) => {
+                return Err(CaseError::new(format!("{path}.pressure"), "must be finite"));
+            }
+            _ => {
+                return Err(CaseError::new(
+                    path,
+                    "give exactly one of traction, pressure",
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A geostatic stage: the first, loaded by vertical gravity alone.
+fn geostatic(k: usize, stage: &StageSpec, spec: &GeostaticSpec) -> Result<(), CaseError> {
+    let path = format!("stages[{k}].geostatic");
+    if k > 0 {
+        return Err(CaseError::new(
+            path,
+            "only the first stage may be geostatic (it sets the stresses from scratch)",
+        ));
+    }
+    if let Some(k0) = spec.k0
+        && !(k0 > 0.0 && k0.is_finite())
+    {
+        return Err(CaseError::new(
+            format!("{path}.k0"),
+            "must be a finite number above 0",
+        ));
+    }
+    let loads = stage.loads.as_ref();
+    let vertical = loads
+        .and_then(|l| l.gravity)
+        .is_some_and(|g| g[0] == 0.0 && g[1] < 0.0);
+    let only_gravity = loads.is_none_or(|l| l.point_loads.is_empty() && l.boundary.is_empty())
+        && stage.load_increments.is_none();
+    if !(vertical && only_gravity) {
+        return Err(CaseError::new(
+            path,
+            "a geostatic stage's only load is gravity, [0, -g] in its loads",
+        ));
+    }
+    Ok(())
+}
+
+/// An implicit-boundary support of a later stage continues one of the
+/// stage before: its anchors are laid on the reference curve once, before
+/// the first step. A rotation that continues keeps its centre.
+fn continues_supports(before: &StageView<'_>, stage: &StageView<'_>) -> Result<(), CaseError> {
+    for (i, s) in stage.supports.iter().enumerate() {
+        let path = format!("{}[{i}]", stage.supports_path);
+        let earlier = before.supports.iter().find(|b| b.same_as(s));
+        match earlier {
+            None if s.method == SupportMethod::Ibm => {
+                return Err(CaseError::new(
+                    path,
+                    "an implicit-boundary support must continue one of the stage before (the same \
+                     on, fix, method and constraint); one that starts later is not supported yet: \
+                     give it in the first stage, held still",
+                ));
+            }
+            Some(b) => {
+                if let (Some(r0), Some(r1)) = (b.rotation, s.rotation)
+                    && r0.center != r1.center
+                {
+                    return Err(CaseError::new(
+                        format!("{path}.rotation.center"),
+                        "a support's rotation keeps its centre from stage to stage",
+                    ));
+                }
+            }
+            None => {}
+        }
+    }
+    Ok(())
+}
+
 fn positive(path: &str, v: f64) -> Result<(), CaseError> {
     if v > 0.0 && v.is_finite() {
         Ok(())
@@ -882,6 +1008,10 @@ fn check_convex_quadrilateral(path: &str, v: &[[f64; 2]; 4]) -> Result<(), CaseE
 /// Failed sub-increments a load step may allow: each costs up to a Newton
 /// solve.
 const MAX_CUTBACKS: u32 = 1000;
+
+/// The most stages a case may list: each costs a selection of every
+/// boundary load and support on the seeded bodies.
+const MAX_STAGES: usize = 100;
 
 /// The steepest friction angle taken (degrees): past it the cone's
 /// plane-strain match grows as `tan(phi)` and soils do not reach it.

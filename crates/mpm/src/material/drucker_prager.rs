@@ -170,7 +170,6 @@ fn to_apex(m: &DruckerPrager, elastic: &Returned, volumetric: f64, deviator_norm
             plastic_volume,
             2f64.sqrt() * m.eta_flow * plastic_deviator,
             m.eta_flow > 0.0,
-            plastic_volume.abs() + plastic_deviator,
         ),
     }
 }

@@ -27,6 +27,7 @@ use drucker_prager::drucker_prager;
 use hencky::hencky;
 pub use mohr_coulomb::MohrCoulomb;
 use mohr_coulomb::mohr_coulomb;
+pub use return_map::APEX_SEPARATION;
 use small_strain::small_strain;
 pub use von_mises::VonMises;
 use von_mises::von_mises;
@@ -178,6 +179,44 @@ impl Material {
         }
     }
 
+    /// The history of an undeformed point that carries the Cauchy stress
+    /// `sigma = [xx, yy, zz]` (principal axes x, y, z): the elastic strain
+    /// that makes it, as the plastic models keep it (`b = exp(2 e)`, its
+    /// out-of-plane part too). The elastic models keep no out-of-plane
+    /// strain: theirs is the in-plane strain of `xx` and `yy`, and their
+    /// `zz` follows from it.
+    pub fn history_carrying(&self, sigma: [f64; 3]) -> History {
+        let Elastic { lambda, mu } = self.elastic();
+        let in_plane = || {
+            // [xx, yy] = [[l + 2m, l], [l, l + 2m]] [exx, eyy]
+            let det = 4.0 * mu * (lambda + mu);
+            let p = lambda + 2.0 * mu;
+            [
+                (p * sigma[0] - lambda * sigma[1]) / det,
+                (p * sigma[1] - lambda * sigma[0]) / det,
+            ]
+        };
+        match self {
+            Material::LinearElastic(_) => {
+                let [exx, eyy] = in_plane();
+                History::elastic(Matrix2::new(exx, 0.0, 0.0, eyy))
+            }
+            Material::Hencky(_) => {
+                let [exx, eyy] = in_plane();
+                History::elastic(Matrix2::new((2.0 * exx).exp(), 0.0, 0.0, (2.0 * eyy).exp()))
+            }
+            Material::VonMises(_) | Material::DruckerPrager(_) | Material::MohrCoulomb(_) => {
+                let mean_part = lambda / (3.0 * lambda + 2.0 * mu) * sigma.iter().sum::<f64>();
+                let e = sigma.map(|t| (t - mean_part) / (2.0 * mu));
+                History {
+                    tensor: Matrix2::new((2.0 * e[0]).exp(), 0.0, 0.0, (2.0 * e[1]).exp()),
+                    zz: (2.0 * e[2]).exp(),
+                    plastic_strain: 0.0,
+                }
+            }
+        }
+    }
+
     /// History of an undeformed, unstressed point.
     pub fn initial_history(&self) -> History {
         match self {
@@ -263,6 +302,34 @@ pub(crate) fn assert_tangent_is_the_derivative(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every model, undeformed with the history that carries a stress,
+    /// answers that stress: in full for the plastic models, in-plane for
+    /// the elastic ones (their zz is plane strain's `lambda tr(e)`).
+    #[test]
+    fn a_history_carries_the_stress_it_was_made_for() {
+        let elastic = Elastic::from_young_poisson(2e7, 0.3);
+        let soil = MohrCoulomb {
+            elastic,
+            cohesion: 1e4,
+            friction: 0.5,
+            dilation: 0.0,
+        };
+        let sigma = [-5e4, -1e5, -6e4];
+        for m in [
+            Material::Hencky(elastic),
+            Material::LinearElastic(elastic),
+            Material::MohrCoulomb(soil),
+        ] {
+            let r = m.respond(&m.history_carrying(sigma), &Matrix2::zeros(), 1.0);
+            let got = [r.cauchy.plane[0], r.cauchy.plane[1], r.cauchy.zz];
+            let full = matches!(m, Material::MohrCoulomb(_));
+            for k in 0..if full { 3 } else { 2 } {
+                assert!((got[k] - sigma[k]).abs() < 1e-9 * 1e5, "{m:?}: {got:?}");
+            }
+            assert_eq!(r.cauchy.plane[2], 0.0);
+        }
+    }
 
     fn materials() -> [Material; 2] {
         let c = Elastic::from_young_poisson(1.0e6, 0.3);

@@ -187,12 +187,7 @@ pub(super) fn mohr_coulomb(
         let volume = plastic_strains.iter().sum::<f64>();
         let range = plastic_strains.iter().copied().fold(f64::MIN, f64::max)
             - plastic_strains.iter().copied().fold(f64::MAX, f64::min);
-        off_apex_flow_rule(
-            volume,
-            m.dilation.sin() * range,
-            m.dilation > 0.0,
-            volume.abs() + range,
-        )
+        off_apex_flow_rule(volume, m.dilation.sin() * range, m.dilation > 0.0)
     };
     let returned = Returned {
         tau,

@@ -12,7 +12,7 @@
 //! - the return map met the model's own flow rule
 //!   ([`Response::off_flow_rule`]).
 
-use crate::material::Response;
+use crate::material::{APEX_SEPARATION, Response};
 
 /// The largest factor by which one load step may grow or shrink a point's
 /// volume. A soil changes volume by its elastic strain (`p / K`, a few
@@ -35,8 +35,9 @@ pub enum Inadmissible {
     /// Its stress, `P` or history is not a finite number.
     NonFinite,
     /// The return map left the flow rule: a trial past the apex of a
-    /// frictional model whose dilation cannot take the volume change the
-    /// apex asks (`psi = 0` with the point opening).
+    /// frictional model that opens by more than its dilation takes and
+    /// [`APEX_SEPARATION`] of separation (`psi = 0` with the point pulled
+    /// apart).
     OffFlowRule,
 }
 
@@ -49,9 +50,11 @@ impl std::fmt::Display for Inadmissible {
                 "changed volume by more than a factor of {MAX_STEP_VOLUME_RATIO} in one step"
             ),
             Inadmissible::NonFinite => f.write_str("has a non-finite stress"),
-            Inadmissible::OffFlowRule => f.write_str(
-                "was pulled past its yield surface's apex, which its flow rule cannot return \
-                 (dilation angle 0 with the point opening)",
+            Inadmissible::OffFlowRule => write!(
+                f,
+                "was pulled open past its yield surface's apex by more than {}% of its volume \
+                 in one step beyond what its flow rule (its dilation angle) takes",
+                100.0 * APEX_SEPARATION
             ),
         }
     }

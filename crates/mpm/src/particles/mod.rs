@@ -4,6 +4,7 @@
 use nalgebra::Matrix2;
 
 pub mod admissible;
+pub mod geostatic;
 pub mod seeding;
 
 use crate::grid::Support;

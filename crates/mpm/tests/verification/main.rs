@@ -16,3 +16,4 @@ mod locking;
 mod newton_convergence;
 mod plasticity;
 mod pressure;
+mod stages;

@@ -42,8 +42,11 @@ pub struct IbmSupport {
 /// the reference curve, carried by the grid's displacement.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Anchor {
-    /// Index of the support in the case (for reactions).
+    /// Index of the support among the stage's (for reactions).
     pub support: usize,
+    /// The support it belongs to, by its place among the run's
+    /// implicit-boundary supports ([`enter_stage`]).
+    pub(super) owner: usize,
     pub(super) loop_index: usize,
     pub(super) segment: usize,
     /// Parameter on the segment and Gauss weight in it.
@@ -58,9 +61,12 @@ pub struct Anchor {
     /// on. It stays put while the body deforms (the body's own normal turns
     /// with its shear, and a roller along it would push the body sideways).
     pub(super) normal: [f64; 2],
-    /// Prescribed displacement and rotation at load factor 1.
+    /// Prescribed displacement and rotation at load factor 1 of the stage,
+    /// on top of where the stages before took it (`start`: a displacement
+    /// and an angle in degrees about the rotation's centre).
     pub(super) prescribed: [f64; 2],
     pub(super) rotation: Option<Rotation>,
+    pub(super) start: ([f64; 2], f64),
     /// Reference position and the displacement since.
     pub(super) reference: [f64; 2],
     pub(super) moved: [f64; 2],
@@ -84,12 +90,17 @@ impl Anchor {
         self.moved = moved;
     }
 
-    /// The prescribed displacement at load factor `lambda`:
-    /// `lambda d + (R(lambda theta) - I)(X - c)`.
+    /// The prescribed displacement at load factor `lambda` of the stage:
+    /// `d0 + lambda d + (R(theta0 + lambda theta) - I)(X - c)`, `d0` and
+    /// `theta0` where the stages before took it.
     pub(super) fn prescribed_at(&self, lambda: f64) -> [f64; 2] {
-        let mut u = [lambda * self.prescribed[0], lambda * self.prescribed[1]];
+        let (d0, theta0) = self.start;
+        let mut u = [
+            d0[0] + lambda * self.prescribed[0],
+            d0[1] + lambda * self.prescribed[1],
+        ];
         if let Some(r) = self.rotation {
-            let (sin, cos) = (lambda * r.angle.to_radians()).sin_cos();
+            let (sin, cos) = (theta0.to_radians() + lambda * r.angle.to_radians()).sin_cos();
             let x = [
                 self.reference[0] - r.center[0],
                 self.reference[1] - r.center[1],
@@ -98,6 +109,24 @@ impl Anchor {
             u[1] += sin * x[0] + (cos - 1.0) * x[1];
         }
         u
+    }
+
+    /// Moves on to the next stage's motion: where this stage ends is
+    /// where the next starts.
+    fn continue_with(&mut self, motion: &IbmMotion) {
+        let (d0, theta0) = self.start;
+        let angle = self.rotation.map_or(0.0, |r| r.angle);
+        self.start = (
+            [d0[0] + self.prescribed[0], d0[1] + self.prescribed[1]],
+            theta0 + angle,
+        );
+        self.support = motion.index;
+        self.prescribed = motion.displacement;
+        self.rotation = match (motion.rotation, self.rotation) {
+            (Some(r), _) => Some(r),
+            (None, Some(r)) => Some(Rotation { angle: 0.0, ..r }),
+            (None, None) => None,
+        };
     }
 
     /// `A_nn[i][j] = A[(2i+K),(2j+L)] n_K n_L` of the anchor's point's
@@ -190,6 +219,28 @@ fn overlap_share(ranges: &Selector, p: [f64; 2], span: [f64; 2]) -> f64 {
     share
 }
 
+/// What an implicit-boundary support does in a stage after the first: its
+/// index among the stage's supports, and its displacement and rotation over
+/// the stage (increments; a rotation keeps its centre).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IbmMotion {
+    pub index: usize,
+    pub displacement: [f64; 2],
+    pub rotation: Option<Rotation>,
+}
+
+/// Moves the anchors on to a stage: each continues with its support's
+/// `motions[owner]`, or is dropped with its released support (`None`).
+pub fn enter_stage(anchors: &mut Vec<Anchor>, motions: &[Option<IbmMotion>]) {
+    anchors.retain_mut(|a| match &motions[a.owner] {
+        Some(m) => {
+            a.continue_with(m);
+            true
+        }
+        None => false,
+    });
+}
+
 /// The anchors of the implicit-boundary supports: Gauss points of the
 /// reference-curve segments each support holds.
 pub fn anchors(
@@ -201,7 +252,7 @@ pub fn anchors(
 ) -> Vec<Anchor> {
     let mut out = Vec::new();
     let mut pieces_so_far = 0;
-    for s in supports {
+    for (owner, s) in supports.iter().enumerate() {
         for (loop_index, pieces) in &s.pieces {
             let first = out.len();
             let (loop_index, l) = (*loop_index, &loops[*loop_index]);
@@ -222,6 +273,7 @@ pub fn anchors(
                     out.push(Anchor {
                         normal: [d[1] / length, -d[0] / length],
                         support: s.index,
+                        owner,
                         loop_index,
                         segment: k,
                         t,
@@ -230,6 +282,7 @@ pub fn anchors(
                         fix: s.fix,
                         prescribed: s.displacement,
                         rotation: s.rotation,
+                        start: ([0.0, 0.0], 0.0),
                         reference: bezier(&segment, t),
                         moved: [0.0, 0.0],
                         piece: None,

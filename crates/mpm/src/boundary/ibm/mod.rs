@@ -52,5 +52,5 @@ pub mod anchors;
 pub mod band;
 pub mod ghost_ties;
 
-pub use anchors::{AVERAGED_PIECE_CELLS, Anchor, IbmSupport, anchors};
+pub use anchors::{AVERAGED_PIECE_CELLS, Anchor, IbmMotion, IbmSupport, anchors, enter_stage};
 pub use band::{BandTerms, DEFAULT_BAND_WIDTH};

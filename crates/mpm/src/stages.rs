@@ -1,0 +1,75 @@
+//! A run's stages, one after another: each its own load steps, the loads it
+//! holds and those it ramps, and its supports ([`crate::model`] builds
+//! them from the case; a case without stages is one). Within a stage every
+//! quantity goes linearly with the stage's load factor `t` from where the
+//! stage before left it to its value at the stage's end: a load is split
+//! into its held part (its value at the stage's start, factor 1) and its
+//! ramped part (its change over the stage, factor `t`).
+
+use crate::assembly::PointLoad;
+use crate::boundary::ibm::IbmMotion;
+use crate::boundary::loading::LoadedStretch;
+use crate::supports::GridSupport;
+
+/// One stage of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stage {
+    /// The case's name for it (`stage k` if it gave none); `None` when the
+    /// case has no stages.
+    pub name: Option<String>,
+    pub load_steps: usize,
+    /// Gravity `[held, ramped]` (m/s^2).
+    pub gravity: [[f64; 2]; 2],
+    pub point_loads: Vec<PointLoad>,
+    pub boundary_loads: Vec<LoadedStretch>,
+    pub grid_supports: Vec<GridSupport>,
+    /// Per implicit-boundary support of the run (in the first stage's
+    /// order), its motion in this stage, or `None` once released. The
+    /// first stage's are the anchors' own and are not read.
+    pub ibm: Vec<Option<IbmMotion>>,
+    /// The stage's supports (grid and IBM), for reactions.
+    pub n_supports: usize,
+    /// A geostatic stage's `K0` (`Some(None)`: each material's `nu / (1 -
+    /// nu)`): it starts from the overburden stresses and does not move the
+    /// points ([`crate::particles::geostatic`]).
+    pub geostatic: Option<Option<f64>>,
+}
+
+/// The stage that holds load step `step` (counted from 1 over the run),
+/// and the load steps of the stages before it.
+pub fn stage_of(stages: &[Stage], step: usize) -> (usize, usize) {
+    let mut before = 0;
+    for (k, s) in stages.iter().enumerate() {
+        if step <= before + s.load_steps || k + 1 == stages.len() {
+            return (k, before);
+        }
+        before += s.load_steps;
+    }
+    (0, 0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stage(load_steps: usize) -> Stage {
+        Stage {
+            name: None,
+            load_steps,
+            gravity: [[0.0; 2]; 2],
+            point_loads: Vec::new(),
+            boundary_loads: Vec::new(),
+            grid_supports: Vec::new(),
+            ibm: Vec::new(),
+            n_supports: 0,
+            geostatic: None,
+        }
+    }
+
+    #[test]
+    fn steps_are_numbered_across_stages() {
+        let stages = [stage(2), stage(3), stage(1)];
+        let found: Vec<_> = (1..=6).map(|s| stage_of(&stages, s)).collect();
+        assert_eq!(found, [(0, 0), (0, 0), (1, 2), (1, 2), (1, 2), (2, 5)]);
+    }
+}
