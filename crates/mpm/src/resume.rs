@@ -324,8 +324,8 @@ mod tests {
             assert_eq!(
                 rest.steps,
                 whole.steps[stop_after..]
-                    .to_vec()
-                    .into_iter()
+                    .iter()
+                    .cloned()
                     .map(|mut s| {
                         s.timings = rest.steps[s.step - stop_after - 1].timings;
                         s
