@@ -117,7 +117,10 @@ pub fn units_hint(case: &mpm::Case, e: &SolveError) -> Option<String> {
 impl From<SolveError> for Failure {
     fn from(e: SolveError) -> Self {
         let kind = match e.cause() {
-            SolveError::NotConverged { .. } => FailureKind::NotConverged,
+            // An arc that misses the path is Newton's failure on it.
+            SolveError::NotConverged { .. } | SolveError::ArcMissed { .. } => {
+                FailureKind::NotConverged
+            }
             SolveError::Diverged { .. } => FailureKind::Diverged,
             SolveError::Inadmissible {
                 reason: mpm::newton::Inadmissible::Inverted,

@@ -20,7 +20,10 @@
 //!   last load it carried and the smallest try past it; the runaway of
 //!   the settlement tells a collapse from a stall. The Drucker-Prager soil
 //!   pushed by the IBM is run too;
-//! - the undrained smooth footing pushed to a settlement of 0.5 B.
+//! - the undrained smooth footing pushed to a settlement of 0.5 B;
+//! - arc-length control: the undrained pressure ramp passing its
+//!   collapse, and the footing as a stiff block on the clay, loaded by a
+//!   pressure under arc-length control against the block pushed.
 //!
 //! The footing's load is the IBM support's reaction (twice the half
 //! model's), as pressure over B.
@@ -135,6 +138,42 @@ pub fn footing_case(h: f64, soil: Soil, loading: Loading, steps: usize) -> Value
     case
 }
 
+/// `case` under arc-length control (`analysis.control`).
+fn arc_length(mut case: Value) -> Value {
+    case["analysis"]["control"] = json!("arc_length");
+    case
+}
+
+/// The footing as a stiff elastic block (B/2 x 0.5 m, E 100 times the
+/// clay's, nu = 0.3) on the undrained clay at cell `h`, loaded on its top
+/// by `loading` (pushed smooth, or a pressure), in `steps` steps: one body
+/// on the other, their points on one grid, so the block is rough. The
+/// first probe is the middle of its top. The ghost penalty, scaled by the
+/// stiffest material, is 1e-5 (the clay's own 1e-3) and the tolerance
+/// 1e-8 (the stiffness contrast's round-off floor is 1.7e-9).
+fn block_case(h: f64, loading: Loading, steps: usize) -> Value {
+    let mut case = footing_case(h, Soil::Undrained, loading, steps);
+    case["bodies"].as_array_mut().expect("bodies").push(json!({
+        "name": "footing",
+        "geometry": { "rectangle": { "min": [0.0, 3.0], "max": [HALF_WIDTH, 3.5] } },
+        "points": { "per_cell": 2 },
+        "material": { "model": "linear_elastic", "youngs_modulus": 1.0e10,
+                      "poisson_ratio": 0.3, "density": 0.0 }
+    }));
+    case["analysis"]["stabilisation"] = json!({ "ghost_penalty": 1e-5 });
+    case["analysis"]["newton"] = json!({ "tolerance": 1e-8 });
+    case["probes"] = json!([{ "name": "top", "at": [0.0, 3.5] }]);
+    let top = json!({ "segment": [[0.0, 3.5], [HALF_WIDTH, 3.5]] });
+    match loading {
+        Loading::Pushed { .. } => {
+            case["supports"][0]["on"] = top;
+            case["supports"][0]["constraint"] = json!("pointwise");
+        }
+        Loading::Pressure(_) => case["loads"]["boundary"][0]["on"] = top,
+    }
+    case
+}
+
 /// One run's curve: settlement / B against q / c, step by step.
 pub struct Curve {
     pub points: Vec<(f64, f64)>,
@@ -231,7 +270,17 @@ struct Results {
     /// At `CELLS[1]`, held pointwise (the candidate the averaged
     /// constraint replaced): `(rough, curve)`.
     pointwise: Vec<(bool, Curve)>,
+    /// The undrained pressure ramp under arc-length control, per cell.
+    arc_pressure: Vec<(f64, Curve, f64)>,
+    /// The footing as a stiff block at `CELLS[0]`: pushed in
+    /// `BLOCK_STEPS` and twice as many steps, and loaded by a pressure
+    /// under arc-length control.
+    block: Option<[Curve; 3]>,
 }
+
+/// The stiff block's pushed run: steps to `BLOCK_SETTLEMENT` B.
+const BLOCK_STEPS: usize = 40;
+const BLOCK_SETTLEMENT: f64 = 0.01;
 
 /// Grid origins of the placement sweep, in cells: the footing's edge at
 /// five places inside a cell.
@@ -261,6 +310,8 @@ pub fn footing(out: &Path, quick: bool) -> Result<(), LabError> {
         large: None,
         placements: Vec::new(),
         pointwise: Vec::new(),
+        arc_pressure: Vec::new(),
+        block: None,
     };
     for &h in cells {
         for rough in [false, true] {
@@ -306,7 +357,30 @@ pub fn footing(out: &Path, quick: bool) -> Result<(), LabError> {
         )?;
         eprintln!("undrained pressure h {h}: {}", summary(&curve));
         results.undrained_pressure.push((h, curve, q_max));
+        let case = arc_length(footing_case(h, Soil::Undrained, loading, RAMP_STEPS));
+        let curve = run_curve(&case, loading)?;
+        eprintln!("undrained pressure, arc length, h {h}: {}", summary(&curve));
+        results.arc_pressure.push((h, curve, q_max));
     }
+    let block = |loading, steps| run_curve(&block_case(CELLS[0], loading, steps), loading);
+    let pushed_block = |steps| {
+        let loading = Loading::Pushed {
+            settlement: BLOCK_SETTLEMENT * 2.0 * HALF_WIDTH,
+            rough: false,
+        };
+        block(loading, steps)
+    };
+    let loaded = Loading::Pressure(RAMP_TO * prandtl() * COHESION * 1.5);
+    let arc_case = arc_length(block_case(CELLS[0], loaded, 2 * BLOCK_STEPS));
+    let curves = [
+        pushed_block(BLOCK_STEPS)?,
+        pushed_block(2 * BLOCK_STEPS)?,
+        run_curve(&arc_case, loaded)?,
+    ];
+    for c in &curves {
+        eprintln!("block: {}", summary(c));
+    }
+    results.block = Some(curves);
     let finest = *cells.last().expect("cells");
     for rough in [false, true] {
         let loading = pushed(rough);
@@ -524,6 +598,7 @@ fn markdown(r: &Results, quick: bool) -> String {
         }
         let _ = writeln!(md, "\nObserved orders of the error: {}.\n", orders(&errors));
     }
+    arc_markdown(&mut md, r);
     if let Some(c) = &r.frictional_pushed {
         let _ = writeln!(
             md,
@@ -557,6 +632,114 @@ fn markdown(r: &Results, quick: bool) -> String {
         );
     }
     md
+}
+
+/// The highest point of a curve, `(settlement, q / c)`.
+fn peak(c: &Curve) -> (f64, f64) {
+    c.points
+        .iter()
+        .copied()
+        .fold((f64::NAN, f64::MIN), |m, p| if p.1 > m.1 { p } else { m })
+}
+
+/// `c`'s q / c at `settlement`, linearly between its steps; `None`
+/// outside it.
+fn at_settlement(c: &Curve, settlement: f64) -> Option<f64> {
+    c.points.windows(2).find_map(|w| {
+        let ((x0, q0), (x1, q1)) = (w[0], w[1]);
+        (x0 <= settlement && settlement <= x1 && x1 > x0)
+            .then(|| q0 + (q1 - q0) * (settlement - x0) / (x1 - x0))
+    })
+}
+
+/// Arc-length control: the pressure ramps passing their collapse, and
+/// the stiff block loaded by a pressure against the block pushed.
+fn arc_markdown(md: &mut String, r: &Results) {
+    let p = prandtl();
+    let _ = writeln!(
+        md,
+        "## Arc-length control\n\n\
+         The undrained pressure ramp above under `\"control\": \"arc_length\"`, asked for \
+         {RAMP_TO} times Prandtl's load in {RAMP_STEPS} steps: the load factor is found with the \
+         settlement, so the run passes the collapse load instead of failing at it. Peak: the \
+         highest load of the run; load-controlled: the last load the ramp above carried.\n\n\
+         | h (m) | peak q / c | error | at settlement (B) | last q / c | at settlement (B) | load-controlled collapse q / c | Newton iterations | cutbacks | wall (s) |\n\
+         |---|---|---|---|---|---|---|---|---|---|"
+    );
+    for ((h, c, _), (_, ramp, q_max)) in r.arc_pressure.iter().zip(&r.undrained_pressure) {
+        let (at, top) = peak(c);
+        let last = c.points.last().copied().unwrap_or_default();
+        let ramp_collapse =
+            collapse(ramp, *q_max).map_or("-".to_string(), |(lo, _)| format!("{lo:.4}"));
+        let _ = writeln!(
+            md,
+            "| {h} | {top:.4}{} | {:+.2}% | {at:.5} | {:.4} | {:.5} | {ramp_collapse} | {} | {} | {:.1} |",
+            if c.failure.is_some() {
+                " (stopped)"
+            } else {
+                ""
+            },
+            100.0 * (top - p) / p,
+            last.1,
+            last.0,
+            c.newton_iterations,
+            c.cutbacks,
+            c.seconds
+        );
+    }
+    let Some([pushed, pushed_fine, loaded]) = &r.block else {
+        return;
+    };
+    let fine = 2 * BLOCK_STEPS;
+    let _ = writeln!(
+        md,
+        "\nThe footing as a stiff elastic block on the clay (E 100 times the clay's, B/2 x 0.5 m, \
+         h = {}, rough, the ghost penalty 1e-5 of the block's stiffness): pushed down \
+         {BLOCK_SETTLEMENT} B on its top by the IBM in {BLOCK_STEPS} and {fine} steps, and loaded \
+         by a pressure on its top under arc-length control in {fine} steps. The same body under \
+         the two controls must carry the same curve; how far the pushed curve moves with its \
+         steps is the method's own error at these steps.\n\n\
+         | run | peak q / c | at settlement (B) | Newton iterations | wall (s) |\n\
+         |---|---|---|---|---|",
+        CELLS[0]
+    );
+    for (name, c) in [
+        (format!("pushed, {BLOCK_STEPS} steps"), pushed),
+        (format!("pushed, {fine} steps"), pushed_fine),
+        (format!("pressure, arc length, {fine} steps"), loaded),
+    ] {
+        let (at, top) = peak(c);
+        let _ = writeln!(
+            md,
+            "| {name} | {top:.4}{} | {at:.5} | {} | {:.1} |",
+            if c.failure.is_some() {
+                " (stopped)"
+            } else {
+                ""
+            },
+            c.newton_iterations,
+            c.seconds
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\n| settlement (B) | pushed, {BLOCK_STEPS} steps | pushed, {fine} steps | arc length | arc / pushed ({BLOCK_STEPS}) | arc / pushed ({fine}) |\n\
+         |---|---|---|---|---|---|"
+    );
+    for k in 1..=5 {
+        let s = BLOCK_SETTLEMENT * k as f64 / 5.0;
+        let q = [pushed, pushed_fine, loaded].map(|c| at_settlement(c, s).unwrap_or(f64::NAN));
+        let _ = writeln!(
+            md,
+            "| {s:.4} | {:.4} | {:.4} | {:.4} | {:+.2}% | {:+.2}% |",
+            q[0],
+            q[1],
+            q[2],
+            100.0 * (q[2] / q[0] - 1.0),
+            100.0 * (q[2] / q[1] - 1.0)
+        );
+    }
+    let _ = writeln!(md);
 }
 
 /// The placement sweep, the pointwise candidate and the contact pressure.

@@ -4,8 +4,8 @@
 //! checkpoint holds only what load steps change: the material points'
 //! positions, deformation gradients (their volumes follow as `det F V0`),
 //! constitutive history, yield flags and stress; the probes' positions;
-//! the IBM anchors' displacements; and the step-size control carried
-//! between steps. The boundary loops, found once before any step, are kept
+//! the IBM anchors' displacements; and the step-size and arc-length
+//! controls carried between steps. The boundary loops, found once before any step, are kept
 //! to check against: a solver that finds them differently refuses it. Restoring it into a simulation built
 //! from the same case and running on gives the run that was never stopped.
 //!
@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::boundary::BoundaryLoop;
 
 /// The encoding's version: a checkpoint of another one is refused.
-pub(crate) const FORMAT: u32 = 1;
+pub(crate) const FORMAT: u32 = 2;
 
 /// The state of a run after `steps_done` load steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -38,6 +38,18 @@ pub struct Checkpoint {
     pub(crate) anchors_moved: Vec<[f64; 2]>,
     pub(crate) loops: Vec<LoopState>,
     pub(crate) step_size: StepSizeState,
+    /// The arc-length control, once an arc-length stage has begun.
+    pub(crate) arc: Option<ArcControlState>,
+}
+
+/// The arc-length control between steps: `[length, first length, load
+/// factor]`, easy steps in a row, and the last increment `(node keys,
+/// displacements, change of load factor)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub(crate) struct ArcControlState {
+    pub(crate) arc: [f64; 3],
+    pub(crate) easy_in_a_row: usize,
+    pub(crate) last: Option<(Vec<u64>, Vec<f64>, f64)>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -23,7 +23,7 @@ use crate::configuration::Configuration;
 use crate::grid::{Connectivity, increment, node_coordinates};
 use crate::linsolve::{Factorisation, SolveTally, SolverSettings, SparseSolver};
 use crate::material::{CauchyStress, History, Material, Response};
-use crate::newton::Equilibrium;
+use crate::newton::{Equilibrium, PathEquilibrium};
 use crate::parallel;
 use crate::particles::MaterialPoints;
 use crate::particles::admissible::{self, InadmissiblePoint};
@@ -37,8 +37,11 @@ use crate::supports::HeldDofs;
 /// whose stiffness goes into the tangent in the list's order.
 pub struct StepTerms<'a> {
     pub held: HeldDofs,
-    /// Gravity and point loads.
+    /// Gravity and point loads at the step's load factor.
     pub f_ext: Vec<f64>,
+    /// For a step whose load factor is an unknown (path following): that
+    /// factor, and the derivative of `f_ext` by it (the ramped parts).
+    pub f_ext_rate: Option<(f64, Vec<f64>)>,
     /// F-bar's averaging cells, when the case asks for it.
     pub fbar: Option<FbarCells>,
     pub terms: Vec<Box<dyn StepTerm + 'a>>,
@@ -79,6 +82,11 @@ pub struct StepEquilibrium<'a> {
     f_support: Vec<f64>,
     /// Loads that do not depend on the displacement (gravity, point loads).
     f_ext_fixed: Vec<f64>,
+    /// Path following: the load factor `f_ext_fixed` was made at, and its
+    /// derivative by the load factor ([`StepTerms::f_ext_rate`]).
+    f_ext_rate: Option<(f64, Vec<f64>)>,
+    /// What `f_ext_fixed` is at the load factor of `f_ext_rate`.
+    f_ext_made: Vec<f64>,
     /// All external forces at the last trial state.
     f_ext: Vec<f64>,
     /// The last trial increment.
@@ -136,6 +144,7 @@ impl<'a> StepEquilibrium<'a> {
         let StepTerms {
             held,
             f_ext,
+            f_ext_rate,
             fbar,
             terms,
         } = terms;
@@ -175,7 +184,13 @@ impl<'a> StepEquilibrium<'a> {
             terms,
             f_support: vec![0.0; conn.n_dofs()],
             f_ext: f_ext.clone(),
+            f_ext_made: if f_ext_rate.is_some() {
+                f_ext.clone()
+            } else {
+                Vec::new()
+            },
             f_ext_fixed: f_ext,
+            f_ext_rate,
             u: Vec::new(),
             f_int: Vec::new(),
             k: Vec::new(),
@@ -397,13 +412,69 @@ impl Equilibrium for StepEquilibrium<'_> {
         r: &[f64],
         accuracy: f64,
     ) -> Result<(Vec<f64>, Factorisation), String> {
+        let (mut du, kind) = self.solve_columns(&[r], accuracy)?;
+        Ok((du.pop().expect("one right-hand side"), kind))
+    }
+}
+
+impl PathEquilibrium for StepEquilibrium<'_> {
+    fn set_load_factor(&mut self, lambda: f64) {
+        let (made_at, rate) = self
+            .f_ext_rate
+            .as_ref()
+            .expect("a path-following step is made with its load rate");
+        for ((f, made), q) in self.f_ext_fixed.iter_mut().zip(&self.f_ext_made).zip(rate) {
+            *f = made + (lambda - made_at) * q;
+        }
+        self.f_ext.clone_from(&self.f_ext_fixed);
+        for term in &mut self.terms {
+            term.set_load_factor(lambda);
+        }
+    }
+
+    fn load_rate(&self) -> Vec<f64> {
+        let (_, rate) = self
+            .f_ext_rate
+            .as_ref()
+            .expect("a path-following step is made with its load rate");
+        let mut q = rate.clone();
+        for term in &self.terms {
+            if term.side() == Side::Load {
+                term.add_load_rate(&self.u, &mut q);
+            }
+        }
+        for (qi, &fixed) in q.iter_mut().zip(&self.held.fixed) {
+            if fixed {
+                *qi = 0.0;
+            }
+        }
+        q
+    }
+
+    fn corrections(
+        &mut self,
+        rhs: &[&[f64]],
+        accuracy: f64,
+    ) -> Result<(Vec<Vec<f64>>, Factorisation), String> {
+        self.solve_columns(rhs, accuracy)
+    }
+}
+
+impl StepEquilibrium<'_> {
+    /// Solves `K x = b` for each of `rhs` with the tangent at the last
+    /// trial state.
+    fn solve_columns(
+        &mut self,
+        rhs: &[&[f64]],
+        accuracy: f64,
+    ) -> Result<(Vec<Vec<f64>>, Factorisation), String> {
         if !self.assembled {
             self.assemble_tangent();
         }
         let symmetric = symmetric_tangent(&self.terms, self.fbar.as_ref(), self.points);
         let solved = self
             .solver
-            .solve(&self.pattern, &self.k, r, symmetric, accuracy);
+            .solve_columns(&self.pattern, &self.k, rhs, symmetric, accuracy);
         self.memory = StepMemory {
             points: self.points.heap_bytes(),
             links: self.conn.heap_bytes(),
@@ -415,7 +486,7 @@ impl Equilibrium for StepEquilibrium<'_> {
         let (du, kind, timing) = solved?;
         self.timings.factorisation += timing.factorise;
         self.timings.solve += timing.solve;
-        if du.iter().any(|v| !v.is_finite()) {
+        if du.iter().flatten().any(|v| !v.is_finite()) {
             return Err("the solution has non-finite entries (singular tangent)".into());
         }
         Ok((du, kind))
@@ -507,7 +578,7 @@ mod tests {
         case["supports"] = serde_json::json!([ { "on": { "x": 0.1 }, "fix": "xy" } ]);
         let sim = fixtures::simulation(&case);
         let conn = sim.reset_grid();
-        let mut eq = sim.assemble(&conn, 1.0, None);
+        let mut eq = sim.assemble(&conn, 1.0, false, None);
         let u: Vec<f64> = (0..conn.n_dofs())
             .map(|dof| {
                 let x = sim.grid.node_position(conn.nodes[dof / 2]);

@@ -655,11 +655,38 @@ impl SparseSolver {
         symmetric: bool,
         accuracy: f64,
     ) -> Result<(Vec<f64>, Factorisation, Timing), String> {
+        let (mut x, kind, timing) =
+            self.solve_columns(pattern, values, &[rhs], symmetric, accuracy)?;
+        Ok((x.pop().expect("one right-hand side"), kind, timing))
+    }
+
+    /// [`SparseSolver::solve`] for several right-hand sides with one
+    /// factorisation (a direct solve takes them together; an iterative one
+    /// solves each with the same preconditioner).
+    pub fn solve_columns(
+        &mut self,
+        pattern: &Pattern,
+        values: &[f64],
+        rhs: &[&[f64]],
+        symmetric: bool,
+        accuracy: f64,
+    ) -> Result<(Vec<Vec<f64>>, Factorisation, Timing), String> {
         let t0 = std::time::Instant::now();
         let tangent = Tangent::new(pattern, values);
         if symmetric && self.method == SymmetricMethod::Multigrid {
-            if let Some((x, timing)) = self.cg_with_multigrid(pattern, values, rhs, accuracy) {
-                return Ok((x, Factorisation::Multigrid, timing));
+            let mut solved = Vec::with_capacity(rhs.len());
+            let mut total = Timing::default();
+            for b in rhs {
+                match self.cg_with_multigrid(pattern, values, b, accuracy) {
+                    Some((x, timing)) => {
+                        total.add(timing);
+                        solved.push(x);
+                    }
+                    None => break,
+                }
+            }
+            if solved.len() == rhs.len() {
+                return Ok((solved, Factorisation::Multigrid, total));
             }
             // No hierarchy serves this tangent (no grid, aggregation that
             // stalls, or a tangent that is not positive definite): the
@@ -668,7 +695,7 @@ impl SparseSolver {
             self.method = SymmetricMethod::KeptFactorCg;
             self.hierarchy = None;
         }
-        let b = Mat::from_fn(self.n, 1, |i, _| rhs[i]);
+        let b = Mat::from_fn(self.n, rhs.len(), |i, j| rhs[j][i]);
         if symmetric {
             if self.llt.is_none() {
                 if self.order.is_none() && self.nested_dissection {
@@ -712,20 +739,28 @@ impl SparseSolver {
                     // The symbolic analysis, if this solve made it, counts
                     // as factorisation.
                     let analysis = t0.elapsed().as_secs_f64();
-                    Some((
-                        self.cg_with_kept_factor(pattern, values, rhs, accuracy, par),
-                        analysis,
-                    ))
+                    let mut solved = Vec::with_capacity(rhs.len());
+                    let mut total = Timing {
+                        factorise: analysis,
+                        solve: 0.0,
+                    };
+                    for b in rhs {
+                        match self.cg_with_kept_factor(pattern, values, b, accuracy, par) {
+                            Kept::Solved(x, timing) => {
+                                total.add(timing);
+                                solved.push(x);
+                            }
+                            Kept::NotPositiveDefinite => break,
+                        }
+                    }
+                    Some((solved.len() == rhs.len()).then_some((solved, total)))
                 }
                 SymmetricMethod::Direct | SymmetricMethod::Multigrid => None,
             };
             match kept {
-                Some((Kept::Solved(x, mut timing), analysis)) => {
-                    timing.factorise += analysis;
-                    return Ok((x, Factorisation::Cholesky, timing));
-                }
+                Some(Some((x, timing))) => return Ok((x, Factorisation::Cholesky, timing)),
                 // Neither precision factorised it: only LU serves.
-                Some((Kept::NotPositiveDefinite, _)) => {}
+                Some(None) => {}
                 None => {
                     let symbolic = self.llt.as_ref().expect("just built");
                     self.factor_bytes = symbolic.len_val() * std::mem::size_of::<f64>();
@@ -985,7 +1020,7 @@ fn cholesky(
     b: &Mat<f64>,
     par: Par,
     started: std::time::Instant,
-) -> (Option<(Vec<f64>, Timing)>, usize) {
+) -> (Option<(Columns, Timing)>, usize) {
     let mut values = vec![0.0; symbolic.len_val()];
     let (ok, scratch_bytes) = factorise(symbolic, tangent, exact, &mut values, par);
     if !ok {
@@ -994,7 +1029,7 @@ fn cholesky(
     let factorise = started.elapsed().as_secs_f64();
     let t = std::time::Instant::now();
     let mut x = b.clone();
-    let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, par));
+    let mut scratch = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(b.ncols(), par));
     LltRef::new(symbolic, &values).solve_in_place_with_conj(
         Conj::No,
         x.as_mut(),
@@ -1005,7 +1040,7 @@ fn cholesky(
         factorise,
         solve: t.elapsed().as_secs_f64(),
     };
-    (Some((column(&x), timing)), scratch_bytes)
+    (Some((columns(&x), timing)), scratch_bytes)
 }
 
 /// Solves with a finished factorisation; the factorisation's time is the
@@ -1014,7 +1049,7 @@ fn timed_solve(
     factors: &impl Solve<f64>,
     b: &Mat<f64>,
     started: std::time::Instant,
-) -> (Vec<f64>, Timing) {
+) -> (Vec<Vec<f64>>, Timing) {
     let factorise = started.elapsed().as_secs_f64();
     let t = std::time::Instant::now();
     let x = factors.solve(b);
@@ -1022,8 +1057,11 @@ fn timed_solve(
         factorise,
         solve: t.elapsed().as_secs_f64(),
     };
-    (column(&x), timing)
+    (columns(&x), timing)
 }
+
+/// Solutions, one a right-hand side.
+type Columns = Vec<Vec<f64>>;
 
 /// Wall-clock seconds of one solve.
 #[derive(Debug, Clone, Copy, Default)]
@@ -1032,8 +1070,17 @@ pub struct Timing {
     pub solve: f64,
 }
 
-fn column(x: &Mat<f64>) -> Vec<f64> {
-    (0..x.nrows()).map(|i| x[(i, 0)]).collect()
+impl Timing {
+    fn add(&mut self, other: Timing) {
+        self.factorise += other.factorise;
+        self.solve += other.solve;
+    }
+}
+
+fn columns(x: &Mat<f64>) -> Vec<Vec<f64>> {
+    (0..x.ncols())
+        .map(|j| (0..x.nrows()).map(|i| x[(i, j)]).collect())
+        .collect()
 }
 
 #[cfg(test)]

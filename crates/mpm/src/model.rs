@@ -314,6 +314,7 @@ fn stages(case: &Case, seeded: &Seeded) -> Result<(Vec<Stage>, Vec<IbmSupport>),
             ibm,
             n_supports: view.supports.len(),
             geostatic,
+            arc_length: view.control == case::Control::ArcLength,
         });
         before = end;
     }
@@ -364,6 +365,7 @@ impl Simulation {
             },
             fbar: case.analysis.volumetric == crate::case::Volumetric::Fbar,
             step_size: StepSize::default(),
+            arc: None,
             steps_done: 0,
             stiffness,
             solver: SolverSettings::default(),

@@ -102,6 +102,17 @@ pub enum SolveError {
         tries: usize,
         cause: Box<SolveError>,
     },
+    /// Path following: the arc about the step's start does not meet the
+    /// equilibrium path the iteration's tangent predicts (the constraint's
+    /// quadratic has no real root); a shorter arc may.
+    #[error(
+        "the arc of load step {step} does not meet the equilibrium path at iteration {iteration}: relative residual {residual:.3e}"
+    )]
+    ArcMissed {
+        step: usize,
+        iteration: usize,
+        residual: f64,
+    },
     #[error("cancelled in load step {step} at iteration {iteration}")]
     Cancelled {
         step: usize,
@@ -128,6 +139,7 @@ impl SolveError {
                 | SolveError::Diverged { .. }
                 | SolveError::Inadmissible { .. }
                 | SolveError::LinearSolve { .. }
+                | SolveError::ArcMissed { .. }
         )
     }
 
@@ -150,6 +162,11 @@ impl SolveError {
                 ..
             }
             | SolveError::Cancelled {
+                step,
+                iteration,
+                residual,
+            }
+            | SolveError::ArcMissed {
                 step,
                 iteration,
                 residual,
@@ -191,6 +208,200 @@ pub trait Equilibrium {
     /// iterative solver may stop there; a direct one answers exactly).
     fn correction(&mut self, r: &[f64], accuracy: f64)
     -> Result<(Vec<f64>, Factorisation), String>;
+}
+
+/// A step's equilibrium whose load factor is an unknown beside the
+/// displacements: what path following ([`solve_arc_length`]) asks of it.
+pub trait PathEquilibrium: Equilibrium {
+    /// The load factor the next [`Equilibrium::out_of_balance`] applies
+    /// the ramped loads at.
+    fn set_load_factor(&mut self, lambda: f64);
+    /// `df_ext / dlambda` at the last trial state (zero on constrained DOFs).
+    fn load_rate(&self) -> Vec<f64>;
+    /// Solves `K x = b` for each of `rhs` with one factorisation of the
+    /// tangent at the last trial state, each to `accuracy` as in
+    /// [`Equilibrium::correction`].
+    fn corrections(
+        &mut self,
+        rhs: &[&[f64]],
+        accuracy: f64,
+    ) -> Result<(Vec<Vec<f64>>, Factorisation), String>;
+}
+
+/// The corrector's load-factor change `x` on an iteration of
+/// [`solve_arc_length`] from increment `u`, with `w = u + du_r` and the
+/// load's correction `du_q`: a root of `|w + x du_q| = length`, the one
+/// whose increment turns least from `u`; where the arc and the line miss
+/// each other (the residual's correction is longer than the arc), the
+/// correction normal to `u` instead (Ramm's normal plane, "Strategies
+/// for tracing the nonlinear response near limit points", 1981), which
+/// always meets it unless the load's correction is normal to `u` too.
+fn arc_root(u: &[f64], w: &[f64], du_q: &[f64], length: f64) -> Option<f64> {
+    let (a, b, c) = (
+        dot(du_q, du_q),
+        2.0 * dot(du_q, w),
+        dot(w, w) - length * length,
+    );
+    let discriminant = b * b - 4.0 * a * c;
+    if a > 0.0 && discriminant >= 0.0 {
+        let root = discriminant.sqrt();
+        let roots = [(-b + root) / (2.0 * a), (-b - root) / (2.0 * a)];
+        let along = |x: f64| dot(u, w) + x * dot(u, du_q);
+        return Some(if along(roots[0]) >= along(roots[1]) {
+            roots[0]
+        } else {
+            roots[1]
+        });
+    }
+    let (uw, uq) = (dot(u, w) - dot(u, u), dot(u, du_q));
+    (uq != 0.0).then(|| -uw / uq).filter(|x| x.is_finite())
+}
+
+/// One path-following increment: the length of its arc (the norm of its
+/// displacement increment), the load factor it starts from, and the last
+/// converged increment on this step's DOFs with its change of load
+/// factor, if there was one (the secant predictor).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArcStep {
+    pub length: f64,
+    pub load_factor: f64,
+    pub last: Option<(Vec<f64>, f64)>,
+}
+
+/// Solves one increment of the arc-length method, Crisfield's cylindrical
+/// arc ("A fast incremental/iterative solution procedure that handles
+/// snap-through", Computers & Structures 13, 1981; and his "Non-linear
+/// Finite Element Analysis of Solids and Structures" vol. 1, sec. 9.3):
+/// the load factor `lambda` is an unknown, and the increment `u` keeps
+/// `|u| = length` at every iteration. Each iteration solves with one
+/// factorisation for the corrections of the residual and of the load,
+/// `K du_r = r` and `K du_q = q` (`q = df_ext/dlambda`), and takes
+/// `du = du_r + dlambda du_q` with `dlambda` a root of
+/// `|u + du| = length`:
+/// - the predictor goes on along the last converged increment, scaled to
+///   the arc with its change of load factor (the secant predictor: past
+///   yield the tangent at a step's start is the elastic one, as no point
+///   flows at a zero increment, and a predictor along it misses the
+///   mechanism the body flows in). Without a last increment it goes along
+///   the tangent, forward while the tangent's stiffness along the load is
+///   positive (`q . du_q > 0`; Bergan's current stiffness parameter);
+///   The predictor also takes out the residual the step starts with (the
+///   grid's reset leaves a little of the last step's balance undone);
+/// - a corrector keeps the root whose increment turns least from the
+///   last one (the larger `u . (u + du)`), or where there is none, takes
+///   the correction normal to the increment ([`arc_root`]).
+///
+/// There is no line search: a trial state with an inadmissible point, or
+/// an arc that misses the path ([`SolveError::ArcMissed`]), fails the
+/// increment, and the stepper shortens the arc. Returns the increment, the
+/// load factor it converged at, and Newton's record.
+pub fn solve_arc_length<M: Monitor + ?Sized>(
+    eq: &mut impl PathEquilibrium,
+    settings: &NewtonSettings,
+    step: usize,
+    monitor: &mut M,
+    arc: ArcStep,
+) -> Result<(Vec<f64>, f64, NewtonInfo), SolveError> {
+    let mut u = vec![0.0; eq.n_dofs()];
+    let mut lambda = arc.load_factor;
+    let mut info = NewtonInfo::default();
+    let inadmissible = |iteration, p: InadmissiblePoint, residual| SolveError::Inadmissible {
+        step,
+        iteration,
+        point: p.point,
+        jacobian: p.jacobian,
+        reason: p.reason,
+        residual,
+    };
+    // The secant predictor, when there is a last increment.
+    let secant = arc.last.as_ref().and_then(|(last, dlambda)| {
+        let along = norm(last);
+        (along > 0.0).then(|| (last, dlambda * arc.length / along, arc.length / along))
+    });
+    if let Some((last, dlambda, scale)) = secant {
+        for (ui, li) in u.iter_mut().zip(last) {
+            *ui = scale * li;
+        }
+        lambda += dlambda;
+    }
+    eq.set_load_factor(lambda);
+    let (mut r, mut scale) = eq
+        .out_of_balance(&u)
+        .map_err(|p| inadmissible(0, p, None))?;
+    for iteration in 0.. {
+        let norm = norm(&r);
+        let residual = if norm == 0.0 { 0.0 } else { norm / scale };
+        info.residuals.push(residual);
+        monitor.newton_iteration(step, iteration, residual);
+        if !residual.is_finite() || residual > settings.divergence_limit {
+            return Err(SolveError::Diverged {
+                step,
+                iteration,
+                residual,
+                last_finite: info
+                    .residuals
+                    .iter()
+                    .rev()
+                    .skip(1)
+                    .copied()
+                    .find(|r| r.is_finite()),
+            });
+        }
+        // The tangent's predictor is always taken: at the start the step
+        // has not moved.
+        if (iteration > 0 || secant.is_some()) && residual <= settings.tolerance {
+            info.iterations = iteration;
+            return Ok((u, lambda, info));
+        }
+        out_of_iterations_or_cancelled(&info, settings, monitor, (step, iteration, residual))?;
+        let q = eq.load_rate();
+        let (solved, kind) = eq
+            .corrections(&[&r, &q], forcing_term(residual, settings.tolerance))
+            .map_err(|message| SolveError::LinearSolve {
+                step,
+                iteration,
+                message,
+                residual,
+            })?;
+        info.factorisation = Some(kind);
+        let (du_r, du_q) = (&solved[0], &solved[1]);
+        let w: Vec<f64> = u.iter().zip(du_r).map(|(a, b)| a + b).collect();
+        let dlambda = if iteration == 0 && secant.is_none() {
+            // Along the tangent by the arc, forward while the stiffness
+            // along the load is positive; `du_r` takes out what the grid's
+            // reset left of the last step's balance.
+            let along = self::norm(du_q);
+            if along == 0.0 {
+                return Err(SolveError::ArcMissed {
+                    step,
+                    iteration,
+                    residual,
+                });
+            }
+            let forward = dot(&q, du_q) >= 0.0;
+            if forward {
+                arc.length / along
+            } else {
+                -arc.length / along
+            }
+        } else {
+            arc_root(&u, &w, du_q, arc.length).ok_or(SolveError::ArcMissed {
+                step,
+                iteration,
+                residual,
+            })?
+        };
+        for ((ui, wi), qi) in u.iter_mut().zip(&w).zip(du_q) {
+            *ui = wi + dlambda * qi;
+        }
+        lambda += dlambda;
+        info.step_lengths.push(1.0);
+        eq.set_load_factor(lambda);
+        (r, scale) = eq
+            .out_of_balance(&u)
+            .map_err(|p| inadmissible(iteration + 1, p, Some(residual)))?;
+    }
+    unreachable!("the loop returns")
 }
 
 /// The line search along a Newton direction `du` from a state with
@@ -338,26 +549,7 @@ pub fn solve<M: Monitor + ?Sized>(
         if norm < lowest {
             (lowest, free_steps) = (norm, FREE_STEPS);
         }
-        if iteration >= settings.max_iterations {
-            let earlier = info
-                .residuals
-                .len()
-                .checked_sub(3)
-                .map(|k| info.residuals[k]);
-            return Err(SolveError::NotConverged {
-                step,
-                iteration,
-                residual,
-                stalled: earlier.is_some_and(|r| residual > 0.1 * r),
-            });
-        }
-        if monitor.should_cancel() {
-            return Err(SolveError::Cancelled {
-                step,
-                iteration,
-                residual,
-            });
-        }
+        out_of_iterations_or_cancelled(&info, settings, monitor, (step, iteration, residual))?;
         let (du, kind) = eq
             .correction(&r, forcing_term(residual, settings.tolerance))
             .map_err(|message| SolveError::LinearSolve {
@@ -409,6 +601,38 @@ pub fn solve<M: Monitor + ?Sized>(
         u = trial;
     }
     unreachable!("the loop returns")
+}
+
+/// The end of a solve that has used up its iterations (`NotConverged`,
+/// `stalled` when the residual fell less than tenfold over the last two)
+/// or that the monitor cancels, at `(step, iteration, residual)`.
+fn out_of_iterations_or_cancelled<M: Monitor + ?Sized>(
+    info: &NewtonInfo,
+    settings: &NewtonSettings,
+    monitor: &mut M,
+    (step, iteration, residual): (usize, usize, f64),
+) -> Result<(), SolveError> {
+    if iteration >= settings.max_iterations {
+        let earlier = info
+            .residuals
+            .len()
+            .checked_sub(3)
+            .map(|k| info.residuals[k]);
+        return Err(SolveError::NotConverged {
+            step,
+            iteration,
+            residual,
+            stalled: earlier.is_some_and(|r| residual > 0.1 * r),
+        });
+    }
+    if monitor.should_cancel() {
+        return Err(SolveError::Cancelled {
+            step,
+            iteration,
+            residual,
+        });
+    }
+    Ok(())
 }
 
 /// How accurately the correction at a Newton iteration whose relative
@@ -489,6 +713,120 @@ mod tests {
                 Factorisation::Lu,
             ))
         }
+    }
+
+    /// Two springs, one softening, with internal forces `f0 = 2 u0 - u0^3
+    /// / 3 - u1` and `f1 = 2 u1 - u0`, loaded by `lambda` on DOF 0. On the equilibrium path `u1 =
+    /// u0 / 2` and `lambda = 1.5 u0 - u0^3 / 3`, whose peak is at `u0 =
+    /// sqrt(1.5)`: `lambda = (2/3) 1.5^1.5 = 1.224745`. Its tangent is
+    /// singular there.
+    struct SofteningSprings {
+        start: [f64; 2],
+        u: [f64; 2],
+        lambda: f64,
+    }
+
+    impl SofteningSprings {
+        fn f(&self) -> [f64; 2] {
+            let [a, b] = self.u;
+            [2.0 * a - a.powi(3) / 3.0 - b, 2.0 * b - a]
+        }
+    }
+
+    impl Equilibrium for SofteningSprings {
+        fn n_dofs(&self) -> usize {
+            2
+        }
+        fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InadmissiblePoint> {
+            self.u = [self.start[0] + u[0], self.start[1] + u[1]];
+            let f = self.f();
+            Ok((vec![self.lambda - f[0], -f[1]], 1.0))
+        }
+        fn correction(
+            &mut self,
+            r: &[f64],
+            accuracy: f64,
+        ) -> Result<(Vec<f64>, Factorisation), String> {
+            let (mut x, kind) = self.corrections(&[r], accuracy)?;
+            Ok((x.pop().unwrap(), kind))
+        }
+    }
+
+    impl PathEquilibrium for SofteningSprings {
+        fn set_load_factor(&mut self, lambda: f64) {
+            self.lambda = lambda;
+        }
+        fn load_rate(&self) -> Vec<f64> {
+            vec![1.0, 0.0]
+        }
+        fn corrections(
+            &mut self,
+            rhs: &[&[f64]],
+            _accuracy: f64,
+        ) -> Result<(Vec<Vec<f64>>, Factorisation), String> {
+            let a = self.u[0];
+            let k = [[2.0 - a * a, -1.0], [-1.0, 2.0]];
+            let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
+            Ok((
+                rhs.iter()
+                    .map(|r| {
+                        vec![
+                            (k[1][1] * r[0] - k[0][1] * r[1]) / det,
+                            (k[0][0] * r[1] - k[1][0] * r[0]) / det,
+                        ]
+                    })
+                    .collect(),
+                Factorisation::Lu,
+            ))
+        }
+    }
+
+    #[test]
+    fn the_arc_length_method_passes_the_peak_of_a_softening_spring() {
+        let settings = NewtonSettings {
+            tolerance: 1e-12,
+            ..NewtonSettings::default()
+        };
+        let mut springs = SofteningSprings {
+            start: [0.0; 2],
+            u: [0.0; 2],
+            lambda: 0.0,
+        };
+        let (length, peak) = (0.1, 2.0 / 3.0 * 1.5_f64.powf(1.5));
+        let mut path = vec![(0.0, 0.0)];
+        // The first step from the tangent, the others from the secant.
+        let mut last: Option<(Vec<f64>, f64)> = None;
+        for step in 1..=30 {
+            let start = springs.lambda;
+            let arc = ArcStep {
+                length,
+                load_factor: start,
+                last: last.clone(),
+            };
+            let (u, lambda, info) =
+                solve_arc_length(&mut springs, &settings, step, &mut NoObserver, arc).unwrap();
+            assert!((norm(&u) - length).abs() < 1e-12 * length, "step {step}");
+            assert!(info.iterations <= 6, "step {step}: {:?}", info.residuals);
+            springs.start = springs.u;
+            last = Some((u.clone(), lambda - start));
+            // On the equilibrium path.
+            let a = springs.u[0];
+            assert!((springs.u[1] - a / 2.0).abs() < 1e-9);
+            assert!((lambda - (1.5 * a - a.powi(3) / 3.0)).abs() < 1e-9);
+            path.push((a, lambda));
+        }
+        let top = path.iter().map(|p| p.1).fold(f64::MIN, f64::max);
+        // Sampled every 0.1 / sqrt(1.25) in u0 around a peak of curvature
+        // -2 sqrt(1.5): at most 2.45 * 0.045^2 / 2 = 0.0025 below it.
+        assert!(
+            top <= peak + 1e-12 && top > peak - 0.0025,
+            "{top} against {peak}"
+        );
+        // Past the peak and down the other side, u0 still growing.
+        let (a_end, lambda_end) = *path.last().unwrap();
+        assert!(a_end > 2.0, "{a_end}");
+        assert!(lambda_end < 0.5 * peak, "{lambda_end}");
+        assert!(path.windows(2).all(|w| w[1].0 > w[0].0));
     }
 
     #[test]

@@ -3,10 +3,10 @@
 //! encoding: `checkpoint.rs`).
 
 use crate::checkpoint::{
-    Checkpoint, CheckpointError, FORMAT, HistoryState, LoopState, StepSizeState,
+    ArcControlState, Checkpoint, CheckpointError, FORMAT, HistoryState, LoopState, StepSizeState,
 };
 use crate::material::CauchyStress;
-use crate::stepper::{Simulation, StepSize};
+use crate::stepper::{ArcState, LastIncrement, Simulation, StepSize};
 
 impl Simulation {
     /// Load steps converged so far.
@@ -51,6 +51,11 @@ impl Simulation {
                 clean_steps: self.step_size.clean_steps,
                 wait: self.step_size.wait,
             },
+            arc: self.arc.as_ref().map(|a| ArcControlState {
+                arc: [a.length, a.first_length, a.load_factor],
+                easy_in_a_row: a.easy_in_a_row,
+                last: (a.last.as_ref()).map(|l| (l.nodes.clone(), l.u.clone(), l.dlambda)),
+            }),
         }
     }
 
@@ -128,6 +133,20 @@ impl Simulation {
             clean_steps: s.clean_steps,
             wait: s.wait,
         };
+        self.arc = c.arc.as_ref().map(|a| {
+            let [length, first_length, load_factor] = a.arc;
+            ArcState {
+                length,
+                first_length,
+                load_factor,
+                easy_in_a_row: a.easy_in_a_row,
+                last: (a.last.clone()).map(|(nodes, u, dlambda)| LastIncrement {
+                    nodes,
+                    u,
+                    dlambda,
+                }),
+            }
+        });
         self.steps_done = c.steps_done;
         self.analysed = None;
         Ok(())
@@ -310,15 +329,23 @@ mod tests {
         for s in &straight.points.stress {
             assert!(s.plane.iter().all(|x| x.abs() < 1e-5 * 2.0e4), "{s:?}");
         }
-        for stop_after in [3, 5] {
-            let mut first = Simulation::new(&case).unwrap();
+        resumes_to_the_bit(&case, &whole, &straight, &[3, 5]);
+    }
+
+    /// Stopped after each of `stops` and resumed in a fresh simulation,
+    /// the run of `case` ends where the straight run (`whole`, leaving
+    /// `straight`) ends, to the bit (a small run: rayon does not split its
+    /// sums).
+    fn resumes_to_the_bit(case: &Case, whole: &RunReport, straight: &Simulation, stops: &[usize]) {
+        for &stop_after in stops {
+            let mut first = Simulation::new(case).unwrap();
             let mut stop = StopAfter {
                 stop_after,
                 taken: None,
             };
             assert!(first.run(&mut stop).is_err());
             let checkpoint = Checkpoint::from_bytes(&stop.taken.unwrap()).unwrap();
-            let mut resumed = Simulation::new(&case).unwrap();
+            let mut resumed = Simulation::new(case).unwrap();
             resumed.restore(&checkpoint).unwrap();
             let rest = resumed.run(&mut crate::NoObserver).unwrap();
             assert_eq!(
@@ -337,6 +364,31 @@ mod tests {
                 "after {stop_after}"
             );
         }
+    }
+
+    /// An arc-length run (a von Mises block squeezed by a pressure on its
+    /// top, past its yield onto its plateau) resumes on the arc it was
+    /// on: stopped after its first step (an equal increment, which sets
+    /// the arc) and after a later one, it ends where the straight run
+    /// ends, to the bit.
+    #[test]
+    fn an_arc_length_run_resumes_on_its_arc() {
+        let mut v = crate::fixtures::block([1.0, 1.0], [8, 8], 0.25, [0.0, 0.0]);
+        v["analysis"] = serde_json::json!({ "load_steps": 6, "control": "arc_length" });
+        v["bodies"][0]["material"] = serde_json::json!({
+            "model": "von_mises", "youngs_modulus": 1e6, "poisson_ratio": 0.3,
+            "density": 0.0, "yield_stress": 1e3
+        });
+        v["loads"] = serde_json::json!({ "boundary": [{ "on": { "y": 1.0 }, "pressure": 3e3 }] });
+        v["supports"] = serde_json::json!([{ "on": { "x": 0.0 }, "fix": "x" }, { "on": { "y": 0.0 }, "fix": "y" }]);
+        let case = Case::from_json(&v.to_string()).unwrap();
+        let mut straight = Simulation::new(&case).unwrap();
+        let whole = straight.run(&mut crate::NoObserver).unwrap();
+        // Past yield (a plane-strain block flows at 2 sigma_y / sqrt 3 =
+        // 1155 Pa, 0.385 of the pressure asked) within its steps.
+        let last = whole.steps.last().unwrap().load_factor;
+        assert!(last > 0.3 && last < 0.5, "{last}");
+        resumes_to_the_bit(&case, &whole, &straight, &[1, 4]);
     }
 
     #[test]

@@ -33,6 +33,9 @@ pub struct Stage {
     /// nu)`): it starts from the overburden stresses and does not move the
     /// points ([`crate::particles::geostatic`]).
     pub geostatic: Option<Option<f64>>,
+    /// Whether its load factor is found by the arc-length method (from its
+    /// second step on) rather than stepped in equal increments.
+    pub arc_length: bool,
 }
 
 /// The stage that holds load step `step` (counted from 1 over the run),
@@ -63,6 +66,7 @@ mod tests {
             ibm: Vec::new(),
             n_supports: 0,
             geostatic: None,
+            arc_length: false,
         }
     }
 

@@ -103,6 +103,62 @@ impl StepSize {
     }
 }
 
+/// Where the arc-length control stands between the steps of an
+/// arc-length stage. The first step is an equal increment (`1 / n` of the
+/// loads); its displacement increment's norm is the arc length of those
+/// after it. A step that fails is tried again on half the arc, down to
+/// [`Substepping::min_fraction`] of the first; after two easy ones in a
+/// row ([`EASY_ITERATIONS`]) the arc doubles, so that past the elastic
+/// range, where the first arc is a small part of the displacement to
+/// collapse, the steps reach it.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ArcState {
+    pub(crate) length: f64,
+    pub(crate) first_length: f64,
+    /// The stage's load factor the last step reached.
+    pub(crate) load_factor: f64,
+    pub(crate) easy_in_a_row: usize,
+    /// The last converged increment, which the next step's predictor
+    /// goes on along.
+    pub(crate) last: Option<LastIncrement>,
+}
+
+/// A converged increment: the grid displacement on its step's nodes (by
+/// key) and its change of load factor.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct LastIncrement {
+    pub(crate) nodes: Vec<NodeKey>,
+    pub(crate) u: Vec<f64>,
+    pub(crate) dlambda: f64,
+}
+
+impl LastIncrement {
+    /// Its displacement on the DOFs of a step's `nodes` (sorted keys):
+    /// zero on a node it did not have.
+    fn on(&self, nodes: &[NodeKey]) -> Vec<f64> {
+        let mut out = vec![0.0; 2 * nodes.len()];
+        for (i, key) in nodes.iter().enumerate() {
+            if let Ok(j) = self.nodes.binary_search(key) {
+                out[2 * i] = self.u[2 * j];
+                out[2 * i + 1] = self.u[2 * j + 1];
+            }
+        }
+        out
+    }
+
+    fn norm(&self) -> f64 {
+        self.u.iter().map(|v| v * v).sum::<f64>().sqrt()
+    }
+}
+
+/// How an increment's load factor is set: given (from, to), or found
+/// with the displacements on an arc of `length` from `load_factor`.
+#[derive(Debug, Clone, Copy)]
+enum Increment {
+    To(f64, f64),
+    Arc { length: f64, load_factor: f64 },
+}
+
 /// A case made ready to run: points, grid, loads and supports
 /// ([`crate::model`] builds it from a case).
 pub struct Simulation {
@@ -128,6 +184,8 @@ pub struct Simulation {
     pub settings: NewtonSettings,
     pub substepping: Substepping,
     pub(crate) step_size: StepSize,
+    /// The arc-length control, once an arc-length stage's first step is done.
+    pub(crate) arc: Option<ArcState>,
     /// F-bar against volumetric locking ([`crate::assembly::fbar`]).
     pub fbar: bool,
     /// Load steps over all stages.
@@ -219,6 +277,11 @@ impl Simulation {
         let (step_in_stage, n) = (step - before, self.stages[k].load_steps as f64);
         let end = step_in_stage as f64 / n;
         let easy_limit = EASY_ITERATIONS.min(self.settings.max_iterations / 2);
+        if self.stages[k].arc_length
+            && let Some(arc) = self.arc.clone()
+        {
+            return self.arc_step(step, arc, easy_limit, observer);
+        }
         // Progress through the step, and the size of the next try, as
         // fractions of its increment (powers of two: exact in binary).
         let (mut size, probe) = self.step_size.first_try(self.substepping.min_fraction);
@@ -226,6 +289,7 @@ impl Simulation {
         let mut done = 0.0_f64;
         let mut report: Option<StepReport> = None;
         let (mut cutbacks, mut failed_iterations) = (0, 0);
+        let mut converged: Option<(LastIncrement, f64)> = None;
         while done < 1.0 {
             let last = done + size >= 1.0 - 1e-12;
             let reach = if last { 1.0 } else { done + size };
@@ -235,8 +299,11 @@ impl Simulation {
                 (step_in_stage as f64 - 1.0 + reach) / n
             };
             let extent_checked_after = if done > 0.0 { step } else { step - 1 };
-            match self.increment(step, extent_checked_after, load_factor, observer) {
-                Ok(sub) => {
+            let from = (step_in_stage as f64 - 1.0 + done) / n;
+            let to = Increment::To(from, load_factor);
+            match self.increment(step, extent_checked_after, to, observer) {
+                Ok((sub, increment)) => {
+                    converged = Some((increment, reach - done));
                     easy_in_a_row = if sub.newton.iterations <= easy_limit {
                         easy_in_a_row + 1
                     } else {
@@ -276,10 +343,81 @@ impl Simulation {
             }
         }
         self.step_size = self.step_size.after(size, easy_in_a_row, cutbacks, probe);
+        if self.stages[k].arc_length
+            && let Some((increment, span)) = converged
+        {
+            // The arc of a step: the last sub-increment's, scaled to the
+            // whole step.
+            let length = increment.norm() / span;
+            self.arc = Some(ArcState {
+                length,
+                first_length: length,
+                load_factor: end,
+                easy_in_a_row: 0,
+                last: Some(increment),
+            });
+        }
         let mut report = report.expect("the loop converged at least once");
         report.cutbacks = cutbacks;
         report.failed_iterations = failed_iterations;
         Ok(report)
+    }
+
+    /// One step of an arc-length stage on the arc `arc` leaves
+    /// ([`ArcState`]): tried again on half the arc when it fails, down to
+    /// [`Substepping::min_fraction`] of the first arc.
+    fn arc_step(
+        &mut self,
+        step: usize,
+        mut arc: ArcState,
+        easy_limit: usize,
+        observer: &mut dyn Observer,
+    ) -> Result<StepReport, SolveError> {
+        let (mut cutbacks, mut failed_iterations) = (0, 0);
+        loop {
+            let on = Increment::Arc {
+                length: arc.length,
+                load_factor: arc.load_factor,
+            };
+            match self.increment(step, step - 1, on, observer) {
+                Ok((mut report, increment)) => {
+                    arc.load_factor = report.load_factor;
+                    arc.last = Some(increment);
+                    arc.easy_in_a_row = if report.newton.iterations <= easy_limit {
+                        arc.easy_in_a_row + 1
+                    } else {
+                        0
+                    };
+                    if arc.easy_in_a_row >= 2 {
+                        arc.length *= 2.0;
+                        arc.easy_in_a_row = 0;
+                    }
+                    self.arc = Some(arc);
+                    report.cutbacks = cutbacks;
+                    report.failed_iterations = failed_iterations;
+                    return Ok(report);
+                }
+                Err(e) if self.worth_cutting(&e) => {
+                    cutbacks += 1;
+                    failed_iterations += e.location().1.unwrap_or(0);
+                    arc.easy_in_a_row = 0;
+                    arc.length *= 0.5;
+                    let fraction = arc.length / arc.first_length;
+                    if fraction < self.substepping.min_fraction
+                        || cutbacks > self.substepping.max_cutbacks
+                    {
+                        return Err(SolveError::SubstepsExhausted {
+                            step,
+                            load_factor: arc.load_factor,
+                            fraction: 2.0 * fraction,
+                            tries: cutbacks,
+                            cause: Box::new(e),
+                        });
+                    }
+                }
+                Err(e) => return Err(e),
+            }
+        }
     }
 
     /// Whether a smaller increment may succeed where this try failed: not
@@ -298,22 +436,45 @@ impl Simulation {
     /// and commits it, as in the module docs.
     /// `extent_checked_after` is the step a material point that left the
     /// grid's extent is reported after.
+    /// Returns its report and its increment.
     fn increment(
         &mut self,
         step: usize,
         extent_checked_after: usize,
-        load_factor: f64,
+        control: Increment,
         observer: &mut dyn Observer,
-    ) -> Result<StepReport, SolveError> {
+    ) -> Result<(StepReport, LastIncrement), SolveError> {
         let mut clock = Stopwatch::start();
         self.check_inside_extent(extent_checked_after)?;
 
         let conn = self.reset_grid();
         let previous = self.analysed.take();
-        let mut eq = self.assemble(&conn, load_factor, previous);
+        let (from, start_factor, path) = match control {
+            Increment::To(from, to) => (from, to, false),
+            Increment::Arc { load_factor, .. } => (load_factor, load_factor, true),
+        };
+        let mut eq = self.assemble(&conn, start_factor, path, previous);
         let grid_seconds = clock.lap();
 
-        let (u, newton) = newton::solve(&mut eq, &self.settings, step, observer)?;
+        let (u, load_factor, newton) = match control {
+            Increment::To(_, to) => {
+                let (u, info) = newton::solve(&mut eq, &self.settings, step, observer)?;
+                (u, to, info)
+            }
+            Increment::Arc {
+                length,
+                load_factor,
+            } => {
+                let last = (self.arc.as_ref().and_then(|a| a.last.as_ref()))
+                    .map(|l| (l.on(&conn.nodes), l.dlambda));
+                let arc = newton::ArcStep {
+                    length,
+                    load_factor,
+                    last,
+                };
+                newton::solve_arc_length(&mut eq, &self.settings, step, observer, arc)?
+            }
+        };
         clock.lap();
 
         let reactions = eq.reactions(&u, self.stages[self.stage].n_supports);
@@ -367,7 +528,7 @@ impl Simulation {
             ..converged.timings
         };
 
-        Ok(StepReport {
+        let report = StepReport {
             step,
             stage: self.stage_name(self.stage),
             load_factor,
@@ -383,7 +544,13 @@ impl Simulation {
             applied_load,
             support_tractions,
             memory: converged.memory,
-        })
+        };
+        let increment = LastIncrement {
+            nodes: conn.nodes.clone(),
+            u,
+            dlambda: load_factor - from,
+        };
+        Ok((report, increment))
     }
 
     /// The grid reset: every point's shape functions at its current
@@ -401,10 +568,13 @@ impl Simulation {
 
     /// The system of a step at `load_factor` on its grid reset `conn`: the
     /// step's terms, then the stiffness pattern of every coupling they add.
+    /// With `path`, the load factor is an unknown that starts there (the
+    /// arc-length method).
     pub(crate) fn assemble<'a>(
         &'a self,
         conn: &'a Connectivity,
         load_factor: f64,
+        path: bool,
         previous: Option<AnalysedPattern>,
     ) -> StepEquilibrium<'a> {
         let start = Configuration {
@@ -445,6 +615,15 @@ impl Simulation {
                 &stage.point_loads,
                 load_factor,
             ),
+            f_ext_rate: path.then(|| {
+                let rate = assembly::external_force_rate(
+                    conn,
+                    &self.points,
+                    stage.gravity,
+                    &stage.point_loads,
+                );
+                (load_factor, rate)
+            }),
             fbar: self.fbar.then(|| FbarCells::new(&start)),
             terms,
         };
@@ -624,7 +803,7 @@ mod tests {
     fn first_tangent_condition(case: &Case) -> f64 {
         let sim = Simulation::new(case).unwrap();
         let conn = sim.reset_grid();
-        let mut eq = sim.assemble(&conn, 1.0 / sim.load_steps as f64, None);
+        let mut eq = sim.assemble(&conn, 1.0 / sim.load_steps as f64, false, None);
         let n = conn.n_dofs();
         eq.out_of_balance(&vec![0.0; n]).unwrap();
         let free: Vec<usize> = (0..n).filter(|&i| !eq.is_held(i)).collect();
@@ -732,7 +911,7 @@ mod tests {
             case["supports"] = serde_json::json!([ { "on": { "x": 0.1 }, "fix": "xy" } ]);
             let sim = fixtures::simulation(&case);
             let conn = sim.reset_grid();
-            let mut eq = sim.assemble(&conn, 1.0, None);
+            let mut eq = sim.assemble(&conn, 1.0, false, None);
             let n = conn.n_dofs();
             // A smooth trial state and direction: bending and squeezing.
             let field = |a: f64, b: f64| -> Vec<f64> {

@@ -73,3 +73,16 @@ pub fn external_force(
     }
     f
 }
+
+/// The derivative of [`external_force`] by the load factor: the ramped
+/// gravity on every point's mass and the ramped point loads.
+pub fn external_force_rate(
+    conn: &Connectivity,
+    points: &MaterialPoints,
+    gravity: [[f64; 2]; 2],
+    point_loads: &[PointLoad],
+) -> Vec<f64> {
+    let ramped = [[0.0; 2], gravity[1]];
+    let ramped_loads: Vec<PointLoad> = point_loads.iter().filter(|l| !l.held).cloned().collect();
+    external_force(conn, points, ramped, &ramped_loads, 1.0)
+}

@@ -18,7 +18,7 @@ pub mod stiffness;
 pub mod term;
 
 pub use fbar::{FbarCells, FbarTrial};
-pub use forces::{PointLoad, body_force, external_force, internal_force};
+pub use forces::{PointLoad, body_force, external_force, external_force_rate, internal_force};
 pub use ghost_faces::GhostFaces;
 pub use pattern::{NodeAdjacency, Pattern, constrain};
 pub use soft_cells::SoftCells;

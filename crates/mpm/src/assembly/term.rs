@@ -45,6 +45,20 @@ pub trait StepTerm: Send + Sync {
     /// for a load, the internal force otherwise).
     fn add_force(&self, u: &[f64], f: &mut [f64]);
 
+    /// Sets the load factor its force is at, when the load factor is an
+    /// unknown of the step (path following). A load's force follows it;
+    /// the other terms' do not depend on it in such a step (a
+    /// path-following stage prescribes no motion).
+    fn set_load_factor(&mut self, lambda: f64) {
+        let _ = lambda;
+    }
+
+    /// Adds the derivative of its force at `u` by the load factor to `f`
+    /// (nothing by default: a term whose force does not follow it).
+    fn add_load_rate(&self, u: &[f64], f: &mut [f64]) {
+        let _ = (u, f);
+    }
+
     /// Adds its stiffness at `u` to the tangent's `values` in `pattern`'s
     /// layout (a load's is `-df_ext/du`).
     fn add_stiffness(&self, u: &[f64], pattern: &Pattern, values: &mut [f64]);

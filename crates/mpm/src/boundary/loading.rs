@@ -149,12 +149,24 @@ impl<'a> BoundaryLoading<'a> {
         k: usize,
         sink: &mut impl FnMut(usize, [f64; 2]),
     ) {
+        let stretch = &self.stretches[i];
+        let factor = if stretch.held { 1.0 } else { self.load_factor };
+        self.segment_forces_at(i, segment, k, factor, sink);
+    }
+
+    /// [`Self::segment_forces`] at `factor` of the stretch's traction.
+    fn segment_forces_at(
+        &self,
+        i: usize,
+        segment: &[Point; 4],
+        k: usize,
+        factor: f64,
+        sink: &mut impl FnMut(usize, [f64; 2]),
+    ) {
         let q = self.quadrature[i][k]
             .as_ref()
             .expect("loaded segments have a quadrature");
-        let stretch = &self.stretches[i];
-        let factor = if stretch.held { 1.0 } else { self.load_factor };
-        q.forces(segment, stretch.traction, factor, sink);
+        q.forces(segment, self.stretches[i].traction, factor, sink);
     }
 
     /// The loaded segments of stretch `i` whose shape depends on data point
@@ -163,6 +175,24 @@ impl<'a> BoundaryLoading<'a> {
         segments_touching(k, n)
             .filter(|&j| self.quadrature[i][j].is_some())
             .collect()
+    }
+
+    /// Adds the derivative of the nodal forces at increment `u` by the
+    /// load factor to `f`: the ramped stretches' forces at their full
+    /// traction (a force is linear in its factor at a given boundary).
+    pub fn add_load_rate(&self, u: &[f64], f: &mut [f64]) {
+        for (i, s) in self.stretches.iter().enumerate() {
+            if s.held {
+                continue;
+            }
+            let ring = self.ring(&self.loops[s.loop_index], u);
+            for &k in &s.segments {
+                self.segment_forces_at(i, &local_segment(&ring, k), k, 1.0, &mut |a, force| {
+                    f[2 * a] += force[0];
+                    f[2 * a + 1] += force[1];
+                });
+            }
+        }
     }
 
     /// Adds the boundary loads' nodal forces at increment `u` to `f`.
@@ -323,6 +353,14 @@ impl StepTerm for BoundaryLoading<'_> {
 
     fn add_force(&self, u: &[f64], f: &mut [f64]) {
         self.add_forces(u, f);
+    }
+
+    fn set_load_factor(&mut self, lambda: f64) {
+        self.load_factor = lambda;
+    }
+
+    fn add_load_rate(&self, u: &[f64], f: &mut [f64]) {
+        BoundaryLoading::add_load_rate(self, u, f);
     }
 
     fn add_stiffness(&self, u: &[f64], pattern: &Pattern, values: &mut [f64]) {

@@ -313,6 +313,26 @@ pub struct Analysis {
     /// or its cell's average (`fbar`, against volumetric locking).
     #[serde(default)]
     pub volumetric: Volumetric,
+    /// How the load factor moves from step to step (default `load`); with
+    /// `stages`, each stage gives its own.
+    #[serde(default)]
+    pub control: Control,
+}
+
+/// How a stage's load factor moves from step to step.
+#[derive(
+    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Control {
+    /// Equal increments: step `k` of `n` is at load factor `k / n`.
+    #[default]
+    Load,
+    /// The arc-length method: the first step is at `1 / n`, and each after
+    /// it moves the displacements by as much as the first did, the load
+    /// factor found with them, so the load may pass a peak and fall. Its
+    /// supports prescribe no motion; the last stage only.
+    ArcLength,
 }
 
 #[derive(
@@ -684,8 +704,11 @@ pub struct StageSpec {
     /// Shown with each of its steps (default `stage 1`, `stage 2`, ...).
     #[serde(default)]
     pub name: Option<String>,
-    /// Number of equal load increments of the stage.
+    /// Number of load increments of the stage.
     pub load_steps: u32,
+    /// How its load factor moves (default `load`: equal increments).
+    #[serde(default)]
+    pub control: Control,
     /// The loads at the stage's end (targets): a load the stage before had
     /// and this one leaves out goes to zero. A boundary load is the same
     /// load from stage to stage when its `on` and its kind (traction or
@@ -731,6 +754,7 @@ pub struct StageView<'a> {
     pub path: String,
     pub name: Option<&'a str>,
     pub load_steps: u32,
+    pub control: Control,
     pub loads: &'a Loads,
     pub load_increments: Option<&'a Loads>,
     pub supports: &'a [Support],
@@ -748,6 +772,7 @@ impl Case {
                 path: String::new(),
                 name: None,
                 load_steps: self.analysis.load_steps,
+                control: self.analysis.control,
                 loads: &self.loads,
                 load_increments: None,
                 supports: &self.supports,
@@ -771,6 +796,7 @@ impl Case {
             views.push(StageView {
                 name: st.name.as_deref(),
                 load_steps: st.load_steps,
+                control: st.control,
                 loads,
                 load_increments: st.load_increments.as_ref(),
                 supports,
@@ -1007,9 +1033,48 @@ mod tests {
             { "on": { "y": 0.0 }, "fix": "y", "method": "ibm" }
         ]);
         wrong.push((v, "stages[1].supports[0]"));
+        // Arc-length control: the last stage only, with loads of its own
+        // to scale, supports that hold still, and not at the top level.
+        let mut v = staged();
+        v["analysis"]["control"] = "arc_length".into();
+        wrong.push((v, "analysis.control"));
+        let mut v = staged();
+        v["stages"][0]["control"] = "arc_length".into();
+        wrong.push((v, "stages[0].control"));
+        let mut v = staged();
+        v["stages"][1]["control"] = "arc_length".into();
+        wrong.push((v, "stages[1].control"));
+        let mut v = staged();
+        v["stages"][1]["control"] = "arc_length".into();
+        v["stages"][1]["load_increments"] = serde_json::json!({ "gravity": [0.0, -1.0] });
+        v["stages"][1]["supports"] = v["stages"][0]["supports"].clone();
+        v["stages"][1]["supports"][2]["method"] = "ibm".into();
+        v["stages"][1]["supports"][2]["displacement"] = serde_json::json!([0.0, -0.1]);
+        wrong.push((v, "stages[1].supports[2]"));
         for (v, path) in wrong {
             assert_eq!(error_for(v).path, path);
         }
+        let mut v = staged();
+        v["stages"][1]["control"] = "arc_length".into();
+        v["stages"][1]["load_increments"] = serde_json::json!({ "gravity": [0.0, -1.0] });
+        let case = Case::from_json(&v.to_string()).unwrap();
+        assert_eq!(case.stage_views()[1].control, Control::ArcLength);
+    }
+
+    /// A case without stages asks for the arc length in `analysis`; its
+    /// supports must hold still.
+    #[test]
+    fn an_arc_length_case_scales_loads_not_motions() {
+        let mut v = column_json();
+        v["analysis"]["control"] = "arc_length".into();
+        assert!(Case::from_json(&v.to_string()).is_ok());
+        v["supports"][2] = serde_json::json!({ "on": { "y": 0.0 }, "fix": "xy", "method": "ibm", "displacement": [0.0, 0.1] });
+        let e = error_for(v.clone());
+        assert_eq!(e.path, "supports[2]");
+        assert!(e.message.contains("hold still"), "{}", e.message);
+        v["supports"][2] = serde_json::json!({ "on": { "y": 0.0 }, "fix": "xy" });
+        v["loads"] = serde_json::json!({});
+        assert_eq!(error_for(v).path, "analysis.control");
     }
 
     #[test]

@@ -214,6 +214,7 @@ impl Case {
         if !self.stages.is_empty() {
             for (field, given) in [
                 ("analysis.load_steps", a.load_steps != 0),
+                ("analysis.control", a.control != Control::Load),
                 ("loads", self.loads != Loads::default()),
                 ("supports", !self.supports.is_empty()),
             ] {
@@ -234,6 +235,9 @@ impl Case {
                     format!("{stage}load_steps")
                 };
                 return Err(CaseError::new(path, "must be at least 1"));
+            }
+            if view.control == Control::ArcLength {
+                arc_length(k, views.len(), view, self.stages.get(k))?;
             }
             if let Some(st) = self.stages.get(k) {
                 if st.name.as_ref().is_some_and(|n| n.trim().is_empty()) {
@@ -681,6 +685,65 @@ fn validate_loads(prefix: &str, loads: &Loads) -> Result<(), CaseError> {
                 return Err(CaseError::new(
                     path,
                     "give exactly one of traction, pressure",
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// An arc-length stage (`k` of `n`; `spec` when the case has stages): the
+/// last, with a load to scale, and no support motion (the load factor it
+/// finds scales its loads alone).
+fn arc_length(
+    k: usize,
+    n: usize,
+    view: &StageView<'_>,
+    spec: Option<&StageSpec>,
+) -> Result<(), CaseError> {
+    let path = if spec.is_some() {
+        format!("{}control", view.path)
+    } else {
+        "analysis.control".to_string()
+    };
+    if k + 1 < n {
+        return Err(CaseError::new(
+            path,
+            "only the last stage may be arc-length controlled (the load it reaches is not known before it runs)",
+        ));
+    }
+    if spec.is_some_and(|s| s.geostatic.is_some()) {
+        return Err(CaseError::new(
+            path,
+            "a geostatic stage is not arc-length controlled",
+        ));
+    }
+    let loaded = |l: &Loads| {
+        l.gravity.is_some_and(|g| g != [0.0, 0.0])
+            || !l.point_loads.is_empty()
+            || !l.boundary.is_empty()
+    };
+    let ramps = match spec {
+        None => loaded(view.loads),
+        Some(s) => {
+            s.loads.as_ref().is_some_and(loaded) || s.load_increments.as_ref().is_some_and(loaded)
+        }
+    };
+    if !ramps {
+        return Err(CaseError::new(
+            path,
+            "an arc-length stage needs loads (its own loads or load_increments) for its load factor to scale",
+        ));
+    }
+    let own_supports = spec.is_none_or(|s| s.supports.is_some());
+    if own_supports {
+        for (i, s) in view.supports.iter().enumerate() {
+            let moves = s.displacement.is_some_and(|d| d != [0.0, 0.0])
+                || s.rotation.is_some_and(|r| r.angle != 0.0);
+            if moves {
+                return Err(CaseError::new(
+                    format!("{}[{i}]", view.supports_path),
+                    "an arc-length stage's supports hold still: the load factor it finds scales its loads, not a prescribed motion",
                 ));
             }
         }

@@ -20,3 +20,25 @@ pub fn run(case: &serde_json::Value) -> (Simulation, RunReport) {
 pub fn orders(errors: &[f64]) -> Vec<f64> {
     errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
 }
+
+/// Hill's thick cylinder as `plasticity.rs` sets it (a quarter tube a = 1
+/// m, b = 2 m, von Mises with sigma_y = 1 kPa, E = 1 MPa, nu = 0.49 and
+/// F-bar, h = 0.0625 m, GIMP, 2 points per cell), under internal pressure
+/// `pressure` (Pa) in `load_steps` steps.
+pub fn hills_tube(pressure: f64, load_steps: u32) -> serde_json::Value {
+    serde_json::json!({
+        "version": 1,
+        "analysis": { "load_steps": load_steps, "volumetric": "fbar" },
+        "grid": { "cell_size": 0.0625, "extent": { "min": [0.0, 0.0], "max": [2.5, 2.5] } },
+        "basis": "gimp",
+        "bodies": [{
+            "geometry": { "annulus_sector": { "center": [0.0, 0.0], "inner_radius": 1.0, "outer_radius": 2.0,
+                                              "start_angle": 0.0, "end_angle": 90.0 } },
+            "points": { "per_cell": 2 },
+            "material": { "model": "von_mises", "youngs_modulus": 1.0e6, "poisson_ratio": 0.49,
+                          "density": 0.0, "yield_stress": 1.0e3 }
+        }],
+        "loads": { "boundary": [ { "on": { "center": [0.0, 0.0], "radius": 1.0 }, "pressure": pressure } ] },
+        "supports": [ { "on": { "x": 0.0 }, "fix": "x" }, { "on": { "y": 0.0 }, "fix": "y" } ]
+    })
+}

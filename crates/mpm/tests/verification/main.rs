@@ -4,6 +4,7 @@
 
 mod common;
 
+mod arc_length;
 mod bodies;
 mod cantilever;
 mod column;
