@@ -329,24 +329,7 @@ pub fn solve_arc_length<M: Monitor + ?Sized>(
         .out_of_balance(&u)
         .map_err(|p| inadmissible(0, p, None))?;
     for iteration in 0.. {
-        let norm = norm(&r);
-        let residual = if norm == 0.0 { 0.0 } else { norm / scale };
-        info.residuals.push(residual);
-        monitor.newton_iteration(step, iteration, residual);
-        if !residual.is_finite() || residual > settings.divergence_limit {
-            return Err(SolveError::Diverged {
-                step,
-                iteration,
-                residual,
-                last_finite: info
-                    .residuals
-                    .iter()
-                    .rev()
-                    .skip(1)
-                    .copied()
-                    .find(|r| r.is_finite()),
-            });
-        }
+        let (_, residual) = record(&mut info, settings, monitor, (step, iteration), &r, scale)?;
         // The tangent's predictor is always taken: at the start the step
         // has not moved.
         if (iteration > 0 || secant.is_some()) && residual <= settings.tolerance {
@@ -529,19 +512,7 @@ pub fn solve<M: Monitor + ?Sized>(
     // and the force scale at its start.
     let (mut lowest, mut free_steps, scale_start) = (f64::INFINITY, FREE_STEPS, scale);
     for iteration in 0.. {
-        let last_finite = info.residuals.iter().rev().copied().find(|r| r.is_finite());
-        let norm = norm(&r);
-        let residual = if norm == 0.0 { 0.0 } else { norm / scale };
-        info.residuals.push(residual);
-        monitor.newton_iteration(step, iteration, residual);
-        if !residual.is_finite() || residual > settings.divergence_limit {
-            return Err(SolveError::Diverged {
-                step,
-                iteration,
-                residual,
-                last_finite,
-            });
-        }
+        let (norm, residual) = record(&mut info, settings, monitor, (step, iteration), &r, scale)?;
         if residual <= settings.tolerance {
             info.iterations = iteration;
             return Ok((u, info));
@@ -601,6 +572,33 @@ pub fn solve<M: Monitor + ?Sized>(
         u = trial;
     }
     unreachable!("the loop returns")
+}
+
+/// Records the relative residual of `r` (against `scale`) at an iteration
+/// and tells the monitor; returns `|r|` and it, or ends the solve as
+/// diverged when it is not finite or past the divergence limit.
+fn record<M: Monitor + ?Sized>(
+    info: &mut NewtonInfo,
+    settings: &NewtonSettings,
+    monitor: &mut M,
+    (step, iteration): (usize, usize),
+    r: &[f64],
+    scale: f64,
+) -> Result<(f64, f64), SolveError> {
+    let last_finite = info.residuals.iter().rev().copied().find(|r| r.is_finite());
+    let norm = norm(r);
+    let residual = if norm == 0.0 { 0.0 } else { norm / scale };
+    info.residuals.push(residual);
+    monitor.newton_iteration(step, iteration, residual);
+    if !residual.is_finite() || residual > settings.divergence_limit {
+        return Err(SolveError::Diverged {
+            step,
+            iteration,
+            residual,
+            last_finite,
+        });
+    }
+    Ok((norm, residual))
 }
 
 /// The end of a solve that has used up its iterations (`NotConverged`,
