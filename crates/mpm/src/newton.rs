@@ -122,6 +122,24 @@ pub enum SolveError {
 }
 
 impl SolveError {
+    /// The point `p` was not admissible at `iteration` of load step `step`
+    /// (`residual`: that of the last admissible trial state).
+    fn inadmissible(
+        step: usize,
+        iteration: usize,
+        p: InadmissiblePoint,
+        residual: Option<f64>,
+    ) -> Self {
+        SolveError::Inadmissible {
+            step,
+            iteration,
+            point: p.point,
+            jacobian: p.jacobian,
+            reason: p.reason,
+            residual,
+        }
+    }
+
     /// How the solve failed in the end: the error a cut increment's last
     /// try met, or this one.
     pub fn cause(&self) -> &SolveError {
@@ -305,13 +323,8 @@ pub fn solve_arc_length<M: Monitor + ?Sized>(
     let mut u = vec![0.0; eq.n_dofs()];
     let mut lambda = arc.load_factor;
     let mut info = NewtonInfo::default();
-    let inadmissible = |iteration, p: InadmissiblePoint, residual| SolveError::Inadmissible {
-        step,
-        iteration,
-        point: p.point,
-        jacobian: p.jacobian,
-        reason: p.reason,
-        residual,
+    let inadmissible = |iteration, p: InadmissiblePoint, residual| {
+        SolveError::inadmissible(step, iteration, p, residual)
     };
     // The secant predictor, when there is a last increment.
     let secant = arc.last.as_ref().and_then(|(last, dlambda)| {
@@ -497,13 +510,8 @@ pub fn solve<M: Monitor + ?Sized>(
 ) -> Result<(Vec<f64>, NewtonInfo), SolveError> {
     let mut u = vec![0.0; eq.n_dofs()];
     let mut info = NewtonInfo::default();
-    let inadmissible = |iteration, p: InadmissiblePoint, residual| SolveError::Inadmissible {
-        step,
-        iteration,
-        point: p.point,
-        jacobian: p.jacobian,
-        reason: p.reason,
-        residual,
+    let inadmissible = |iteration, p: InadmissiblePoint, residual| {
+        SolveError::inadmissible(step, iteration, p, residual)
     };
     let (mut r, mut scale) = eq
         .out_of_balance(&u)
