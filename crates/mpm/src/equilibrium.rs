@@ -439,9 +439,7 @@ impl PathEquilibrium for StepEquilibrium<'_> {
             .expect("a path-following step is made with its load rate");
         let mut q = rate.clone();
         for term in &self.terms {
-            if term.side() == Side::Load {
-                term.add_load_rate(&self.u, &mut q);
-            }
+            term.add_load_rate(&self.u, &mut q);
         }
         for (qi, &fixed) in q.iter_mut().zip(&self.held.fixed) {
             if fixed {

@@ -181,26 +181,30 @@ impl<'a> BoundaryLoading<'a> {
     /// load factor to `f`: the ramped stretches' forces at their full
     /// traction (a force is linear in its factor at a given boundary).
     pub fn add_load_rate(&self, u: &[f64], f: &mut [f64]) {
-        for (i, s) in self.stretches.iter().enumerate() {
-            if s.held {
-                continue;
-            }
-            let ring = self.ring(&self.loops[s.loop_index], u);
-            for &k in &s.segments {
-                self.segment_forces_at(i, &local_segment(&ring, k), k, 1.0, &mut |a, force| {
-                    f[2 * a] += force[0];
-                    f[2 * a + 1] += force[1];
-                });
-            }
-        }
+        self.add_forces_at(u, f, |s| (!s.held).then_some(1.0));
     }
 
     /// Adds the boundary loads' nodal forces at increment `u` to `f`.
     pub fn add_forces(&self, u: &[f64], f: &mut [f64]) {
+        let factor = self.load_factor;
+        self.add_forces_at(u, f, |s| Some(if s.held { 1.0 } else { factor }));
+    }
+
+    /// Adds each stretch's nodal forces at increment `u`, at `factor` of
+    /// its traction (none where `factor` gives none), to `f`.
+    fn add_forces_at(
+        &self,
+        u: &[f64],
+        f: &mut [f64],
+        factor: impl Fn(&LoadedStretch) -> Option<f64>,
+    ) {
         for (i, s) in self.stretches.iter().enumerate() {
+            let Some(factor) = factor(s) else {
+                continue;
+            };
             let ring = self.ring(&self.loops[s.loop_index], u);
             for &k in &s.segments {
-                self.segment_forces(i, &local_segment(&ring, k), k, &mut |a, force| {
+                self.segment_forces_at(i, &local_segment(&ring, k), k, factor, &mut |a, force| {
                     f[2 * a] += force[0];
                     f[2 * a + 1] += force[1];
                 });
