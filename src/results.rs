@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 use std::io::{self, Write};
 
 use mpm::StepReport;
-use mpm::report::StepTimings;
+use mpm::report::{StepTimings, StrengthStep};
 use mpm::vtk::write_pvd;
 use serde::Serialize;
 
@@ -85,6 +85,10 @@ pub struct Summary<'a> {
     pub error: Option<serde_json::Value>,
     /// The largest loads the finished steps carried.
     pub peaks: Peaks<'a>,
+    /// A strength-reduction run's last step's factors: its factor of
+    /// safety once `found`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub strength_reduction: Option<&'a StrengthStep>,
     pub steps: Vec<StepSummary<'a>>,
 }
 
@@ -170,6 +174,8 @@ pub struct StepSummary<'a> {
     /// of the step's stage's).
     pub reactions: &'a [[f64; 2]],
     pub applied_load: [f64; 2],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub strength_reduction: Option<&'a StrengthStep>,
 }
 
 #[derive(Serialize)]
@@ -215,6 +221,7 @@ impl<'a> Summary<'a> {
                     .collect(),
                 reactions: &s.reactions,
                 applied_load: s.applied_load,
+                strength_reduction: s.strength_reduction.as_ref(),
             })
             .collect();
         Self {
@@ -227,6 +234,7 @@ impl<'a> Summary<'a> {
             newton_iterations: steps.iter().map(|s| s.newton_iterations).sum(),
             error: None,
             peaks: Peaks::of(all),
+            strength_reduction: all.iter().rev().find_map(|s| s.strength_reduction.as_ref()),
             steps,
         }
     }

@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 
 use mpm::StepReport;
-use mpm::report::StepTimings;
+use mpm::report::{StepTimings, StrengthStep};
 use serde::Serialize;
 use serde_json::Value;
 use serde_json::value::RawValue;
@@ -110,6 +110,10 @@ pub struct ResultView {
     pub newton: Vec<StepNewton>,
     /// Summed over the finished steps.
     pub timings: StepTimings,
+    /// The last finished step's strength reduction (its factor of
+    /// safety once found).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub strength_reduction: Option<StrengthStep>,
 }
 
 #[derive(Debug, Serialize)]
@@ -182,6 +186,10 @@ impl ResultView {
                 })
                 .collect(),
             timings,
+            strength_reduction: steps
+                .iter()
+                .rev()
+                .find_map(|s| s.strength_reduction.clone()),
         }
     }
 }

@@ -17,9 +17,10 @@
 use serde::{Deserialize, Serialize};
 
 use crate::boundary::BoundaryLoop;
+use crate::report::Settled;
 
 /// The encoding's version: a checkpoint of another one is refused.
-pub(crate) const FORMAT: u32 = 2;
+pub(crate) const FORMAT: u32 = 3;
 
 /// The state of a run after `steps_done` load steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -40,6 +41,12 @@ pub struct Checkpoint {
     pub(crate) step_size: StepSizeState,
     /// The arc-length control, once an arc-length stage has begun.
     pub(crate) arc: Option<ArcControlState>,
+    /// The strength reduction, once its stage has begun: the largest
+    /// factor that held, and the smallest that failed with the factor it
+    /// was tried from.
+    pub(crate) reduction: Option<(f64, Option<[f64; 2]>)>,
+    /// What the last step reported of its state (reactions, tractions).
+    pub(crate) settled: Option<Settled>,
 }
 
 /// The arc-length control between steps: `[length, first length, load

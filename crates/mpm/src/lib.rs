@@ -46,6 +46,7 @@ mod resume;
 pub mod settings;
 pub mod stages;
 pub mod stepper;
+pub mod strength_reduction;
 pub mod supports;
 pub mod triangular;
 pub mod triangulation;

@@ -26,7 +26,7 @@ use crate::particles::MaterialPoints;
 use crate::particles::seeding::{self, Density, FillSize, Lattice};
 use crate::probes::Probes;
 use crate::report::PointField;
-use crate::stages::Stage;
+use crate::stages::{Stage, StrengthReduction};
 use crate::stepper::{Simulation, StepSize, Substepping};
 use crate::supports::{Fix, GridSupport, HeldDofs, Rotation};
 
@@ -315,6 +315,14 @@ fn stages(case: &Case, seeded: &Seeded) -> Result<(Vec<Stage>, Vec<IbmSupport>),
             n_supports: view.supports.len(),
             geostatic,
             arc_length: view.control == case::Control::ArcLength,
+            strength_reduction: case
+                .stages
+                .get(k)
+                .and_then(|s| s.strength_reduction)
+                .map(|r| StrengthReduction {
+                    increment: r.increment,
+                    tolerance: r.tolerance,
+                }),
         });
         before = end;
     }
@@ -366,6 +374,8 @@ impl Simulation {
             fbar: case.analysis.volumetric == crate::case::Volumetric::Fbar,
             step_size: StepSize::default(),
             arc: None,
+            reduction: None,
+            settled: None,
             steps_done: 0,
             stiffness,
             solver: SolverSettings::default(),

@@ -128,9 +128,44 @@ pub struct StepReport {
     /// order of the case's supports. Empty when absent from a stored step.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub support_tractions: Vec<SupportTraction>,
+    /// A strength-reduction step's factors: the one its state holds at,
+    /// and the bisection's bracket then.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub strength_reduction: Option<StrengthStep>,
     /// What the step's data weighed (for benchmarks; not stored).
     #[serde(skip)]
     pub memory: StepMemory,
+}
+
+/// What the last converged increment reported of the state it left,
+/// besides the points: the step that finds the factor of safety after a
+/// failed trial reports the state of the last trial that held, which it
+/// does not solve again.
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+pub(crate) struct Settled {
+    pub(crate) reactions: Vec<[f64; 2]>,
+    pub(crate) applied_load: [f64; 2],
+    pub(crate) support_tractions: Vec<SupportTraction>,
+    pub(crate) active_nodes: usize,
+    pub(crate) active_dofs: usize,
+}
+
+/// Where a strength-reduction stage stood after one of its steps.
+#[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
+pub struct StrengthStep {
+    /// The factor the strengths were divided by in the step's state (the
+    /// largest that held so far).
+    pub factor: f64,
+    /// The smallest factor that failed so far, if one has.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failed: Option<f64>,
+    /// Whether `factor` is the factor of safety: `failed` is within the
+    /// stage's tolerance above it, and was tried from close below. The
+    /// run ends at the step that finds it.
+    pub found: bool,
+    /// Why the step's last failed trial failed, if one did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
 }
 
 /// The traction an implicit-boundary support exerts on the body at one of

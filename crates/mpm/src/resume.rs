@@ -7,6 +7,7 @@ use crate::checkpoint::{
 };
 use crate::material::CauchyStress;
 use crate::stepper::{ArcState, LastIncrement, Simulation, StepSize};
+use crate::strength_reduction::{Failed, ReductionState};
 
 impl Simulation {
     /// Load steps converged so far.
@@ -56,6 +57,11 @@ impl Simulation {
                 easy_in_a_row: a.easy_in_a_row,
                 last: (a.last.as_ref()).map(|l| (l.nodes.clone(), l.u.clone(), l.dlambda)),
             }),
+            reduction: self.reduction.as_ref().map(|r| {
+                let failed = r.failed.map(|f| [f.factor, f.tried_from]);
+                (r.held, failed)
+            }),
+            settled: self.settled.clone(),
         }
     }
 
@@ -147,6 +153,17 @@ impl Simulation {
                 }),
             }
         });
+        // The materials are the case's in a fresh simulation; the
+        // reduction's own are those at the factor that last held.
+        self.reduction = c.reduction.map(|(held, failed)| ReductionState {
+            base: self.points.materials.clone(),
+            held,
+            failed: failed.map(|[factor, tried_from]| Failed { factor, tried_from }),
+        });
+        if let Some(r) = &self.reduction {
+            self.points.materials = r.materials_at(r.held);
+        }
+        self.settled.clone_from(&c.settled);
         self.steps_done = c.steps_done;
         self.analysed = None;
         Ok(())
@@ -389,6 +406,51 @@ mod tests {
         let last = whole.steps.last().unwrap().load_factor;
         assert!(last > 0.3 && last < 0.5, "{last}");
         resumes_to_the_bit(&case, &whole, &straight, &[1, 4]);
+    }
+
+    /// A strength-reduction run (the same block flowing at `2 sigma_y /
+    /// sqrt 3 = 1154.7 Pa`, loaded to 1154.7 / 1.23 Pa, then reduced: its
+    /// factor of safety is 1.23) resumes where its bisection stood:
+    /// stopped after its first trial and after a step that followed a
+    /// failed one, it ends where the straight run ends, to the bit.
+    #[test]
+    fn a_strength_reduction_resumes_where_its_bisection_stood() {
+        let mut v = crate::fixtures::block([1.0, 1.0], [8, 8], 0.25, [0.0, 0.0]);
+        let flow = 2.0 * 1e3 / 3f64.sqrt();
+        v["analysis"] = serde_json::json!({});
+        v["bodies"][0]["material"] = serde_json::json!({
+            "model": "von_mises", "youngs_modulus": 1e6, "poisson_ratio": 0.3,
+            "density": 0.0, "yield_stress": 1e3
+        });
+        v.as_object_mut().unwrap().remove("loads");
+        v.as_object_mut().unwrap().remove("supports");
+        v["stages"] = serde_json::json!([
+            {
+                "load_steps": 2,
+                "loads": { "boundary": [{ "on": { "y": 1.0 }, "pressure": flow / 1.23 }] },
+                "supports": [{ "on": { "x": 0.0 }, "fix": "x" }, { "on": { "y": 0.0 }, "fix": "y" }]
+            },
+            { "load_steps": 20, "strength_reduction": { "increment": 0.1, "tolerance": 0.01 } }
+        ]);
+        let case = Case::from_json(&v.to_string()).unwrap();
+        let mut straight = Simulation::new(&case).unwrap();
+        let whole = straight.run(&mut crate::NoObserver).unwrap();
+        let last = whole
+            .steps
+            .last()
+            .unwrap()
+            .strength_reduction
+            .clone()
+            .unwrap();
+        assert!(last.found, "{last:?}");
+        assert!(
+            last.factor <= 1.23 && last.failed.unwrap() > 1.23,
+            "{last:?}"
+        );
+        let after_failure = (whole.steps.iter())
+            .position(|s| s.cutbacks > 0 && s.newton.iterations > 0)
+            .expect("a trial that held after one that failed");
+        resumes_to_the_bit(&case, &whole, &straight, &[3, after_failure + 1]);
     }
 
     #[test]

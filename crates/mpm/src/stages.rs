@@ -36,6 +36,18 @@ pub struct Stage {
     /// Whether its load factor is found by the arc-length method (from its
     /// second step on) rather than stepped in equal increments.
     pub arc_length: bool,
+    /// A strength-reduction stage's factor steps: its steps are trials
+    /// that divide the strengths by a factor ([`crate::reduction`]).
+    pub strength_reduction: Option<StrengthReduction>,
+}
+
+/// How a strength-reduction stage moves its factor: up by `increment`
+/// from 1 until a trial fails, then in halves between the last that held
+/// and the first that failed until they are `tolerance` apart.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StrengthReduction {
+    pub increment: f64,
+    pub tolerance: f64,
 }
 
 /// The stage that holds load step `step` (counted from 1 over the run),
@@ -67,6 +79,7 @@ mod tests {
             n_supports: 0,
             geostatic: None,
             arc_length: false,
+            strength_reduction: None,
         }
     }
 

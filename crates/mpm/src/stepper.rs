@@ -32,10 +32,11 @@ use crate::newton::{self, SolveError};
 use crate::observer::{self, Observer, StepState};
 use crate::particles::{MaterialPoints, geostatic};
 use crate::probes::Probes;
-use crate::report::{RunReport, StepReport, StepTimings};
+use crate::report::{RunReport, Settled, StepReport, StepTimings, StrengthStep};
 use crate::settings::NewtonSettings;
 pub use crate::settings::Substepping;
-use crate::stages::{self, Stage};
+use crate::stages::{self, Stage, StrengthReduction};
+use crate::strength_reduction::{Next, ReductionState};
 use crate::supports::HeldDofs;
 use crate::update;
 
@@ -192,6 +193,10 @@ pub struct Simulation {
     pub(crate) step_size: StepSize,
     /// The arc-length control, once an arc-length stage's first step is done.
     pub(crate) arc: Option<ArcState>,
+    /// The strength reduction, once its stage has begun.
+    pub(crate) reduction: Option<ReductionState>,
+    /// What the last converged increment reported of its state.
+    pub(crate) settled: Option<Settled>,
     /// F-bar against volumetric locking ([`crate::assembly::fbar`]).
     pub fbar: bool,
     /// Load steps over all stages.
@@ -227,6 +232,7 @@ impl Simulation {
             reactions: vec![[0.0; 2]; self.stages[0].n_supports],
             applied_load: [0.0; 2],
             support_tractions: Vec::new(),
+            strength_reduction: None,
             memory: Default::default(),
         };
         (report, self.step_state())
@@ -242,6 +248,9 @@ impl Simulation {
         let start = Instant::now();
         let mut steps = Vec::with_capacity(self.load_steps - self.steps_done);
         for step in self.steps_done + 1..=self.load_steps {
+            if self.factor_of_safety_found() {
+                break;
+            }
             observer.step_started(step, self.load_steps);
             let report = self.load_step(step, observer)?;
             self.steps_done = step;
@@ -287,6 +296,9 @@ impl Simulation {
             && let Some(arc) = self.arc.clone()
         {
             return self.arc_step(step, arc, easy_limit, observer);
+        }
+        if let Some(spec) = self.stages[k].strength_reduction {
+            return self.reduction_step(step, &spec, observer);
         }
         // Progress through the step, and the size of the next try, as
         // fractions of its increment (powers of two: exact in binary).
@@ -426,6 +438,94 @@ impl Simulation {
         }
     }
 
+    /// One step of a strength-reduction stage: trials from the state of
+    /// the last that held ([`crate::strength_reduction`]) until one holds,
+    /// the failed ones counted as cutbacks. When a failure finds the
+    /// factor of safety, the step is that of the last trial that held, not
+    /// solved again (a fresh increment at a factor just below collapse
+    /// may itself fail): its points, reactions and tractions, with the
+    /// verdict, so that the run's last step is the body at its factor of
+    /// safety and its plastic strain the mechanism.
+    fn reduction_step(
+        &mut self,
+        step: usize,
+        spec: &StrengthReduction,
+        observer: &mut dyn Observer,
+    ) -> Result<StepReport, SolveError> {
+        let (mut cutbacks, mut failed_iterations) = (0, 0);
+        let mut timings = StepTimings::default();
+        let mut failure: Option<String> = None;
+        if self.reduction.is_none() {
+            self.reduction = Some(ReductionState::new(self.points.materials.clone()));
+        }
+        loop {
+            let reduction = self.reduction.as_ref().expect("set above");
+            let verdict = |reduction: &ReductionState, failure: Option<String>| StrengthStep {
+                factor: reduction.held,
+                failed: reduction.failed.map(|f| f.factor),
+                found: reduction.next(spec) == Next::Found,
+                failure,
+            };
+            let factor = match reduction.next(spec) {
+                Next::Trial(f) => f,
+                Next::Found => {
+                    let settled = self.settled.clone().expect("a stage before converged");
+                    return Ok(StepReport {
+                        step,
+                        stage: self.stage_name(self.stage),
+                        load_factor: 1.0,
+                        newton: Default::default(),
+                        substeps: 0,
+                        cutbacks,
+                        failed_iterations,
+                        timings,
+                        active_nodes: settled.active_nodes,
+                        active_dofs: settled.active_dofs,
+                        probes: self.probes.reports(),
+                        reactions: settled.reactions,
+                        applied_load: settled.applied_load,
+                        support_tractions: settled.support_tractions,
+                        strength_reduction: Some(verdict(reduction, failure)),
+                        memory: Default::default(),
+                    });
+                }
+            };
+            self.points.materials = reduction.materials_at(factor);
+            let started = Instant::now();
+            let tried = self.increment(step, step - 1, Increment::To(1.0, 1.0), observer);
+            let reduction = self.reduction.as_mut().expect("set above");
+            match tried {
+                Ok((mut report, _)) => {
+                    reduction.record(factor, true);
+                    report.strength_reduction = Some(verdict(reduction, failure));
+                    report.cutbacks = cutbacks;
+                    report.failed_iterations = failed_iterations;
+                    report.timings += &timings;
+                    return Ok(report);
+                }
+                Err(e) if e.may_pass_when_cut() => {
+                    cutbacks += 1;
+                    failed_iterations += e.location().1.unwrap_or(0);
+                    timings.total += started.elapsed().as_secs_f64();
+                    failure = Some(format!("F = {factor}: {e}"));
+                    reduction.record(factor, false);
+                    self.points.materials = reduction.materials_at(reduction.held);
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    /// Whether a strength-reduction stage has found the factor of safety
+    /// (the run ends there).
+    pub fn factor_of_safety_found(&self) -> bool {
+        let stage = &self.stages[self.stage];
+        match (&self.reduction, &stage.strength_reduction) {
+            (Some(r), Some(spec)) => r.next(spec) == Next::Found,
+            _ => false,
+        }
+    }
+
     /// Whether a smaller increment may succeed where this try failed: not
     /// when cutting is off, and not when Newton stalled (no tenfold fall
     /// over its last two iterations) within [`ROUND_OFF_MARGIN`] of its
@@ -549,8 +649,16 @@ impl Simulation {
             reactions,
             applied_load,
             support_tractions,
+            strength_reduction: None,
             memory: converged.memory,
         };
+        self.settled = Some(Settled {
+            reactions: report.reactions.clone(),
+            applied_load: report.applied_load,
+            support_tractions: report.support_tractions.clone(),
+            active_nodes: report.active_nodes,
+            active_dofs: report.active_dofs,
+        });
         let increment = LastIncrement {
             nodes: conn.nodes.clone(),
             u,

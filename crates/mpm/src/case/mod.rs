@@ -727,6 +727,17 @@ pub struct StageSpec {
     /// without moving them, so the displacements start from zero after it.
     #[serde(default)]
     pub geostatic: Option<GeostaticSpec>,
+    /// A strength-reduction stage (the last, after one that loads the
+    /// body): the loads and supports of the stage before held, each step
+    /// a trial that divides every plastic material's strength by a factor
+    /// `F` (`c / F`, `tan(phi) / F`, `tan(psi) / F`; von Mises's yield
+    /// stress and hardening `/ F`) and solves for equilibrium from the
+    /// last trial that held. The factor goes up by `increment` until a
+    /// trial fails, then bisects between the largest that held and the
+    /// smallest that failed until they are `tolerance` apart: that largest
+    /// is the factor of safety. `load_steps` is the most trials it takes.
+    #[serde(default)]
+    pub strength_reduction: Option<StrengthReductionSpec>,
     /// The supports during the stage. A support is the same one as in the
     /// stage before when its `on`, `fix`, `method` and `constraint` are:
     /// it holds on from where that stage left the boundary, moved by this
@@ -735,6 +746,28 @@ pub struct StageSpec {
     /// stage before's supports, held still.
     #[serde(default)]
     pub supports: Option<Vec<Support>>,
+}
+
+/// How a strength-reduction stage steps its factor.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct StrengthReductionSpec {
+    /// How far each trial raises the factor above the last that held
+    /// until one fails (from 1, the strengths the case gives).
+    #[serde(default = "default_reduction_increment")]
+    pub increment: f64,
+    /// How far apart the factor that held and the one that failed are
+    /// when the bisection stops.
+    #[serde(default = "default_reduction_tolerance")]
+    pub tolerance: f64,
+}
+
+fn default_reduction_increment() -> f64 {
+    0.1
+}
+
+fn default_reduction_tolerance() -> f64 {
+    0.01
 }
 
 /// The initial stresses of a geostatic stage.
@@ -1051,9 +1084,40 @@ mod tests {
         v["stages"][1]["supports"][2]["method"] = "ibm".into();
         v["stages"][1]["supports"][2]["displacement"] = serde_json::json!([0.0, -0.1]);
         wrong.push((v, "stages[1].supports[2]"));
+        // Strength reduction: the last stage of two or more, changing the
+        // strength alone, its increment and tolerance in range.
+        let reduce = serde_json::json!({ "increment": 0.1 });
+        let mut v = staged();
+        v["stages"][0]["strength_reduction"] = reduce.clone();
+        wrong.push((v, "stages[0].strength_reduction"));
+        let mut v = staged();
+        v["stages"][1]["strength_reduction"] = reduce.clone();
+        v["stages"][1]["load_increments"] = serde_json::json!({ "gravity": [0.0, -1.0] });
+        wrong.push((v, "stages[1].load_increments"));
+        let mut v = staged();
+        v["stages"][1]["strength_reduction"] = reduce.clone();
+        v["stages"][1]["supports"] = v["stages"][0]["supports"].clone();
+        wrong.push((v, "stages[1].supports"));
+        for (increment, tolerance, field) in [
+            (0.0, 0.01, "increment"),
+            (20.0, 0.01, "increment"),
+            (0.1, 0.1, "tolerance"),
+            (0.1, -0.01, "tolerance"),
+            (0.1, 1e-8, "tolerance"),
+        ] {
+            let mut v = staged();
+            v["stages"][1]["strength_reduction"] =
+                serde_json::json!({ "increment": increment, "tolerance": tolerance });
+            wrong.push((v, ["stages[1].strength_reduction.", field].concat().leak()));
+        }
         for (v, path) in wrong {
             assert_eq!(error_for(v).path, path);
         }
+        let mut v = staged();
+        v["stages"][1]["strength_reduction"] = reduce;
+        let case = Case::from_json(&v.to_string()).unwrap();
+        let spec = case.stages[1].strength_reduction.unwrap();
+        assert_eq!((spec.increment, spec.tolerance), (0.1, 0.01));
         let mut v = staged();
         v["stages"][1]["control"] = "arc_length".into();
         v["stages"][1]["load_increments"] = serde_json::json!({ "gravity": [0.0, -1.0] });

@@ -249,6 +249,9 @@ impl Case {
                 if let Some(g) = &st.geostatic {
                     geostatic(k, st, g)?;
                 }
+                if let Some(r) = &st.strength_reduction {
+                    strength_reduction(k, views.len(), st, r)?;
+                }
                 if let Some(l) = &st.load_increments {
                     validate_loads(&format!("{stage}load_increments"), l)?;
                 }
@@ -747,6 +750,57 @@ fn arc_length(
                 ));
             }
         }
+    }
+    Ok(())
+}
+
+/// A strength-reduction stage (`k` of `n`): the last, after a stage that
+/// loads the body, holding that stage's loads and supports.
+fn strength_reduction(
+    k: usize,
+    n: usize,
+    stage: &StageSpec,
+    spec: &StrengthReductionSpec,
+) -> Result<(), CaseError> {
+    let path = format!("stages[{k}].strength_reduction");
+    let refuse = |field: String, why: &str| Err(CaseError::new(field, why));
+    if k == 0 || k + 1 < n {
+        return refuse(
+            path,
+            "only the last stage of two or more may reduce the strength: a stage before it loads the body, and the run ends when the factor of safety is found",
+        );
+    }
+    for (field, given) in [
+        ("loads", stage.loads.is_some()),
+        ("load_increments", stage.load_increments.is_some()),
+        ("supports", stage.supports.is_some()),
+        ("geostatic", stage.geostatic.is_some()),
+        ("control", stage.control != Control::Load),
+    ] {
+        if given {
+            return refuse(
+                format!("stages[{k}].{field}"),
+                "a strength-reduction stage holds the loads and supports of the stage before: it changes the strength alone",
+            );
+        }
+    }
+    if !(spec.increment > 0.0 && spec.increment <= 10.0) {
+        return refuse(
+            format!("{path}.increment"),
+            "must be above 0 and at most 10",
+        );
+    }
+    if !(spec.tolerance > 0.0 && spec.tolerance < spec.increment) {
+        return refuse(
+            format!("{path}.tolerance"),
+            "must be above 0 and below the increment",
+        );
+    }
+    if spec.increment / spec.tolerance > 1e6 {
+        return refuse(
+            format!("{path}.tolerance"),
+            "must be at least 1e-6 of the increment (twenty bisections)",
+        );
     }
     Ok(())
 }

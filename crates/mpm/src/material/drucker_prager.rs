@@ -51,19 +51,39 @@ impl DruckerPrager {
     /// The plane-strain match to Mohr-Coulomb's `c`, friction angle `phi`
     /// and dilation angle `psi` (radians).
     pub fn plane_strain_match(elastic: Elastic, cohesion: f64, phi: f64, psi: f64) -> Self {
-        let matched = |angle: f64| {
-            let t = angle.tan();
+        Self::matched_to_tangents(elastic, cohesion, phi.tan(), psi.tan())
+    }
+
+    /// The match to `c`, `tan(phi)` and `tan(psi)`: `eta = 3 t / sqrt(9 +
+    /// 12 t^2)` and `xi = 3 / sqrt(9 + 12 t^2)`, so that `t = eta / xi`.
+    fn matched_to_tangents(elastic: Elastic, cohesion: f64, tan_phi: f64, tan_psi: f64) -> Self {
+        let matched = |t: f64| {
             let root = (9.0 + 12.0 * t * t).sqrt();
             (3.0 * t / root, 3.0 / root)
         };
-        let (eta, xi) = matched(phi);
+        let (eta, xi) = matched(tan_phi);
         Self {
             elastic,
             cohesion,
             eta,
             xi,
-            eta_flow: matched(psi).0,
+            eta_flow: matched(tan_psi).0,
         }
+    }
+
+    /// The match with `c`, `tan(phi)` and `tan(psi)` divided by `factor`
+    /// (strength reduction). `tan(psi)` comes back from `eta_flow` as
+    /// `3 eta_flow / sqrt(9 - 12 eta_flow^2)`.
+    pub fn reduced(&self, factor: f64) -> Self {
+        let tan_phi = self.eta / self.xi;
+        let e = self.eta_flow;
+        let tan_psi = 3.0 * e / (9.0 - 12.0 * e * e).sqrt();
+        Self::matched_to_tangents(
+            self.elastic,
+            self.cohesion / factor,
+            tan_phi / factor,
+            tan_psi / factor,
+        )
     }
 }
 

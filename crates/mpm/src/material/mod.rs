@@ -179,6 +179,23 @@ impl Material {
         }
     }
 
+    /// The material with its strength divided by `factor` (strength
+    /// reduction): a frictional model's `c`, `tan(phi)` and `tan(psi)`, von
+    /// Mises's yield stress and hardening. The elastic constants stay, and
+    /// the elastic models have no strength to reduce.
+    pub fn with_strength_reduced(&self, factor: f64) -> Material {
+        match *self {
+            Material::Hencky(_) | Material::LinearElastic(_) => *self,
+            Material::VonMises(m) => Material::VonMises(VonMises {
+                yield_stress: m.yield_stress / factor,
+                hardening: m.hardening / factor,
+                ..m
+            }),
+            Material::DruckerPrager(m) => Material::DruckerPrager(m.reduced(factor)),
+            Material::MohrCoulomb(m) => Material::MohrCoulomb(m.reduced(factor)),
+        }
+    }
+
     /// The history of an undeformed point that carries the Cauchy stress
     /// `sigma = [xx, yy, zz]` (principal axes x, y, z): the elastic strain
     /// that makes it, as the plastic models keep it (`b = exp(2 e)`, its
@@ -328,6 +345,46 @@ mod tests {
                 assert!((got[k] - sigma[k]).abs() < 1e-9 * 1e5, "{m:?}: {got:?}");
             }
             assert_eq!(r.cauchy.plane[2], 0.0);
+        }
+    }
+
+    /// Strength reduction by `F` is the model of the reduced constants: `c /
+    /// F`, `atan(tan(phi) / F)`, `atan(tan(psi) / F)` (Griffiths and Lane
+    /// 1999, eq. 1-2), here with psi below phi and a factor below one too.
+    #[test]
+    fn a_reduced_strength_is_the_model_of_the_reduced_constants() {
+        let c = Elastic::from_young_poisson(1.0e7, 0.3);
+        let (phi, psi) = (30f64.to_radians(), 10f64.to_radians());
+        let reduce = |angle: f64, f: f64| (angle.tan() / f).atan();
+        for f in [1.6, 0.8] {
+            let dp = DruckerPrager::plane_strain_match(c, 1.0e4, phi, psi);
+            let Material::DruckerPrager(got) = Material::DruckerPrager(dp).with_strength_reduced(f)
+            else {
+                unreachable!()
+            };
+            let want =
+                DruckerPrager::plane_strain_match(c, 1.0e4 / f, reduce(phi, f), reduce(psi, f));
+            for (g, w) in [
+                (got.eta, want.eta),
+                (got.xi, want.xi),
+                (got.eta_flow, want.eta_flow),
+            ] {
+                assert!((g - w).abs() < 1e-14, "{got:?} {want:?}");
+            }
+            assert_eq!(got.cohesion, want.cohesion);
+            let mc = MohrCoulomb {
+                elastic: c,
+                cohesion: 1.0e4,
+                friction: phi,
+                dilation: psi,
+            };
+            let Material::MohrCoulomb(got) = Material::MohrCoulomb(mc).with_strength_reduced(f)
+            else {
+                unreachable!()
+            };
+            assert!((got.friction - reduce(phi, f)).abs() < 1e-15);
+            assert!((got.dilation - reduce(psi, f)).abs() < 1e-15);
+            assert_eq!((got.cohesion, got.elastic), (1.0e4 / f, c));
         }
     }
 

@@ -44,6 +44,17 @@ pub struct MohrCoulomb {
 struct Plane(usize, usize);
 
 impl MohrCoulomb {
+    /// The model with `c`, `tan(phi)` and `tan(psi)` divided by `factor`
+    /// (strength reduction).
+    pub fn reduced(&self, factor: f64) -> Self {
+        Self {
+            elastic: self.elastic,
+            cohesion: self.cohesion / factor,
+            friction: (self.friction.tan() / factor).atan(),
+            dilation: (self.dilation.tan() / factor).atan(),
+        }
+    }
+
     fn plane_vector(&self, plane: Plane, angle: f64) -> Vector3<f64> {
         let mut n = Vector3::zeros();
         n[plane.0] = 1.0 + angle.sin();

@@ -18,3 +18,4 @@ mod newton_convergence;
 mod plasticity;
 mod pressure;
 mod stages;
+mod strength_reduction;
