@@ -16,7 +16,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use mpm_lab::{LabError, basis_study, bench, footing_study, study};
+use mpm_lab::{LabError, basis_study, bench, footing_study, slope_study, study};
 
 /// The built-in case `mpm run` solves when given no file.
 pub const DEFAULT_EXAMPLE: &str = "cantilever";
@@ -90,7 +90,8 @@ enum Command {
         /// four bases on the paper's case: convergence, grid origins, load
         /// steps, error against cost) or `footing` (the strip footing on
         /// undrained and frictional soil: collapse loads at three cell
-        /// sizes, and a settlement of 0.5 B).
+        /// sizes, and a settlement of 0.5 B) or `slope` (Griffiths and
+        /// Lane's slope: its factor of safety by strength reduction).
         name: String,
         /// Output directory.
         #[arg(long, default_value = "study")]
@@ -160,8 +161,9 @@ fn main() -> ExitCode {
             "cantilever" => study::cantilever(&out, quick, &basis).map_err(CliError::from),
             "bases" => basis_study::bases(&out, quick).map_err(CliError::from),
             "footing" => footing_study::footing(&out, quick).map_err(CliError::from),
+            "slope" => slope_study::slope(&out, quick).map_err(CliError::from),
             other => Err(CliError::input(format!(
-                "no study {other:?}; available: cantilever, bases, footing"
+                "no study {other:?}; available: cantilever, bases, footing, slope"
             ))),
         },
         Command::Serve(args) => serve::serve(args),

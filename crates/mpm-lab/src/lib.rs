@@ -2,7 +2,8 @@
 //! `mpm study` and `mpm bench`: the paper's convergence study written as
 //! tables and SVG plots ([`study`]), the grid bases compared on it
 //! ([`basis_study`]), the strip footing on plastic soil
-//! ([`footing_study`]), and cost against problem size written
+//! ([`footing_study`]), a slope's factor of safety by strength reduction
+//! ([`slope_study`]), and cost against problem size written
 //! to BENCHMARKS.md ([`bench`]). They use only the solver crate.
 //!
 //! [`bench::bench`] measures each row in a child process (for its own peak
@@ -14,6 +15,7 @@ pub mod basis_study;
 pub mod bench;
 pub mod footing_study;
 pub mod plot;
+pub mod slope_study;
 pub mod study;
 
 /// Why a study or benchmark stopped.

@@ -507,7 +507,7 @@ impl Simulation {
                     cutbacks += 1;
                     failed_iterations += e.location().1.unwrap_or(0);
                     timings.total += started.elapsed().as_secs_f64();
-                    failure = Some(format!("F = {factor}: {e}"));
+                    failure = Some(format!("F = {factor:.5}: {e}"));
                     reduction.record(factor, false);
                     self.points.materials = reduction.materials_at(reduction.held);
                 }
