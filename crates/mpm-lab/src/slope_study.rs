@@ -14,8 +14,9 @@
 //! (increment 0.1, tolerance 0.01). GIMP, 2x2 points a cell, the grid's
 //! origin at `-0.3 h` in both directions unless a row moves it. Rows: the
 //! cell from H/10 to H/40 without the ghost penalty; with the default
-//! penalty; associated flow (psi = phi); the grid moved; and smaller
-//! increments of the factor.
+//! penalty; associated flow (psi = phi); the grid moved; smaller
+//! increments of the factor, and the increments again with Newton's
+//! limit at 100 iterations; and Drucker-Prager, the smooth cone.
 
 use std::fmt::Write as _;
 use std::fs;
@@ -48,6 +49,8 @@ struct Row {
     increment: f64,
     /// `mohr_coulomb` or `drucker_prager` (matched in plane strain).
     model: &'static str,
+    /// Newton's iteration limit, if not the default.
+    max_iterations: Option<u32>,
 }
 
 impl Row {
@@ -68,6 +71,9 @@ impl Row {
         if self.increment != 0.1 {
             label += &format!(", increment {}", self.increment);
         }
+        if let Some(n) = self.max_iterations {
+            label += &format!(", {n} Newton iterations");
+        }
         label
     }
 }
@@ -81,12 +87,16 @@ fn slope_case(row: &Row) -> Value {
         offset,
         increment,
         model,
+        max_iterations,
     } = *row;
     let h = HEIGHT / cells;
     let length = 2.0 * HEIGHT + CREST;
     let mut analysis = json!({ "type": "plane_strain" });
     if let Some(g) = ghost {
         analysis["stabilisation"] = json!({ "ghost_penalty": g });
+    }
+    if let Some(n) = max_iterations {
+        analysis["newton"] = json!({ "max_iterations": n });
     }
     json!({
         "version": 1,
@@ -172,6 +182,7 @@ pub fn slope(out: &Path, quick: bool) -> Result<(), LabError> {
         offset: 0.3,
         increment: 0.1,
         model: "mohr_coulomb",
+        max_iterations: None,
     };
     let at = |cells: f64| Row { cells, ..base };
     let refinement: &[f64] = if quick {
@@ -203,6 +214,17 @@ pub fn slope(out: &Path, quick: bool) -> Result<(), LabError> {
             ..at(variants)
         },
     ]);
+    // Newton's limit raised: does the factor still follow the increments?
+    rows.extend([0.1, 0.05, 0.03].map(|increment| Row {
+        increment,
+        max_iterations: Some(100),
+        ..at(variants)
+    }));
+    let smooth: &[f64] = if quick { &[10.0] } else { &[20.0, 40.0] };
+    rows.extend(smooth.iter().map(|&cells| Row {
+        model: "drucker_prager",
+        ..at(cells)
+    }));
     let mut found = Vec::new();
     for row in rows {
         let f = solve(row)?;
