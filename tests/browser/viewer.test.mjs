@@ -78,6 +78,26 @@ before(async () => {
     { name: 'half', load_steps: 2, supports, loads: { boundary: half } },
     { name: 'whole', load_steps: 2, loads },
   ];
+  // A von Mises block loaded to its plane-strain strength over 1.23, then
+  // reduced: its factor of safety is 1.23.
+  const flow = (2 * 1e3) / Math.sqrt(3);
+  const reduced = {
+    version: 1,
+    title: 'von Mises block loaded, then its strength reduced',
+    analysis: {},
+    grid: { cell_size: 0.25, origin: [0, 0] },
+    bodies: [{
+      geometry: { rectangle: { min: [0, 0], max: [1, 1] } },
+      points: { per_cell: 2 },
+      material: { model: 'von_mises', youngs_modulus: 1e6, poisson_ratio: 0.3, density: 0, yield_stress: 1e3 },
+    }],
+    stages: [
+      { load_steps: 2, loads: { boundary: [{ on: { y: 1 }, pressure: flow / 1.23 }] },
+        supports: [{ on: { x: 0 }, fix: 'x' }, { on: { y: 0 }, fix: 'y' }] },
+      { load_steps: 20, strength_reduction: { increment: 0.1, tolerance: 0.01 } },
+    ],
+  };
+  jobs.reduced = (await call('POST', '/jobs', reduced)).id;
   jobs.cantilever = (await call('POST', '/jobs', cantilever)).id;
   jobs.staged = (await call('POST', '/jobs', staged)).id;
   jobs.failing = (await call('POST', '/jobs', failing)).id;
@@ -143,6 +163,7 @@ test('the page asks for the token, refuses a wrong one and lists the jobs with t
     [jobs.failing]: 'failed',
     [jobs.thinned]: 'succeeded',
     [jobs.stillborn]: 'failed',
+    [jobs.reduced]: 'succeeded',
   });
   assert.equal(await page.$eval('#forget-token', (b) => b.hidden), false);
   // The token is kept for the tab: a reload goes straight to the list.
@@ -247,6 +268,19 @@ test('a job that stores no columns and thins its steps still shows its body', as
   assert.equal(await page.$eval('#points', (c) => c.dataset.points), '0');
   await page.$eval('#step-slider', (s) => { s.value = 4; s.dispatchEvent(new Event('input')); });
   await page.waitForSelector('#points[data-points="896"]');
+  await page.close();
+});
+
+test('a strength-reduction job says the factor of each step and which is the factor of safety', async () => {
+  const page = await browser.newPage();
+  await signedIn(page);
+  await page.click(`a[href="#/jobs/${jobs.reduced}"]`);
+  await page.waitForSelector('#points[data-points="64"]');
+  const label = await page.textContent('#step-label');
+  const [, factor] = label.match(/strength factor ([\d.]+) \(the factor of safety\)$/) || [];
+  assert.ok(factor && Number(factor) > 1.21 && Number(factor) <= 1.23, label);
+  await page.$eval('#step-slider', (s) => { s.value = 3; s.dispatchEvent(new Event('input')); });
+  await page.waitForFunction(() => /strength factor 1\.1$/.test(document.querySelector('#step-label').textContent));
   await page.close();
 });
 

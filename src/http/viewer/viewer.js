@@ -271,7 +271,12 @@ async function jobPage(id, stale) {
     if (Number(slider.value) !== k) return;
     const lf = doc.report.load_factor;
     const stage = doc.report.stage ? `stage "${doc.report.stage}", ` : '';
-    stepLabel.textContent = `step ${k} of ${current.job.progress.of}, ${stage}load factor ${formatNumber(lf)}`;
+    // A strength-reduction step: the factor its strengths are divided by.
+    const sr = doc.report.strength_reduction;
+    const strength = sr
+      ? `, strength factor ${formatNumber(sr.factor)}${sr.found ? ' (the factor of safety)' : ''}`
+      : '';
+    stepLabel.textContent = `step ${k} of ${current.job.progress.of}, ${stage}load factor ${formatNumber(lf)}${strength}`;
     if (!doc.points) {
       message.textContent = `Step ${k}'s points were not stored (the case's output.every thins them).`;
       clear(canvas);
