@@ -122,6 +122,18 @@ pub enum SolveError {
 }
 
 impl SolveError {
+    /// The linear solve of `iteration` of load step `step` failed with the
+    /// message it is given (for `map_err`); `residual` is the one it was
+    /// to correct.
+    fn linear_solve(step: usize, iteration: usize, residual: f64) -> impl FnOnce(String) -> Self {
+        move |message| SolveError::LinearSolve {
+            step,
+            iteration,
+            message,
+            residual,
+        }
+    }
+
     /// The point `p` was not admissible at `iteration` of load step `step`
     /// (`residual`: that of the last admissible trial state).
     fn inadmissible(
@@ -353,12 +365,7 @@ pub fn solve_arc_length<M: Monitor + ?Sized>(
         let q = eq.load_rate();
         let (solved, kind) = eq
             .corrections(&[&r, &q], forcing_term(residual, settings.tolerance))
-            .map_err(|message| SolveError::LinearSolve {
-                step,
-                iteration,
-                message,
-                residual,
-            })?;
+            .map_err(SolveError::linear_solve(step, iteration, residual))?;
         info.factorisation = Some(kind);
         let (du_r, du_q) = (&solved[0], &solved[1]);
         let w: Vec<f64> = u.iter().zip(du_r).map(|(a, b)| a + b).collect();
@@ -531,12 +538,7 @@ pub fn solve<M: Monitor + ?Sized>(
         out_of_iterations_or_cancelled(&info, settings, monitor, (step, iteration, residual))?;
         let (du, kind) = eq
             .correction(&r, forcing_term(residual, settings.tolerance))
-            .map_err(|message| SolveError::LinearSolve {
-                step,
-                iteration,
-                message,
-                residual,
-            })?;
+            .map_err(SolveError::linear_solve(step, iteration, residual))?;
         info.factorisation = Some(kind);
         let search = Search::new(&r, &du, norm, settings.divergence_limit);
         let mut alpha = 1.0;
