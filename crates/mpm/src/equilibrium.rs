@@ -560,7 +560,6 @@ mod tests {
     use crate::assembly;
     use crate::boundary::loading::BoundaryLoading;
     use crate::case::Case;
-    use crate::configuration::Configuration;
     use crate::fixtures;
     use crate::newton::Equilibrium;
     use crate::stepper::Simulation;
@@ -615,12 +614,7 @@ mod tests {
         let case = crate::case::builtin::get("cantilever").unwrap();
         let sim = Simulation::new(&Case::from_json(case).unwrap()).unwrap();
         let conn = sim.reset_grid();
-        let start = Configuration {
-            grid: &sim.grid,
-            basis: sim.basis,
-            conn: &conn,
-            points: &sim.points,
-        };
+        let start = sim.configuration(&conn);
         let loading = BoundaryLoading::new(&start, &sim.loops, &sim.stages[0].boundary_loads, 1.0);
         let u: Vec<f64> = (0..conn.n_dofs())
             .map(|dof| {

@@ -680,6 +680,16 @@ impl Simulation {
         )
     }
 
+    /// The points and the grid on the grid reset `conn`: a step's start.
+    pub(crate) fn configuration<'a>(&'a self, conn: &'a Connectivity) -> Configuration<'a> {
+        Configuration {
+            grid: &self.grid,
+            basis: self.basis,
+            conn,
+            points: &self.points,
+        }
+    }
+
     /// The system of a step at `load_factor` on its grid reset `conn`: the
     /// step's terms, then the stiffness pattern of every coupling they add.
     /// With `path`, the load factor is an unknown that starts there (the
@@ -691,12 +701,7 @@ impl Simulation {
         path: bool,
         previous: Option<AnalysedPattern>,
     ) -> StepEquilibrium<'a> {
-        let start = Configuration {
-            grid: &self.grid,
-            basis: self.basis,
-            conn,
-            points: &self.points,
-        };
+        let start = self.configuration(conn);
         let loops = &self.loops;
         // In the order their stiffness is added to the tangent.
         let mut terms: Vec<Box<dyn StepTerm + 'a>> = Vec::new();
@@ -811,14 +816,13 @@ impl Simulation {
     }
 
     /// The ghost penalty on the faces of the cells at the material's edge,
-    /// with twice the largest shear modulus.
+    /// with the modulus of the material at each face.
     fn ghost_faces(&self, start: &Configuration) -> Option<GhostFaces> {
         let gamma = self.settings.ghost_penalty;
         if gamma == 0.0 {
             return None;
         }
-        let shear = self.stiffness.largest_shear;
-        Some(GhostFaces::new(start, self.basis, 2.0 * shear, gamma))
+        Some(GhostFaces::new(start, self.basis, gamma))
     }
 
     /// Moves the IBM anchors with the converged increment; an anchor off

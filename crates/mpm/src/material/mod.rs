@@ -101,8 +101,6 @@ pub struct StiffnessScales {
     /// The elastic constants of the material with the largest P-wave
     /// modulus `lambda + 2 mu` (the soft background's).
     pub stiffest: Option<Elastic>,
-    /// The largest shear modulus (the ghost penalty's), 0 with none.
-    pub largest_shear: f64,
     /// The largest ratio of P-wave to shear modulus, `(lambda + 2 mu) /
     /// mu` (2 at nu = 0, 5001 at nu = 0.4999), at least 1: how much more a
     /// spurious volume change costs than a shear, which bounds how far a
@@ -116,7 +114,6 @@ impl StiffnessScales {
         Self {
             stiffest: elastic()
                 .max_by(|a, b| (a.lambda + 2.0 * a.mu).total_cmp(&(b.lambda + 2.0 * b.mu))),
-            largest_shear: elastic().map(|c| c.mu).fold(0.0, f64::max),
             p_wave_to_shear: elastic()
                 .map(|c| (c.lambda + 2.0 * c.mu) / c.mu)
                 .fold(1.0, f64::max),

@@ -100,8 +100,11 @@ fn assert_quadratic(steps: &[mpm::StepReport], label: &str) {
 /// times the square of the one before, from the second iteration on (the
 /// first leaves the yield surface, where the response has a kink).
 /// Quadratic convergence bounds that ratio; a linear rate `q` makes it `q /
-/// r`, unbounded as `r` falls (halving at r = 1e-4: 5e3). `C` = 100;
-/// measured at most 78 (Mohr-Coulomb) and 4.6 (Drucker-Prager).
+/// r`, unbounded as `r` falls (halving at r = 1e-4: 5e3). `C` = 300;
+/// measured at most 156 (Mohr-Coulomb) and 4.6 (Drucker-Prager). The
+/// constant grows with the inverse of the tangent's smallest stiffness:
+/// with the ghost penalty's full elastic weight on the flowing edge cells
+/// (`YIELDED_SHARE` = 1, five times today's) it is 78.
 ///
 /// For this sample the three-point order of [`assert_quadratic`] misleads:
 /// Mohr-Coulomb's return is affine in the principal strains, so the first
@@ -112,7 +115,7 @@ fn assert_quadratic(steps: &[mpm::StepReport], label: &str) {
 /// direction of each correction, with the differences' `e^2` error), and no
 /// line search cuts a step.
 fn assert_quadratic_constant(steps: &[mpm::StepReport], label: &str) {
-    const C: f64 = 100.0;
+    const C: f64 = 300.0;
     for s in steps {
         let all = &s.newton.residuals;
         let ratios: Vec<String> = (1..all.len() - 1)
