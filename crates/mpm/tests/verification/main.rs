@@ -11,6 +11,7 @@ mod column;
 mod footing;
 mod ghost;
 mod hard_cases;
+mod hinge;
 mod ibm;
 mod lame;
 mod locking;
