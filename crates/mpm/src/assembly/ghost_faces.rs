@@ -58,8 +58,8 @@ pub struct GhostFaces {
 /// of the footing's clay at h = B/8 comes to +2.2% and +1.25% of 4/3 at
 /// 0.2 (+2.7% and +4.1% at 1, +1.25% at 0.1), while the worst point of the
 /// confined Mohr-Coulomb sample sheared in two stages moves off its
-/// strength by 0.82% (0.33% at 1, 1.02% at 0.1): the largest cut that
-/// keeps that sample within 1%.
+/// confinement by 0.82% (0.33% at 1, 1.02% at 0.1) and off its strength by
+/// 0.75%: the largest cut that keeps that sample within 1%.
 pub const YIELDED_SHARE: f64 = 0.2;
 
 /// The second difference across a face.
