@@ -20,27 +20,50 @@
 //! A cell at the boundary averages over the points it holds, however few;
 //! points of different materials in one cell average separately.
 //!
-//! With the model's stress `P^(dF_bar)` and tangent `A^`, the stress that
-//! pairs with the point's own `dF` is `P = P^ / alpha` (its Cauchy stress
-//! is the model's, on the point's true volume), and the consistent tangent
-//! is
+//! The stress is the derivative of the step's incremental potential in
+//! the points' `dF_bar` (the variational F-bar, the finite-strain mean
+//! dilatation of Nagtegaal, Parks & Rice 1974 and Simo, Taylor & Pister
+//! 1985): the virtual work of point `p` is `V0_p P^ : d(dF_bar_p)`, with
+//! `P^` the model's stress at `dF_bar`. Split by the in-plane mean Cauchy
+//! stress `sigma_m` (tension positive), each point's deviator works
+//! against its own deformation and the cell's mean pressure against its
+//! own volume change:
 //!
 //! ```text
-//! dP = [A^ - B (x) dF^-T] : d(dF)  +  (B / dJ_bar) sum_q w_q dJ_q dF_q^-T : d(dF_q),
-//! B  = (A^ : dF - P) / 2,   w_q = V_q / sum V
+//! P_p  = J_start [dJ_bar dev(sigma_p) + dJ_p Pi] dF_p^-T = P~_p + Pi J_start dJ_p dF_p^-T,
+//! Pi   = sum_q w_q sigma_m,q,      w_q = V_q / sum V
 //! ```
+//!
+//! where `dev` takes off `sigma_m` and `P~ = alpha P^ - alpha (P^ : dF) / 2
+//! dF^-T`. The tangent is the force's derivative: a local part by the
+//! point's own `d(dF)` (through `P^`'s tangent `A^`, `alpha` and `dF^-T`),
+//! and two couplings with every point of the cell, by `dJ_bar` (in `P~`,
+//! `sigma_m` and so `Pi`) and by the other points' `sigma_m` (in `Pi`).
+//! Where the model's tangent is symmetric (elastic, associated flow) so is
+//! this one, a potential's second derivative.
+//!
+//! The earlier form paired `P^ / alpha` with the point's own `dF` (each
+//! point's whole stress on its own volume change; de Souza Neto et al.
+//! 1996). Its tangent is not symmetric, and with dilation it was
+//! indefinite: a plastic point's pressure changes with its shear (the
+//! dilatancy), and that pressure worked against the point's own volume,
+//! which F-bar leaves free within its cell. Newton's corrections then
+//! reached across the mesh, and a footing on a dilatant Mohr-Coulomb or
+//! Drucker-Prager soil failed after a few steps whatever the cut
+//! (docs/guide.md, Hard cases). With `psi = 0` or von Mises the pressure
+//! does not follow the shear and both forms converge.
 //!
 //! The small-strain model takes F-bar's linearisation, B-bar:
 //! `g_bar = g + (b - a) / 2 I` with `a = tr g` and `b` its cell average
-//! ([`FbarCells::adjust_small_strain`]). F-bar's `alpha dF` would make that
-//! model nonlinear, with second-order terms scaled by the bulk modulus:
-//! near incompressibility those outgrow the shear response at strains of
-//! `mu / K`, and Newton did not converge on Cook's membrane.
+//! ([`FbarCells::adjust_small_strain`]), its stress on the point's own
+//! strain. F-bar's `alpha dF` would make that model nonlinear, with
+//! second-order terms scaled by the bulk modulus: near incompressibility
+//! those outgrow the shear response at strains of `mu / K`, and Newton did
+//! not converge on Cook's membrane.
 //!
-//! The second term couples each point with every point of its cell; in the
-//! stiffness it is, per cell, the outer product of two nodal vectors (the
-//! sums over the cell's points of `V0_p g_pa . B_p / dJ_bar` and of
-//! `w_q dJ_q dF_q^-T g_qb`), so it costs one dense block per cell.
+//! The couplings join each point with every point of its cell; in the
+//! stiffness they are, per cell, two outer products of nodal vectors
+//! ([`FbarCells::add_to`]), so they cost one dense block per cell.
 
 use nalgebra::{Matrix2, Matrix4};
 use rayon::prelude::*;
@@ -67,15 +90,19 @@ pub struct FbarCells {
     nodes: Vec<Vec<u32>>,
 }
 
-/// What the trial state's responses and the coupling term of the tangent
+/// What the trial state's responses and the coupling terms of the tangent
 /// need from the trial state.
 pub struct FbarTrial {
     /// Per cell, `dJ_bar - 1` ([`FbarCells::averages`]).
     pub averages: Vec<f64>,
-    /// Per point, `B_p / dJ_bar`.
-    b: Vec<Matrix2<f64>>,
-    /// Per point, `w_q dJ_q dF_q^-T`.
-    v: Vec<Matrix2<f64>>,
+    /// Per cell, its mean pressure term `Pi` (the volume-weighted mean of
+    /// the points' in-plane mean Cauchy stress), which every point's own
+    /// volume change works against.
+    pub means: Vec<f64>,
+    /// Per cell, the mean of the points' `d sigma_m / d dJ_bar`.
+    mean_rates: Vec<f64>,
+    /// Per point, its share of the coupling terms.
+    parts: Vec<FbarPart>,
 }
 
 impl FbarCells {
@@ -161,38 +188,61 @@ impl FbarCells {
         averages[self.cell_of[p] as usize]
     }
 
-    /// Turns the model's response to `dF_bar = alpha dF` into the point's:
-    /// `P = P^ / alpha` and the local part of the tangent. Returns the
-    /// point's share of the coupling term.
+    /// Turns the model's response `P^`, `A^` to `dF_bar = alpha dF` into
+    /// the point's local stress `P~ = dJ_bar dev(sigma) dF^-T` and its local
+    /// tangent, and returns the point's part in its cell's terms (see the
+    /// module docs). With the cell's `mean` (`Pi`) known, the stress and
+    /// the tangent are completed with `Pi J dF^-T` and its derivative.
     pub fn adjust(
         &self,
         p: usize,
         response: &mut Response,
-        df: &Matrix2<f64>,
-        dj: f64,
-        dj_bar: f64,
-    ) -> (Matrix2<f64>, Matrix2<f64>) {
+        (df, j_start): (&Matrix2<f64>, f64),
+        (dj, dj_bar): (f64, f64),
+        mean: Option<f64>,
+    ) -> FbarPart {
         if self.members(self.cell_of[p] as usize).len() == 1 {
             // Alone in its cell: dJ_bar = dJ, and F-bar is the identity.
-            return (Matrix2::zeros(), Matrix2::zeros());
+            return FbarPart::default();
         }
-        let alpha = (dj_bar / dj).sqrt();
-        let p_point = response.p / alpha;
-        let a = &response.tangent;
-        let a_df = Matrix2::from_fn(|i, ii| {
-            (0..2)
-                .flat_map(|j| (0..2).map(move |jj| (j, jj)))
-                .map(|(j, jj)| a[(2 * i + ii, 2 * j + jj)] * df[(j, jj)])
-                .sum()
-        });
-        let b = (a_df - p_point) * 0.5;
+        let (a, jb) = ((dj_bar / dj).sqrt(), dj_bar);
+        let (k, pk) = (response.tangent, response.p);
         // dF^-T = cof(dF) / dJ, with the dJ > 0 the caller checked.
-        let df_inv_t = Matrix2::new(df[(1, 1)], -df[(1, 0)], -df[(0, 1)], df[(0, 0)]) / dj;
-        let local =
-            Matrix4::from_fn(|r, c| a[(r, c)] - b[(r / 2, r % 2)] * df_inv_t[(c / 2, c % 2)]);
-        response.p = p_point;
-        response.tangent = local;
-        (b / dj_bar, df_inv_t * (self.weight[p] * dj))
+        let c = Matrix2::new(df[(1, 1)], -df[(1, 0)], -df[(0, 1)], df[(0, 0)]) / dj;
+        let k_df = contract_right(&k, df);
+        let df_k = contract_left(df, &k);
+        let s = df.component_mul(&k_df).sum();
+        let t = pk.component_mul(df).sum();
+        // Rates by the point's own d(dF) (2 x 2 rows, or 4 x 4) and by
+        // d(dJ_bar) (the `_bar` ones).
+        let alpha_own = c * (-a / 2.0);
+        let alpha_bar = a / (2.0 * jb);
+        let t_own = df_k * a + pk - c * (a * s / 2.0);
+        let t_bar = a * s / (2.0 * jb);
+        let at_own = alpha_own * t + t_own * a;
+        let at_bar = alpha_bar * t + a * t_bar;
+        let dc = inverse_transpose_rate(&c);
+        let p_own = outer(&pk, &alpha_own) + (k * a - outer(&k_df, &c) * (a / 2.0)) * a
+            - outer(&c, &at_own) * 0.5
+            - dc * (a * t / 2.0);
+        let p_bar = pk * alpha_bar + k_df * (a * a / (2.0 * jb)) - c * (at_bar / 2.0);
+        let jc = c * (j_start * dj);
+        response.p = pk * a - c * (a * t / 2.0);
+        response.tangent = p_own;
+        if let Some(pi) = mean {
+            response.p += jc * pi;
+            response.tangent += (outer(&jc, &c) + dc * (j_start * dj)) * pi;
+        }
+        let scale = 2.0 * jb * j_start;
+        FbarPart {
+            sigma_m: a * t / scale,
+            mean_rate: at_bar / scale - a * t / (scale * jb),
+            mean_own: at_own * (self.weight[p] / scale),
+            by_bar: p_bar,
+            pressure: jc,
+            volume: c * (self.weight[p] * dj),
+            weight: self.weight[p],
+        }
     }
 
     /// The small-strain model's F-bar, B-bar: `g_bar = g + (b - a) / 2 I`
@@ -200,24 +250,45 @@ impl FbarCells {
     /// the increments and its tangent is `A^ - B (x) I` locally plus
     /// `B (x) sum_q w_q I : d(g_q)`, `B = A^ : I / 2`. Returns the point's
     /// share of the coupling as [`FbarCells::adjust`] does.
-    pub fn adjust_small_strain(
-        &self,
-        p: usize,
-        response: &mut Response,
-    ) -> (Matrix2<f64>, Matrix2<f64>) {
+    pub fn adjust_small_strain(&self, p: usize, response: &mut Response) -> FbarPart {
         if self.members(self.cell_of[p] as usize).len() == 1 {
-            return (Matrix2::zeros(), Matrix2::zeros());
+            return FbarPart::default();
         }
         let a = &response.tangent;
         let b = Matrix2::from_fn(|i, ii| 0.5 * (a[(2 * i + ii, 0)] + a[(2 * i + ii, 3)]));
         let identity = Matrix2::<f64>::identity();
         response.tangent =
             Matrix4::from_fn(|r, c| a[(r, c)] - b[(r / 2, r % 2)] * identity[(c / 2, c % 2)]);
-        (b, identity * self.weight[p])
+        FbarPart {
+            by_bar: b,
+            volume: identity * self.weight[p],
+            ..FbarPart::default()
+        }
     }
 
-    /// Adds the coupling term's stiffness to tangent values in `pattern`'s
-    /// layout (which must hold [`FbarCells::coupling_groups`]).
+    /// Each cell's mean pressure term `Pi = sum_p w_p sigma_m,p` and the
+    /// mean of the points' `d sigma_m / d dJ_bar`.
+    fn means(&self, parts: &[FbarPart]) -> (Vec<f64>, Vec<f64>) {
+        (0..self.cells())
+            .map(|c| {
+                self.members(c).iter().fold((0.0, 0.0), |(pi, rate), &p| {
+                    let part = &parts[p as usize];
+                    (
+                        pi + part.weight * part.sigma_m,
+                        rate + part.weight * part.mean_rate,
+                    )
+                })
+            })
+            .unzip()
+    }
+
+    /// Adds the couplings' stiffness to tangent values in `pattern`'s
+    /// layout (which must hold [`FbarCells::coupling_groups`]): per cell,
+    /// `x (x) y + x2 (x) z` with, summed over the cell's points,
+    /// `x_a = V0_p (dP~_p / d dJ_bar + J_start dJ_p dF_p^-T dPi / d dJ_bar) g_pa`,
+    /// `y_b = w_q dJ_q dF_q^-T g_qb` (`d dJ_bar`), `x2_a = V0_p J_start dJ_p
+    /// dF_p^-T g_pa` and `z_b = w_q (d sigma_m,q / d(dF_q)) g_qb` (`d Pi` by
+    /// the points' own deformation).
     pub fn add_to(
         &self,
         conn: &Connectivity,
@@ -234,29 +305,40 @@ impl FbarCells {
                 let index = |n: u32| nodes.binary_search(&n).expect("a node of the cell");
                 let mut x = vec![[0.0; 2]; nodes.len()];
                 let mut y = vec![[0.0; 2]; nodes.len()];
+                let mut x2 = vec![[0.0; 2]; nodes.len()];
+                let mut z = vec![[0.0; 2]; nodes.len()];
+                let rate = trial.mean_rates[c];
+                let row = |m: &Matrix2<f64>, grad: [f64; 2], i: usize| {
+                    m[(i, 0)] * grad[0] + m[(i, 1)] * grad[1]
+                };
                 for &p in self.members(c) {
                     let p = p as usize;
-                    let (b, v) = (&trial.b[p], &trial.v[p]);
+                    let part = &trial.parts[p];
+                    let by_bar = part.by_bar + part.pressure * rate;
                     let v0 = points.volume0[p];
                     for l in conn.point_links(p) {
                         let k = index(l.node);
                         for i in 0..2 {
-                            x[k][i] += v0 * (b[(i, 0)] * l.grad[0] + b[(i, 1)] * l.grad[1]);
-                            y[k][i] += v[(i, 0)] * l.grad[0] + v[(i, 1)] * l.grad[1];
+                            x[k][i] += v0 * row(&by_bar, l.grad, i);
+                            y[k][i] += row(&part.volume, l.grad, i);
+                            x2[k][i] += v0 * row(&part.pressure, l.grad, i);
+                            z[k][i] += row(&part.mean_own, l.grad, i);
                         }
                     }
                 }
-                (c, x, y)
+                (c, [x, x2], [y, z])
             })
             .collect();
-        for (c, x, y) in blocks {
+        for (c, xs, ys) in blocks {
             let nodes = &self.nodes[c];
             for (kb, &nb) in nodes.iter().enumerate() {
                 for (ka, &na) in nodes.iter().enumerate() {
                     let (base, stride) = pattern.block(na, nb);
-                    for i in 0..2 {
-                        for j in 0..2 {
-                            values[base + i + j * stride] += x[ka][i] * y[kb][j];
+                    for (x, y) in xs.iter().zip(&ys) {
+                        for i in 0..2 {
+                            for j in 0..2 {
+                                values[base + i + j * stride] += x[ka][i] * y[kb][j];
+                            }
                         }
                     }
                 }
@@ -265,24 +347,87 @@ impl FbarCells {
     }
 }
 
-/// A cell's coupling block: the cell, and its two nodal vectors (one entry
-/// per node of [`FbarCells::coupling_groups`]' group, two components).
-type CellBlock = (usize, Vec<[f64; 2]>, Vec<[f64; 2]>);
+/// A cell's coupling block: the cell, and the two nodal vectors of each of
+/// its two outer products (one entry per node of
+/// [`FbarCells::coupling_groups`]' group, two components).
+type CellBlock = (usize, [Vec<[f64; 2]>; 2], [Vec<[f64; 2]>; 2]);
 
 impl FbarTrial {
-    pub fn new(averages: Vec<f64>, shares: Vec<(Matrix2<f64>, Matrix2<f64>)>) -> Self {
-        let (b, v) = shares.into_iter().unzip();
-        Self { averages, b, v }
+    /// The trial's cell terms from its `averages` and the points' `parts`.
+    pub fn new(fbar: &FbarCells, averages: Vec<f64>, parts: Vec<FbarPart>) -> Self {
+        let (means, mean_rates) = fbar.means(&parts);
+        Self {
+            averages,
+            means,
+            mean_rates,
+            parts,
+        }
+    }
+
+    /// Point `p`'s stress: its local `P~` completed by its cell's pressure
+    /// term `Pi J dF^-T` (none for the small-strain model, whose own
+    /// volume change pairs with its whole stress).
+    pub fn stress(&self, fbar: &FbarCells, p: usize, local: &Matrix2<f64>) -> Matrix2<f64> {
+        local + self.parts[p].pressure * fbar.of(&self.means, p)
     }
 
     /// Bytes held on the heap.
     pub fn heap_bytes(&self) -> usize {
         use std::mem::size_of_val;
         size_of_val(self.averages.as_slice())
-            + size_of_val(self.b.as_slice())
-            + size_of_val(self.v.as_slice())
+            + size_of_val(self.means.as_slice())
+            + size_of_val(self.mean_rates.as_slice())
+            + size_of_val(self.parts.as_slice())
     }
 }
+
+/// A point's part in its cell's terms. Rates are by the point's own
+/// `d(dF)` (`_own`, as 2 x 2 rows) or by `d(dJ_bar)`.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FbarPart {
+    /// Its in-plane mean Cauchy stress `sigma_m`.
+    sigma_m: f64,
+    /// `d sigma_m / d dJ_bar`.
+    mean_rate: f64,
+    /// `w_p d sigma_m / d(dF)`.
+    mean_own: Matrix2<f64>,
+    /// `d P~ / d dJ_bar` (small-strain: `B`).
+    by_bar: Matrix2<f64>,
+    /// `J dF^-T`, what the cell's pressure term multiplies in its stress.
+    pressure: Matrix2<f64>,
+    /// `w_p dJ dF^-T`: `d dJ_bar / d(dF_p)`.
+    volume: Matrix2<f64>,
+    /// Its weight `w_p` in its cell.
+    weight: f64,
+}
+
+/// `(m : x)_r = sum_c m_rc x_c` over the flattened 2 x 2 `x`.
+fn contract_right(m: &Matrix4<f64>, x: &Matrix2<f64>) -> Matrix2<f64> {
+    Matrix2::from_fn(|i, ii| {
+        (0..4)
+            .map(|col| m[(2 * i + ii, col)] * x[(col / 2, col % 2)])
+            .sum()
+    })
+}
+
+/// `(x : m)_c = sum_r x_r m_rc`.
+fn contract_left(x: &Matrix2<f64>, m: &Matrix4<f64>) -> Matrix2<f64> {
+    Matrix2::from_fn(|j, jj| (0..4).map(|r| x[(r / 2, r % 2)] * m[(r, 2 * j + jj)]).sum())
+}
+
+/// `x (x) y` on flattened 2 x 2 tensors.
+fn outer(x: &Matrix2<f64>, y: &Matrix2<f64>) -> Matrix4<f64> {
+    Matrix4::from_fn(|r, col| x[(r / 2, r % 2)] * y[(col / 2, col % 2)])
+}
+
+/// The rate of `dF^-T` (`c`) by `d(dF)`: `d c = -c d(dF)^T c`.
+fn inverse_transpose_rate(c: &Matrix2<f64>) -> Matrix4<f64> {
+    Matrix4::from_fn(|r, col| {
+        let ((i, j), (l, k)) = ((r / 2, r % 2), (col / 2, col % 2));
+        -c[(i, k)] * c[(l, j)]
+    })
+}
+
 /// Whether point `p` has the small-strain model, which F-bar averages by
 /// its own volumetric strain.
 fn small_strain(mp: &MaterialPoints, p: usize) -> bool {
@@ -322,20 +467,18 @@ pub fn trial_averages(
     fbar.averages(&growth)
 }
 
-/// A point's share of F-bar's coupling term ([`FbarCells::adjust`]).
-pub type FbarShare = (Matrix2<f64>, Matrix2<f64>);
-
 /// Point `p`'s response to its `dF_bar` at `u`, given its cell's
-/// `averages`, with its share of the coupling term; or the point, if `u`
-/// or its cell's average inverts it.
+/// `averages` (and, once the trial's point loop has made them, its
+/// `means`), with its part in its cell's terms; or the point, if `u` or its
+/// cell's average inverts it.
 pub fn point_response(
     fbar: &FbarCells,
-    averages: &[f64],
+    (averages, means): (&[f64], Option<&[f64]>),
     conn: &Connectivity,
     mp: &MaterialPoints,
     u: &[f64],
     p: usize,
-) -> Result<(Response, FbarShare), InadmissiblePoint> {
+) -> Result<(Response, FbarPart), InadmissiblePoint> {
     let g = &increment(conn.point_links(p), u).1;
     let j_start = mp.deformation[p].determinant();
     let (a, b) = (volume_growth(mp, p, g), fbar.of(averages, p));
@@ -348,8 +491,8 @@ pub fn point_response(
         let grad_bar = g + Matrix2::identity() * ((b - a) / 2.0);
         let response = material.respond(&mp.history[p], &grad_bar, j_start);
         let mut response = admissible::check_response(p, j_start * dj_bar, response)?;
-        let share = fbar.adjust_small_strain(p, &mut response);
-        return Ok((response, share));
+        let part = fbar.adjust_small_strain(p, &mut response);
+        return Ok((response, part));
     }
     let df = Matrix2::identity() + g;
     let alpha = (dj_bar / dj).sqrt();
@@ -357,6 +500,7 @@ pub fn point_response(
     let grad_bar = Matrix2::identity() * ((b - a) / (dj * (alpha + 1.0))) + g * alpha;
     let response = material.respond(&mp.history[p], &grad_bar, j_start);
     let mut response = admissible::check_response(p, j_start * dj_bar, response)?;
-    let share = fbar.adjust(p, &mut response, &df, dj, dj_bar);
-    Ok((response, share))
+    let mean = means.map(|m| fbar.of(m, p));
+    let part = fbar.adjust(p, &mut response, (&df, j_start), (dj, dj_bar), mean);
+    Ok((response, part))
 }
