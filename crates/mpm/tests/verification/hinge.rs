@@ -76,9 +76,10 @@ fn pure_bending(offset: f64, fbar: bool) -> Vec<f64> {
 
 /// Bent 1 degree over 2 d (the curvature 20 times the first yield's,
 /// where the elastic core leaves 1 - M / M_p = 1e-3), the moment comes to
-/// M_p within 1% and stays flat: measured at the two placements 0.9939
-/// and 1.0006 at the end (d/16: 0.9985), moving by 0.23% and 0.24% over
-/// the second half. The tolerance is the d/8 cells' error with room for
+/// M_p within 1% and stays flat: measured at the two placements 0.9940
+/// and 0.9998 at the end, moving by 0.23% and 0.12% over the second half
+/// (with F-bar's earlier, unsymmetric form: 0.9939 and 1.0006, and 0.9985
+/// at d/16). The tolerance is the d/8 cells' error with room for
 /// the placement. Without F-bar the cells lock at offset 0.3 and the
 /// moment climbs past M_p (1.038 at the end, still rising), which fails
 /// this test; at offset 0.65 the same cells happen not to lock (1.0008).
@@ -115,10 +116,11 @@ fn cantilever(length: f64) -> f64 {
 /// limit. A clamp holds the root section's width (`eps_yy = 0` at the
 /// wall, so with isochoric flow `eps_xx = 0` there): the hinge forms a
 /// fraction of d out from the wall, and the load exceeds `M_p / L` by
-/// about `c d / L`. Measured: `P L / M_p` = 1.0688 at L = 10 d and 1.0368
-/// at L = 20 d (`c` = 0.69 and 0.74; d/16 at L = 10 d and 0.02 L: 1.067),
-/// the excess nearly halving with `d / L`. Extrapolated in `d / L` to the
-/// slender limit (Richardson, first order): 1.0049. The tolerance, 2%, is the issue's
+/// about `c d / L`. Measured: `P L / M_p` = 1.0687 at L = 10 d and 1.0367
+/// at L = 20 d (`c` = 0.69 and 0.73; d/16 at L = 10 d and 0.02 L, with
+/// F-bar's earlier form: 1.067), the excess nearly halving with `d / L`.
+/// Extrapolated in `d / L` to the slender limit (Richardson, first
+/// order): 1.0047. The tolerance, 2%, is the issue's
 /// for the hinge: the d/8 cells' error in pure bending (0.6%) and the
 /// second-order remainder of the extrapolation.
 #[test]

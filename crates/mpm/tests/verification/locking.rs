@@ -72,11 +72,12 @@ fn fbar_unlocks_a_nearly_incompressible_cantilever() {
 /// F-bar's tangent is the consistent one: Newton stays quadratic on the
 /// large-deformation cantilever (Hencky, GIMP, 5 steps). Observed orders
 /// where the residuals are in the asymptotic range (below 5e-2, falling,
-/// above the round-off floor of 1e-11), measured at nu = 0.25: 1.70, 2.11,
-/// 2.46, 2.78 (the standard formulation: 2.08, 2.41, 2.64); asserted: their
-/// median is above 1.8. (Solved as if symmetric, the tangent converged
-/// linearly, r = 3.8e-3, 7.5e-6, 1.8e-6, 4.7e-7, ...; without its coupling
-/// term, the test fails.) Nearer incompressibility the
+/// above the round-off floor of 1e-11), measured at nu = 0.25: 1.69, 2.10,
+/// 2.49, 2.76 (the standard formulation: 2.08, 2.41, 2.64); asserted: their
+/// median is above 1.8. (F-bar's earlier form, whose tangent is not
+/// symmetric, converged linearly when solved as if it were: r = 3.8e-3,
+/// 7.5e-6, 1.8e-6, 4.7e-7, ...; without its coupling terms the test
+/// fails.) Nearer incompressibility the
 /// round-off floor rises (about 1e-10 at nu = 0.49, for either
 /// formulation) and hides the rate.
 #[test]
