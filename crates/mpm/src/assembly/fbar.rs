@@ -50,7 +50,7 @@
 //! which F-bar leaves free within its cell. Newton's corrections then
 //! reached across the mesh, and a footing on a dilatant Mohr-Coulomb or
 //! Drucker-Prager soil failed after a few steps whatever the cut
-//! (docs/guide.md, Hard cases). With `psi = 0` or von Mises the pressure
+//! (docs/guide.md, Material models). With `psi = 0` or von Mises the pressure
 //! does not follow the shear and both forms converge.
 //!
 //! The small-strain model takes F-bar's linearisation, B-bar:
@@ -170,8 +170,9 @@ impl FbarCells {
         &self.points[self.start[c]..self.start[c + 1]]
     }
 
-    /// Each cell's volume-weighted mean of a per-point value (of `dJ - 1`,
-    /// for `dJ_bar - 1`: the weights add up to one).
+    /// Each cell's volume-weighted mean of a per-point value (of `dJ - 1`
+    /// for `dJ_bar - 1`, the weights adding up to one; of `sigma_m` for
+    /// `Pi`).
     pub fn averages(&self, dj: &[f64]) -> Vec<f64> {
         (0..self.cells())
             .map(|c| {
@@ -241,7 +242,6 @@ impl FbarCells {
             by_bar: p_bar,
             pressure: jc,
             volume: c * (self.weight[p] * dj),
-            weight: self.weight[p],
         }
     }
 
@@ -264,22 +264,6 @@ impl FbarCells {
             volume: identity * self.weight[p],
             ..FbarPart::default()
         }
-    }
-
-    /// Each cell's mean pressure term `Pi = sum_p w_p sigma_m,p` and the
-    /// mean of the points' `d sigma_m / d dJ_bar`.
-    fn means(&self, parts: &[FbarPart]) -> (Vec<f64>, Vec<f64>) {
-        (0..self.cells())
-            .map(|c| {
-                self.members(c).iter().fold((0.0, 0.0), |(pi, rate), &p| {
-                    let part = &parts[p as usize];
-                    (
-                        pi + part.weight * part.sigma_m,
-                        rate + part.weight * part.mean_rate,
-                    )
-                })
-            })
-            .unzip()
     }
 
     /// Adds the couplings' stiffness to tangent values in `pattern`'s
@@ -355,7 +339,9 @@ type CellBlock = (usize, [Vec<[f64; 2]>; 2], [Vec<[f64; 2]>; 2]);
 impl FbarTrial {
     /// The trial's cell terms from its `averages` and the points' `parts`.
     pub fn new(fbar: &FbarCells, averages: Vec<f64>, parts: Vec<FbarPart>) -> Self {
-        let (means, mean_rates) = fbar.means(&parts);
+        // Pi = sum_p w_p sigma_m,p, and its rate by dJ_bar likewise.
+        let means = fbar.averages(&parts.iter().map(|q| q.sigma_m).collect::<Vec<_>>());
+        let mean_rates = fbar.averages(&parts.iter().map(|q| q.mean_rate).collect::<Vec<_>>());
         Self {
             averages,
             means,
@@ -397,8 +383,6 @@ pub struct FbarPart {
     pressure: Matrix2<f64>,
     /// `w_p dJ dF^-T`: `d dJ_bar / d(dF_p)`.
     volume: Matrix2<f64>,
-    /// Its weight `w_p` in its cell.
-    weight: f64,
 }
 
 /// `(m : x)_r = sum_c m_rc x_c` over the flattened 2 x 2 `x`.
