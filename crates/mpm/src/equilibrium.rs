@@ -17,6 +17,7 @@ use std::time::Instant;
 use nalgebra::Matrix2;
 use rayon::prelude::*;
 
+use crate::assembly::cell_mean::{CellMean, CellTrial};
 use crate::assembly::fbar::{self, FbarCells, FbarTrial};
 use crate::assembly::{self, NodeAdjacency, Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
@@ -44,6 +45,8 @@ pub struct StepTerms<'a> {
     pub f_ext_rate: Option<(f64, Vec<f64>)>,
     /// F-bar's averaging cells, when the case asks for it.
     pub fbar: Option<FbarCells>,
+    /// The cell-mean strain's cells, when the case asks for it.
+    pub cell_mean: Option<CellMean>,
     pub terms: Vec<Box<dyn StepTerm + 'a>>,
 }
 
@@ -59,6 +62,9 @@ impl StepTerms<'_> {
         if let Some(fbar) = &self.fbar {
             groups.extend(fbar.coupling_groups());
         }
+        if let Some(cells) = &self.cell_mean {
+            groups.extend(cells.coupling_groups());
+        }
         Pattern::build(conn, &groups)
     }
 }
@@ -73,6 +79,9 @@ pub struct StepEquilibrium<'a> {
     fbar: Option<FbarCells>,
     /// F-bar's cell averages and coupling terms at the last trial state.
     fbar_trial: Option<FbarTrial>,
+    cell_mean: Option<CellMean>,
+    /// The cell-mean strain's gradients and cell sums at the last trial.
+    cell_trial: Option<CellTrial>,
     /// The step terms, in the order their stiffness is added.
     terms: Vec<Box<dyn StepTerm + 'a>>,
     /// The largest of the terms' [`StepTerm::force_scale`], once per step.
@@ -146,6 +155,7 @@ impl<'a> StepEquilibrium<'a> {
             f_ext,
             f_ext_rate,
             fbar,
+            cell_mean,
             terms,
         } = terms;
         let solver = match previous {
@@ -158,7 +168,7 @@ impl<'a> StepEquilibrium<'a> {
                 // multigrid's aggregates are made from them. LU orders its
                 // own columns.
                 let solver = SparseSolver::new(conn.n_dofs(), None, settings, tally.clone());
-                if symmetric_tangent(&terms, fbar.as_ref(), start.points) {
+                if symmetric_tangent(&terms, fbar.is_some() || cell_mean.is_some(), start.points) {
                     solver.with_grid(
                         conn.nodes
                             .iter()
@@ -177,6 +187,8 @@ impl<'a> StepEquilibrium<'a> {
             held,
             fbar,
             fbar_trial: None,
+            cell_mean,
+            cell_trial: None,
             terms_scale: terms
                 .iter()
                 .map(|term| term.force_scale(conn.n_dofs()))
@@ -285,6 +297,13 @@ impl<'a> StepEquilibrium<'a> {
                     .expect("F-bar's averages are made with each trial state");
                 (fbar, trial)
             }),
+            cell: self.cell_mean.as_ref().map(|cells| {
+                let trial = self
+                    .cell_trial
+                    .as_ref()
+                    .expect("the cell means are made with each trial state");
+                (cells, trial)
+            }),
         }
     }
 
@@ -296,20 +315,34 @@ impl<'a> StepEquilibrium<'a> {
         // Loads that move add their own unsymmetric part below; F-bar's
         // points answer to a modified gradient.
         let symmetric_points = self.fbar.is_none()
+            && self.cell_mean.is_none()
             && self
                 .points
                 .materials
                 .iter()
                 .all(Material::symmetric_tangent);
         let responses = self.trial_responses();
-        assembly::stiffness(
-            self.conn,
-            &self.pattern,
-            self.points,
-            |p| responses.at(p, true).tangent,
-            symmetric_points,
-            &mut k,
-        );
+        if let (Some(cells), Some(trial)) = (&self.cell_mean, &self.cell_trial) {
+            let mp = self.points;
+            assembly::stiffness(
+                self.conn,
+                &self.pattern,
+                mp,
+                |p| cells.local_tangent(mp, p),
+                false,
+                &mut k,
+            );
+            cells.add_to(self.conn, mp, trial, &self.pattern, &mut k);
+        } else {
+            assembly::stiffness(
+                self.conn,
+                &self.pattern,
+                self.points,
+                |p| responses.at(p, true).tangent,
+                symmetric_points,
+                &mut k,
+            );
+        }
         if let (Some(fbar), Some(trial)) = (&self.fbar, &self.fbar_trial) {
             fbar.add_to(self.conn, self.points, trial, &self.pattern, &mut k);
         }
@@ -334,10 +367,15 @@ impl Equilibrium for StepEquilibrium<'_> {
         let t = Instant::now();
         self.assembled = false;
         self.fbar_trial = None;
+        self.cell_trial = None;
         self.u.clear();
         self.u.extend_from_slice(u);
         let (conn, mp) = (self.conn, self.points);
-        if let Some(fbar) = &self.fbar {
+        if let Some(cells) = &self.cell_mean {
+            let trial = cells.trial(conn, mp, u)?;
+            self.f_int = assembly::internal_force(conn, mp, |p| cells.stress(&trial, mp, p));
+            self.cell_trial = Some(trial);
+        } else if let Some(fbar) = &self.fbar {
             let averages = fbar::trial_averages(fbar, conn, mp, u);
             let (local, parts): (Vec<Matrix2<f64>>, Vec<_>) = (0..mp.len())
                 .into_par_iter()
@@ -470,7 +508,8 @@ impl StepEquilibrium<'_> {
         if !self.assembled {
             self.assemble_tangent();
         }
-        let symmetric = symmetric_tangent(&self.terms, self.fbar.as_ref(), self.points);
+        let averaged = self.fbar.is_some() || self.cell_mean.is_some();
+        let symmetric = symmetric_tangent(&self.terms, averaged, self.points);
         let solved = self
             .solver
             .solve_columns(&self.pattern, &self.k, rhs, symmetric, accuracy);
@@ -494,16 +533,17 @@ impl StepEquilibrium<'_> {
 
 /// Whether a step's tangent is symmetric (then Cholesky and CG solve it).
 /// Boundary loads move with the boundary: their load stiffness makes the
-/// tangent non-symmetric, and so do F-bar's coupling and non-associated
-/// plastic flow. The elastic models and associated flow under loads that
-/// do not move have a symmetric tangent.
+/// tangent non-symmetric, and so does non-associated plastic flow. The
+/// elastic models and associated flow under loads that do not move have a
+/// symmetric tangent; with the cells' averages (`averaged`, F-bar or the
+/// cell mean) it is taken as unsymmetric.
 fn symmetric_tangent(
     terms: &[Box<dyn StepTerm + '_>],
-    fbar: Option<&FbarCells>,
+    averaged: bool,
     points: &MaterialPoints,
 ) -> bool {
     terms.iter().all(|term| term.symmetric())
-        && fbar.is_none()
+        && !averaged
         && points.materials.iter().all(Material::symmetric_tangent)
 }
 
@@ -514,6 +554,8 @@ struct TrialResponses<'s> {
     u: &'s [f64],
     /// F-bar's cells, with their averages at `u`.
     fbar: Option<(&'s FbarCells, &'s FbarTrial)>,
+    /// The cell-mean strain's cells, with their sums at `u`.
+    cell: Option<(&'s CellMean, &'s CellTrial)>,
 }
 
 impl TrialResponses<'_> {
@@ -522,6 +564,9 @@ impl TrialResponses<'_> {
     /// zero ([`Material::respond_without_tangent`]; F-bar's point needs it).
     fn checked(&self, p: usize, want_tangent: bool) -> Result<Response, InadmissiblePoint> {
         let (conn, mp) = (self.conn, self.points);
+        if let Some((cells, trial)) = self.cell {
+            return cells.response(trial, mp, p, want_tangent);
+        }
         if let Some((fbar, trial)) = self.fbar {
             let cells = (trial.averages.as_slice(), Some(trial.means.as_slice()));
             return fbar::point_response(fbar, cells, conn, mp, self.u, p)
@@ -691,15 +736,16 @@ mod tests {
     /// With the coupling by the other points' pressure left out the
     /// Mohr-Coulomb block misses by 8e-2.
     #[test]
-    fn the_fbar_tangent_is_the_derivative_of_its_force() {
+    fn the_averaged_tangents_are_the_derivatives_of_their_forces() {
         let hencky = serde_json::json!({ "model": "hencky", "youngs_modulus": 1e6,
             "poisson_ratio": 0.3, "density": 0.0 });
         let sand = serde_json::json!({ "model": "mohr_coulomb", "youngs_modulus": 1e6,
             "poisson_ratio": 0.3, "density": 0.0, "cohesion": 1e2, "friction_angle": 30.0 });
-        for material in [hencky, sand] {
+        let variants = ["fbar", "cell_mean"].map(|v| [(v, hencky.clone()), (v, sand.clone())]);
+        for (volumetric, material) in variants.into_iter().flatten() {
             let mut case = fixtures::block([2.0, 1.0], [9, 6], 0.5, [0.1, 0.13]);
             case["basis"] = "gimp".into();
-            case["analysis"]["volumetric"] = "fbar".into();
+            case["analysis"]["volumetric"] = volumetric.into();
             case["bodies"][0]["material"] = material.clone();
             case["supports"] = serde_json::json!([ { "on": { "x": 0.1 }, "fix": "xy" } ]);
             let sim = fixtures::simulation(&case);
@@ -758,7 +804,7 @@ mod tests {
             }
             let miss = (miss / size).sqrt();
             eprintln!(
-                "{}: {yielded} of {} points yielded; miss {miss:e} of |K v|, asymmetry {asymmetry:e}",
+                "{volumetric}, {}: {yielded} of {} points yielded; miss {miss:e} of |K v|, asymmetry {asymmetry:e}",
                 material["model"],
                 eq.points.len()
             );

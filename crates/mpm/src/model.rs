@@ -368,10 +368,11 @@ impl Simulation {
                 tangent_regularisation: stabilisation.tangent_regularisation,
                 line_search: newton.line_search,
                 ghost_penalty: stabilisation.ghost_penalty,
+                hourglass: stabilisation.hourglass,
                 free_step_growth,
                 ..Default::default()
             },
-            fbar: case.analysis.volumetric == crate::case::Volumetric::Fbar,
+            volumetric: case.analysis.volumetric,
             step_size: StepSize::default(),
             arc: None,
             reduction: None,

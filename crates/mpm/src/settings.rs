@@ -21,6 +21,9 @@ pub struct NewtonSettings {
     /// relative to twice the largest shear modulus (1e-3; 0: none); see
     /// [`crate::assembly::GhostFaces`].
     pub ghost_penalty: f64,
+    /// The cell-mean strain's hourglass stiffness, relative to twice the
+    /// material's shear modulus (1e-2); see [`crate::assembly::cell_mean`].
+    pub hourglass: f64,
     /// How far a free full step of the line search may raise the
     /// out-of-balance force, against the larger of the step's lowest and
     /// its starting force scale (10; the model sets ten times the stiffest
@@ -37,6 +40,7 @@ impl Default for NewtonSettings {
             tangent_regularisation: 0.0,
             line_search: true,
             ghost_penalty: 1e-3,
+            hourglass: 1e-2,
             free_step_growth: 10.0,
         }
     }

@@ -19,10 +19,12 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use crate::assembly;
+use crate::assembly::cell_mean::CellMean;
 use crate::assembly::{FbarCells, GhostFaces, SoftCells, StepTerm};
 use crate::boundary::BoundaryLoop;
 use crate::boundary::ibm::{self, Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
+use crate::case::Volumetric;
 use crate::configuration::Configuration;
 use crate::equilibrium::{AnalysedPattern, StepEquilibrium, StepTerms};
 use crate::grid::{Basis, Connectivity, Grid, NodeKey, increment};
@@ -197,8 +199,10 @@ pub struct Simulation {
     pub(crate) reduction: Option<ReductionState>,
     /// What the last converged increment reported of its state.
     pub(crate) settled: Option<Settled>,
-    /// F-bar against volumetric locking ([`crate::assembly::fbar`]).
-    pub fbar: bool,
+    /// How a point's deformation enters its stress: F-bar
+    /// ([`crate::assembly::fbar`]) or the cell mean
+    /// ([`crate::assembly::cell_mean`]) against locking.
+    pub volumetric: Volumetric,
     /// Load steps over all stages.
     pub load_steps: usize,
     /// Load steps converged (and committed) so far.
@@ -743,7 +747,9 @@ impl Simulation {
                 );
                 (load_factor, rate)
             }),
-            fbar: self.fbar.then(|| FbarCells::new(&start)),
+            fbar: (self.volumetric == Volumetric::Fbar).then(|| FbarCells::new(&start)),
+            cell_mean: (self.volumetric == Volumetric::CellMean)
+                .then(|| CellMean::new(&start, self.settings.hourglass)),
             terms,
         };
         let pattern = terms.pattern(conn);

@@ -162,12 +162,22 @@ impl FbarCells {
         self.nodes.clone()
     }
 
-    fn cells(&self) -> usize {
+    pub(super) fn cells(&self) -> usize {
         self.start.len() - 1
     }
 
-    fn members(&self, c: usize) -> &[u32] {
+    pub(super) fn members(&self, c: usize) -> &[u32] {
         &self.points[self.start[c]..self.start[c + 1]]
+    }
+
+    /// Point `p`'s cell and its weight in it.
+    pub(super) fn place(&self, p: usize) -> (usize, f64) {
+        (self.cell_of[p] as usize, self.weight[p])
+    }
+
+    /// The active nodes of cell `c`'s points.
+    pub(super) fn nodes(&self, c: usize) -> &[u32] {
+        &self.nodes[c]
     }
 
     /// Each cell's volume-weighted mean of a per-point value (of `dJ - 1`

@@ -309,8 +309,11 @@ pub struct Analysis {
     pub stabilisation: StabilisationSpec,
     #[serde(default)]
     pub substepping: SubsteppingSpec,
-    /// How a point's volume change enters its stress: its own (`standard`)
-    /// or its cell's average (`fbar`, against volumetric locking).
+    /// How a point's deformation enters its stress: its own (`standard`),
+    /// its volume change the average of its cell's (`fbar`, against
+    /// volumetric locking), or its whole strain increment the average of
+    /// its cell's (`cell_mean`, against locking by incompressibility and by
+    /// dilatancy, with a small hourglass stiffness).
     #[serde(default)]
     pub volumetric: Volumetric,
     /// How the load factor moves from step to step (default `load`); with
@@ -343,6 +346,7 @@ pub enum Volumetric {
     #[default]
     Standard,
     Fbar,
+    CellMean,
 }
 
 /// Cutting a load step's increment when Newton fails on it: the failed
@@ -420,6 +424,12 @@ pub struct StabilisationSpec {
     /// a relative amount of its size.
     #[serde(default = "default_tangent_regularisation")]
     pub tangent_regularisation: f64,
+    /// With `analysis.volumetric: cell_mean`, the stiffness against the
+    /// points' departures from their cell's mean strain, relative to twice
+    /// the material's shear modulus (default: [`NewtonSettings`]'s, 1e-2).
+    /// Larger is easier for Newton and stronger in collapse.
+    #[serde(default = "default_hourglass")]
+    pub hourglass: f64,
 }
 
 impl Default for StabilisationSpec {
@@ -427,6 +437,7 @@ impl Default for StabilisationSpec {
         Self {
             ghost_penalty: default_ghost_penalty(),
             tangent_regularisation: default_tangent_regularisation(),
+            hourglass: default_hourglass(),
         }
     }
 }
@@ -445,6 +456,7 @@ impl Analysis {
                 .newton
                 .tangent_regularisation
                 .unwrap_or(self.stabilisation.tangent_regularisation),
+            hourglass: self.stabilisation.hourglass,
         }
     }
 }
@@ -460,6 +472,9 @@ fn default_tangent_regularisation() -> f64 {
 }
 fn default_ghost_penalty() -> f64 {
     NewtonSettings::default().ghost_penalty
+}
+fn default_hourglass() -> f64 {
+    NewtonSettings::default().hourglass
 }
 fn default_line_search() -> bool {
     NewtonSettings::default().line_search
@@ -1000,6 +1015,7 @@ mod tests {
         let expected = StabilisationSpec {
             ghost_penalty: 0.02,
             tangent_regularisation: 1e-6,
+            hourglass: 1e-2,
         };
         assert_eq!(settings(old.clone()), expected);
         assert_eq!(settings(new.clone()), expected);
@@ -1008,6 +1024,7 @@ mod tests {
             StabilisationSpec {
                 ghost_penalty: 1e-3,
                 tangent_regularisation: 0.0,
+                hourglass: 1e-2,
             }
         );
         let mut both = new.clone();

@@ -179,6 +179,13 @@ impl Case {
                 return Err(CaseError::new(path, "must be a finite number, 0 or more"));
             }
         }
+        let hourglass = a.stabilisation.hourglass;
+        if !(hourglass >= 0.0 && hourglass.is_finite()) {
+            return Err(CaseError::new(
+                "analysis.stabilisation.hourglass",
+                "must be a finite number, 0 or more",
+            ));
+        }
         let sub = &a.substepping;
         if !(sub.min_fraction > 0.0 && sub.min_fraction <= 1.0) {
             return Err(CaseError::new(

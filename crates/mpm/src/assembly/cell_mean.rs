@@ -1,0 +1,234 @@
+//! The cell-mean strain, against locking by incompressibility and by
+//! dilatancy: every point of an averaging cell (F-bar's,
+//! [`super::fbar`]) answers to the cell's mean displacement gradient
+//! `g_bar = sum_q w_q g_q` (weights by volume at the step's start), from
+//! its own history. A plastic soil's flow rule then binds one strain per
+//! cell, not one per point: with dilation, `d eps_v = sin(psi) d gamma`
+//! at each of a cell's four points is four constraints on about two
+//! degrees of freedom, and F-bar, which averages only the volume change,
+//! still asks each point's shear to be its cell's (de Borst & Groen
+//! 1995 found B-bar of no help with dilation).
+//!
+//! The stress is the derivative of the step's incremental potential
+//! `sum_p V0_p W_p(I + g_bar) + beta V0_c / 2 sum_p w_p |g_p - g_bar|^2`:
+//! the second sum holds the modes whose cell means are zero (the
+//! hourglass modes of one-point quadrature), an elastic stiffness `beta`
+//! a fraction (`analysis.stabilisation.hourglass`, 1e-2) of the
+//! material's `2 mu`, on each point's
+//! departure from its cell's mean only. Point `q`'s stress, paired with
+//! its own gradient, is
+//!
+//! ```text
+//! S_q = w_q / V0_q [T_c + beta V0_c (g_q - g_bar)],   T_c = sum_p V0_p P_p(g_bar),
+//! ```
+//!
+//! (the departures sum to zero), and the tangent is, per cell,
+//! `G_bar^T (sum_p V0_p A_p - beta V0_c) G_bar` with `G_bar` the cell's
+//! mean gradient operator, plus `beta V0_c w_q` on each point's own
+//! gradient. It is symmetric where the models' are.
+//!
+//! A homogeneous deformation gives every point of a cell the same
+//! gradient: the cell mean is each point's own and the stabilisation is
+//! zero, so the patch tests hold as for the standard points. A point
+//! alone in its cell is a standard point.
+
+use nalgebra::{Matrix2, Matrix4};
+use rayon::prelude::*;
+
+use super::Pattern;
+use super::fbar::FbarCells;
+use crate::configuration::Configuration;
+use crate::grid::{Connectivity, increment};
+use crate::material::Response;
+use crate::parallel;
+use crate::particles::MaterialPoints;
+use crate::particles::admissible::{self, InadmissiblePoint};
+
+/// The averaging cells of a step, with each cell's `beta V0_c`.
+pub struct CellMean {
+    cells: FbarCells,
+    /// Per cell, `beta V0_c`.
+    stiffness: Vec<f64>,
+}
+
+/// A trial state's cell terms.
+pub struct CellTrial {
+    /// Per point, its own displacement gradient `g_q`.
+    grads: Vec<Matrix2<f64>>,
+    /// Per cell, `g_bar`.
+    means: Vec<Matrix2<f64>>,
+    /// Per cell, `T_c`.
+    stress: Vec<Matrix2<f64>>,
+}
+
+impl CellMean {
+    /// The cells of the step starting at `start`, with `beta` the fraction
+    /// `hourglass` of each cell's material's `2 mu`.
+    pub fn new(start: &Configuration, hourglass: f64) -> Self {
+        let cells = FbarCells::new(start);
+        let points = start.points;
+        let fraction = hourglass;
+        let stiffness = (0..cells.cells())
+            .map(|c| {
+                let members = cells.members(c);
+                let p = members[0] as usize;
+                let mu = points.materials[points.material[p] as usize].elastic().mu;
+                let v0: f64 = members.iter().map(|&q| points.volume0[q as usize]).sum();
+                fraction * 2.0 * mu * v0
+            })
+            .collect();
+        Self { cells, stiffness }
+    }
+
+    /// The node groups the cell terms join (for the stiffness pattern).
+    pub fn coupling_groups(&self) -> Vec<Vec<u32>> {
+        self.cells.coupling_groups()
+    }
+
+    /// The trial's gradients and cell means at `u`, and every point's
+    /// response to its cell's mean; or the first inadmissible point.
+    pub fn trial(
+        &self,
+        conn: &Connectivity,
+        mp: &MaterialPoints,
+        u: &[f64],
+    ) -> Result<CellTrial, InadmissiblePoint> {
+        let grads: Vec<Matrix2<f64>> = (0..mp.len())
+            .into_par_iter()
+            .with_min_len(parallel::BOOKKEEPING)
+            .map(|p| increment(conn.point_links(p), u).1)
+            .collect();
+        let means: Vec<Matrix2<f64>> = (0..self.cells.cells())
+            .map(|c| {
+                self.cells
+                    .members(c)
+                    .iter()
+                    .map(|&q| grads[q as usize] * self.cells.place(q as usize).1)
+                    .sum()
+            })
+            .collect();
+        let mut trial = CellTrial {
+            grads,
+            means,
+            stress: Vec::new(),
+        };
+        let stresses: Vec<Matrix2<f64>> = (0..mp.len())
+            .into_par_iter()
+            .with_min_len(parallel::POINT_RESPONSES)
+            .map(|p| {
+                self.response(&trial, mp, p, false)
+                    .map(|r| r.p * mp.volume0[p])
+            })
+            .collect::<Result<_, _>>()?;
+        trial.stress = (0..self.cells.cells())
+            .map(|c| {
+                self.cells
+                    .members(c)
+                    .iter()
+                    .map(|&q| stresses[q as usize])
+                    .sum()
+            })
+            .collect();
+        Ok(trial)
+    }
+
+    /// Point `p`'s model response to its cell's mean gradient (its history
+    /// and Cauchy stress are what it commits), or the point, if its own
+    /// gradient or its cell's inverts it or the response is not finite.
+    pub fn response(
+        &self,
+        trial: &CellTrial,
+        mp: &MaterialPoints,
+        p: usize,
+        want_tangent: bool,
+    ) -> Result<Response, InadmissiblePoint> {
+        let (c, _) = self.cells.place(p);
+        let (g, g_bar) = (&trial.grads[p], &trial.means[c]);
+        let j_start = mp.deformation[p].determinant();
+        let dj = |g: &Matrix2<f64>| 1.0 + g.trace() + g.determinant();
+        let j_bar = j_start * dj(g_bar);
+        admissible::check_volume(p, j_start, &[j_start * dj(g), j_bar])?;
+        let material = &mp.materials[mp.material[p] as usize];
+        let response = if want_tangent {
+            material.respond(&mp.history[p], g_bar, j_start)
+        } else {
+            material.respond_without_tangent(&mp.history[p], g_bar, j_start)
+        };
+        admissible::check_response(p, j_bar, response)
+    }
+
+    /// Point `q`'s stress `S_q`, paired with its own gradient (see the
+    /// module docs).
+    pub fn stress(&self, trial: &CellTrial, mp: &MaterialPoints, q: usize) -> Matrix2<f64> {
+        let (c, w) = self.cells.place(q);
+        (trial.stress[c] + (trial.grads[q] - trial.means[c]) * self.stiffness[c])
+            * (w / mp.volume0[q])
+    }
+
+    /// The local part of point `q`'s tangent (on its own gradient),
+    /// `beta V0_c w_q / V0_q` times the identity: the stiffness assembly
+    /// multiplies by `V0_q`.
+    pub fn local_tangent(&self, mp: &MaterialPoints, q: usize) -> Matrix4<f64> {
+        let (c, w) = self.cells.place(q);
+        Matrix4::identity() * (self.stiffness[c] * w / mp.volume0[q])
+    }
+
+    /// Adds the cell terms' stiffness, `G_bar^T (sum_p V0_p A_p - beta
+    /// V0_c) G_bar` per cell, to tangent values in `pattern`'s layout
+    /// (which must hold [`CellMean::coupling_groups`]). The models'
+    /// tangents are made here, at the cells' means.
+    pub fn add_to(
+        &self,
+        conn: &Connectivity,
+        mp: &MaterialPoints,
+        trial: &CellTrial,
+        pattern: &Pattern,
+        values: &mut [f64],
+    ) {
+        let blocks: Vec<(usize, Vec<[f64; 2]>, Matrix4<f64>)> = (0..self.cells.cells())
+            .into_par_iter()
+            .map(|c| {
+                let nodes = self.cells.nodes(c);
+                let index = |n: u32| nodes.binary_search(&n).expect("a node of the cell");
+                let mut mean_grad = vec![[0.0; 2]; nodes.len()];
+                let mut a = Matrix4::identity() * -self.stiffness[c];
+                for &q in self.cells.members(c) {
+                    let q = q as usize;
+                    let w = self.cells.place(q).1;
+                    for l in conn.point_links(q) {
+                        let k = index(l.node);
+                        mean_grad[k][0] += w * l.grad[0];
+                        mean_grad[k][1] += w * l.grad[1];
+                    }
+                    // An admissible trial: the point loop checked it.
+                    let response = self
+                        .response(trial, mp, q, true)
+                        .expect("an admissible trial state");
+                    a += response.tangent * mp.volume0[q];
+                }
+                (c, mean_grad, a)
+            })
+            .collect();
+        for (c, m, a) in blocks {
+            let nodes = self.cells.nodes(c);
+            // q[2i+l][j] = sum_n a[(2i+l),(2j+n)] m_b,n, per node b.
+            for (kb, &nb) in nodes.iter().enumerate() {
+                let mut q = [[0.0; 2]; 4];
+                for (row, qr) in q.iter_mut().enumerate() {
+                    for (j, qrj) in qr.iter_mut().enumerate() {
+                        *qrj = a[(row, 2 * j)] * m[kb][0] + a[(row, 2 * j + 1)] * m[kb][1];
+                    }
+                }
+                for (ka, &na) in nodes.iter().enumerate() {
+                    let (base, stride) = pattern.block(na, nb);
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            values[base + i + j * stride] +=
+                                m[ka][0] * q[2 * i][j] + m[ka][1] * q[2 * i + 1][j];
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
