@@ -16,7 +16,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use mpm_lab::{LabError, basis_study, bench, footing_study, slope_study, study};
+use mpm_lab::{LabError, basis_study, bearing_study, bench, footing_study, slope_study, study};
 
 /// The built-in case `mpm run` solves when given no file.
 pub const DEFAULT_EXAMPLE: &str = "cantilever";
@@ -90,8 +90,10 @@ enum Command {
         /// four bases on the paper's case: convergence, grid origins, load
         /// steps, error against cost) or `footing` (the strip footing on
         /// undrained and frictional soil: collapse loads at three cell
-        /// sizes, and a settlement of 0.5 B) or `slope` (Griffiths and
-        /// Lane's slope: its factor of safety by strength reduction).
+        /// sizes, and a settlement of 0.5 B) or `bearing` (N_c of a rough
+        /// footing on frictional soil, the points' own strains against
+        /// their cells' mean) or `slope` (Griffiths and Lane's slope: its
+        /// factor of safety by strength reduction).
         name: String,
         /// Output directory.
         #[arg(long, default_value = "study")]
@@ -162,8 +164,9 @@ fn main() -> ExitCode {
             "bases" => basis_study::bases(&out, quick).map_err(CliError::from),
             "footing" => footing_study::footing(&out, quick).map_err(CliError::from),
             "slope" => slope_study::slope(&out, quick).map_err(CliError::from),
+            "bearing" => bearing_study::bearing(&out, quick).map_err(CliError::from),
             other => Err(CliError::input(format!(
-                "no study {other:?}; available: cantilever, bases, footing, slope"
+                "no study {other:?}; available: cantilever, bases, footing, bearing, slope"
             ))),
         },
         Command::Serve(args) => serve::serve(args),

@@ -484,7 +484,7 @@ fn runaway(c: &Curve) -> f64 {
 }
 
 /// Observed orders of successive errors.
-fn orders(errors: &[f64]) -> String {
+pub(crate) fn orders(errors: &[f64]) -> String {
     errors
         .windows(2)
         .map(|w| format!("{:.2}", (w[0].abs() / w[1].abs()).log2()))

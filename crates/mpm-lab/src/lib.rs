@@ -2,7 +2,8 @@
 //! `mpm study` and `mpm bench`: the paper's convergence study written as
 //! tables and SVG plots ([`study`]), the grid bases compared on it
 //! ([`basis_study`]), the strip footing on plastic soil
-//! ([`footing_study`]), a slope's factor of safety by strength reduction
+//! ([`footing_study`]) and its bearing capacity factor on frictional
+//! soil ([`bearing_study`]), a slope's factor of safety by strength reduction
 //! ([`slope_study`]), and cost against problem size written
 //! to BENCHMARKS.md ([`bench`]). They use only the solver crate.
 //!
@@ -12,6 +13,7 @@
 //! [`bench::bench_row`].
 
 pub mod basis_study;
+pub mod bearing_study;
 pub mod bench;
 pub mod footing_study;
 pub mod plot;

@@ -119,10 +119,11 @@ fn the_footings_contact_tractions_add_up_to_its_reaction() {
 /// `N_q = exp(pi tan(phi)) tan^2(45 + phi / 2)` (Reissner 1924; exact for
 /// weightless soil, smooth or rough: Chen 1975, section 8.4). At h = B/8
 /// the points' own strains lock by dilatancy: the flow rule binds each of
-/// a cell's four points, and the load is +16% without F-bar and +19.8%
-/// with it. The cell-mean strain binds one per cell: +1.9% with the edge
-/// at 0.3 of its cell, and the bound, 5%, is the target at B/16,
-/// at two placements.
+/// a cell's four points, and the load is +18.1% without F-bar and +19.8%
+/// with it. The cell-mean strain binds one per cell: +1.85% and +2.24%
+/// with the edge at 0.3 and 0.6 of its cell (+0.66% at B/16, `mpm study
+/// bearing`); the bound, 5%, is the target at B/16, at two
+/// placements.
 #[test]
 fn the_cell_mean_strain_takes_a_frictional_footing_to_prandtl_reissner() {
     let phi = 30f64.to_radians();
