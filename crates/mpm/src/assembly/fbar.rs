@@ -42,16 +42,10 @@
 //! Where the model's tangent is symmetric (elastic, associated flow) so is
 //! this one, a potential's second derivative.
 //!
-//! The earlier form paired `P^ / alpha` with the point's own `dF` (each
-//! point's whole stress on its own volume change; de Souza Neto et al.
-//! 1996). Its tangent is not symmetric, and with dilation it was
-//! indefinite: a plastic point's pressure changes with its shear (the
-//! dilatancy), and that pressure worked against the point's own volume,
-//! which F-bar leaves free within its cell. Newton's corrections then
-//! reached across the mesh, and a footing on a dilatant Mohr-Coulomb or
-//! Drucker-Prager soil failed after a few steps whatever the cut
-//! (docs/guide.md, Material models). With `psi = 0` or von Mises the pressure
-//! does not follow the shear and both forms converge.
+//! Why this form, and not the one that pairs each point's whole stress
+//! with its own volume change (indefinite with dilation): docs/guide.md,
+//! Material models. F-bar does not relieve the locking of dilatant flow,
+//! which binds each point's shear too: [`super::cell_mean`] does.
 //!
 //! The small-strain model takes F-bar's linearisation, B-bar:
 //! `g_bar = g + (b - a) / 2 I` with `a = tr g` and `b` its cell average
