@@ -518,7 +518,8 @@ impl StepEquilibrium<'_> {
             links: self.conn.heap_bytes(),
             pattern: self.pattern.heap_bytes(),
             tangent: std::mem::size_of_val(self.k.as_slice()),
-            responses: self.fbar_trial.as_ref().map_or(0, FbarTrial::heap_bytes),
+            responses: self.fbar_trial.as_ref().map_or(0, FbarTrial::heap_bytes)
+                + self.cell_trial.as_ref().map_or(0, CellTrial::heap_bytes),
             solver: self.solver.memory(),
         };
         let (du, kind, timing) = solved?;

@@ -61,6 +61,16 @@ pub struct CellTrial {
     stress: Vec<Matrix2<f64>>,
 }
 
+impl CellTrial {
+    /// Bytes held on the heap.
+    pub fn heap_bytes(&self) -> usize {
+        use std::mem::size_of_val;
+        size_of_val(self.grads.as_slice())
+            + size_of_val(self.means.as_slice())
+            + size_of_val(self.stress.as_slice())
+    }
+}
+
 impl CellMean {
     /// The cells of the step starting at `start`, with `beta` the fraction
     /// `hourglass` of each cell's material's `2 mu`.
