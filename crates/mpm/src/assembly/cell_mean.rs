@@ -12,11 +12,10 @@
 //! The stress is the derivative of the step's incremental potential
 //! `sum_p V0_p W_p(I + g_bar) + beta V0_c / 2 sum_p w_p |g_p - g_bar|^2`:
 //! the second sum holds the modes whose cell means are zero (the
-//! hourglass modes of one-point quadrature), an elastic stiffness `beta`
-//! a fraction (`analysis.stabilisation.hourglass`, 1e-2) of the
-//! material's `2 mu`, on each point's
-//! departure from its cell's mean only. Point `q`'s stress, paired with
-//! its own gradient, is
+//! hourglass modes of one-point quadrature) by an elastic stiffness
+//! `beta`, a fraction (`analysis.stabilisation.hourglass`, 1e-2) of the
+//! material's `2 mu`, on each point's departure from its cell's mean
+//! only. Point `q`'s stress, paired with its own gradient, is
 //!
 //! ```text
 //! S_q = w_q / V0_q [T_c + beta V0_c (g_q - g_bar)],   T_c = sum_p V0_p P_p(g_bar),
@@ -30,7 +29,9 @@
 //! A homogeneous deformation gives every point of a cell the same
 //! gradient: the cell mean is each point's own and the stabilisation is
 //! zero, so the patch tests hold as for the standard points. A point
-//! alone in its cell is a standard point.
+//! alone in its cell is a standard point. What it measures on footings,
+//! and what it loses in bending (the strain's variation within a cell):
+//! docs/guide.md, Material models, and `mpm study bearing`.
 
 use nalgebra::{Matrix2, Matrix4};
 use rayon::prelude::*;
