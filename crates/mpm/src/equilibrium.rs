@@ -312,17 +312,9 @@ impl<'a> StepEquilibrium<'a> {
     fn assemble_tangent(&mut self) {
         let t = Instant::now();
         let mut k = std::mem::take(&mut self.k);
-        // Loads that move add their own unsymmetric part below; F-bar's
-        // points answer to a modified gradient.
-        let symmetric_points = self.fbar.is_none()
-            && self.cell_mean.is_none()
-            && self
-                .points
-                .materials
-                .iter()
-                .all(Material::symmetric_tangent);
-        let responses = self.trial_responses();
         if let (Some(cells), Some(trial)) = (&self.cell_mean, &self.cell_trial) {
+            // The points' own stiffness is the hourglass term's; the
+            // models' tangents enter through the cells' blocks.
             let mp = self.points;
             assembly::stiffness(
                 self.conn,
@@ -334,6 +326,15 @@ impl<'a> StepEquilibrium<'a> {
             );
             cells.add_to(self.conn, mp, trial, &self.pattern, &mut k);
         } else {
+            // Loads that move add their own unsymmetric part below; F-bar's
+            // points answer to a modified gradient.
+            let symmetric_points = self.fbar.is_none()
+                && self
+                    .points
+                    .materials
+                    .iter()
+                    .all(Material::symmetric_tangent);
+            let responses = self.trial_responses();
             assembly::stiffness(
                 self.conn,
                 &self.pattern,
