@@ -4,8 +4,8 @@
 //! checkpoint holds only what load steps change: the material points'
 //! positions, deformation gradients (their volumes follow as `det F V0`),
 //! constitutive history, yield flags and stress; the probes' positions;
-//! the IBM anchors' displacements; and the step-size and arc-length
-//! controls carried between steps. The boundary loops, found once before any step, are kept
+//! the IBM anchors' displacements; the step-size and arc-length controls
+//! and the last increment (Newton's predictor) carried between steps. The boundary loops, found once before any step, are kept
 //! to check against: a solver that finds them differently refuses it. Restoring it into a simulation built
 //! from the same case and running on gives the run that was never stopped.
 //!
@@ -20,7 +20,7 @@ use crate::boundary::BoundaryLoop;
 use crate::report::Settled;
 
 /// The encoding's version: a checkpoint of another one is refused.
-pub(crate) const FORMAT: u32 = 3;
+pub(crate) const FORMAT: u32 = 4;
 
 /// The state of a run after `steps_done` load steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -41,6 +41,10 @@ pub struct Checkpoint {
     pub(crate) step_size: StepSizeState,
     /// The arc-length control, once an arc-length stage has begun.
     pub(crate) arc: Option<ArcControlState>,
+    /// The last converged increment of the stage's load-factor steps, which
+    /// the next one's Newton starts from: `(node keys, displacements,
+    /// change of load factor)`.
+    pub(crate) last_increment: Option<(Vec<u64>, Vec<f64>, f64)>,
     /// The strength reduction, once its stage has begun: the largest
     /// factor that held, and the smallest that failed with the factor it
     /// was tried from.

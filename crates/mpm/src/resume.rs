@@ -57,6 +57,8 @@ impl Simulation {
                 easy_in_a_row: a.easy_in_a_row,
                 last: (a.last.as_ref()).map(|l| (l.nodes.clone(), l.u.clone(), l.dlambda)),
             }),
+            last_increment: (self.last_increment.as_ref())
+                .map(|l| (l.nodes.clone(), l.u.clone(), l.dlambda)),
             reduction: self.reduction.as_ref().map(|r| {
                 let failed = r.failed.map(|f| [f.factor, f.tried_from]);
                 (r.held, failed)
@@ -152,6 +154,11 @@ impl Simulation {
                     dlambda,
                 }),
             }
+        });
+        self.last_increment = (c.last_increment.clone()).map(|(nodes, u, dlambda)| LastIncrement {
+            nodes,
+            u,
+            dlambda,
         });
         // The materials are the case's in a fresh simulation; the
         // reduction's own are those at the factor that last held.

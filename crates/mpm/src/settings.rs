@@ -17,6 +17,10 @@ pub struct NewtonSettings {
     pub tangent_regularisation: f64,
     /// Search along each Newton direction (true); see [`crate::newton::solve`].
     pub line_search: bool,
+    /// Start each increment of a load-factor step from the last one's,
+    /// scaled to its change of load factor (true); see
+    /// [`crate::newton::solve_from`].
+    pub predictor: bool,
     /// Ghost penalty on the faces of the cells at the material's edge,
     /// relative to twice the largest shear modulus (1e-3; 0: none); see
     /// [`crate::assembly::GhostFaces`].
@@ -39,6 +43,7 @@ impl Default for NewtonSettings {
             divergence_limit: 1e8,
             tangent_regularisation: 0.0,
             line_search: true,
+            predictor: true,
             ghost_penalty: 1e-3,
             hourglass: 1e-2,
             free_step_growth: 10.0,

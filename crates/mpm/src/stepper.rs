@@ -195,6 +195,10 @@ pub struct Simulation {
     pub(crate) step_size: StepSize,
     /// The arc-length control, once an arc-length stage's first step is done.
     pub(crate) arc: Option<ArcState>,
+    /// The last converged increment of the stage's load-factor steps, which
+    /// the next one's Newton starts from, scaled to its change of load
+    /// factor ([`newton::solve_from`]).
+    pub(crate) last_increment: Option<LastIncrement>,
     /// The strength reduction, once its stage has begun.
     pub(crate) reduction: Option<ReductionState>,
     /// What the last converged increment reported of its state.
@@ -567,8 +571,18 @@ impl Simulation {
         let grid_seconds = clock.lap();
 
         let (u, load_factor, newton) = match control {
-            Increment::To(_, to) => {
-                let (u, info) = newton::solve(&mut eq, &self.settings, step, observer)?;
+            Increment::To(from, to) => {
+                let last = self.last_increment.as_ref();
+                let predicted = last.filter(|_| self.settings.predictor).and_then(|last| {
+                    let scale = (to - from) / last.dlambda;
+                    scale.is_finite().then(|| {
+                        let mut u = last.on(&conn.nodes);
+                        u.iter_mut().for_each(|x| *x *= scale);
+                        u
+                    })
+                });
+                let (u, info) =
+                    newton::solve_from(&mut eq, &self.settings, step, observer, predicted)?;
                 (u, to, info)
             }
             Increment::Arc {
@@ -668,6 +682,9 @@ impl Simulation {
             u,
             dlambda: load_factor - from,
         };
+        if let Increment::To(..) = control {
+            self.last_increment = Some(increment.clone());
+        }
         Ok((report, increment))
     }
 
@@ -763,6 +780,7 @@ impl Simulation {
     pub(crate) fn enter_stage(&mut self, k: usize) {
         while self.stage < k {
             self.stage += 1;
+            self.last_increment = None;
             ibm::enter_stage(&mut self.anchors, &self.stages[self.stage].ibm);
         }
     }

@@ -401,6 +401,13 @@ pub struct NewtonSpec {
     /// the out-of-balance force or that invert a point (default true).
     #[serde(default = "default_line_search")]
     pub line_search: bool,
+    /// Start each increment from the last converged one, scaled to its
+    /// change of load factor, when that leaves less out-of-balance force
+    /// than no displacement (default true). Past yield it saves most of
+    /// the iterations: from no displacement the first tangent is the
+    /// elastic one.
+    #[serde(default = "default_predictor")]
+    pub predictor: bool,
     /// Deprecated: read as `analysis.stabilisation.ghost_penalty`, where it
     /// has moved.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -479,6 +486,9 @@ fn default_hourglass() -> f64 {
 fn default_line_search() -> bool {
     NewtonSettings::default().line_search
 }
+fn default_predictor() -> bool {
+    NewtonSettings::default().predictor
+}
 
 impl Default for NewtonSpec {
     fn default() -> Self {
@@ -487,6 +497,7 @@ impl Default for NewtonSpec {
             max_iterations: default_max_iterations(),
             tangent_regularisation: None,
             line_search: default_line_search(),
+            predictor: default_predictor(),
             ghost_penalty: None,
         }
     }
