@@ -51,7 +51,7 @@ const COHESION: f64 = 10e3;
 const PHI: f64 = 20.0;
 /// Settlement of the refinement runs (fraction of B), and their steps.
 const SETTLEMENT: f64 = 0.01;
-const SETTLEMENT_STEPS: usize = 10;
+const SETTLEMENT_STEPS: usize = 40;
 /// The large-deformation run: settlement (fraction of B), steps, cell.
 const LARGE_SETTLEMENT: f64 = 0.5;
 const LARGE_STEPS: usize = 100;
