@@ -44,7 +44,7 @@ pub struct Checkpoint {
     /// The last converged increment of the stage's load-factor steps, which
     /// the next one's Newton starts from: `(node keys, displacements,
     /// change of load factor)`.
-    pub(crate) last_increment: Option<(Vec<u64>, Vec<f64>, f64)>,
+    pub(crate) last_increment: Option<IncrementState>,
     /// The strength reduction, once its stage has begun: the largest
     /// factor that held, and the smallest that failed with the factor it
     /// was tried from.
@@ -60,8 +60,12 @@ pub struct Checkpoint {
 pub(crate) struct ArcControlState {
     pub(crate) arc: [f64; 3],
     pub(crate) easy_in_a_row: usize,
-    pub(crate) last: Option<(Vec<u64>, Vec<f64>, f64)>,
+    pub(crate) last: Option<IncrementState>,
 }
+
+/// A converged increment: `(node keys, displacements, change of load
+/// factor)`.
+pub(crate) type IncrementState = (Vec<u64>, Vec<f64>, f64);
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub(crate) struct HistoryState {

@@ -3,11 +3,24 @@
 //! encoding: `checkpoint.rs`).
 
 use crate::checkpoint::{
-    ArcControlState, Checkpoint, CheckpointError, FORMAT, HistoryState, LoopState, StepSizeState,
+    ArcControlState, Checkpoint, CheckpointError, FORMAT, HistoryState, IncrementState, LoopState,
+    StepSizeState,
 };
 use crate::material::CauchyStress;
 use crate::stepper::{ArcState, LastIncrement, Simulation, StepSize};
 use crate::strength_reduction::{Failed, ReductionState};
+
+impl LastIncrement {
+    fn state(&self) -> IncrementState {
+        (self.nodes.clone(), self.u.clone(), self.dlambda)
+    }
+}
+
+impl From<IncrementState> for LastIncrement {
+    fn from((nodes, u, dlambda): IncrementState) -> Self {
+        Self { nodes, u, dlambda }
+    }
+}
 
 impl Simulation {
     /// Load steps converged so far.
@@ -55,10 +68,9 @@ impl Simulation {
             arc: self.arc.as_ref().map(|a| ArcControlState {
                 arc: [a.length, a.first_length, a.load_factor],
                 easy_in_a_row: a.easy_in_a_row,
-                last: (a.last.as_ref()).map(|l| (l.nodes.clone(), l.u.clone(), l.dlambda)),
+                last: a.last.as_ref().map(LastIncrement::state),
             }),
-            last_increment: (self.last_increment.as_ref())
-                .map(|l| (l.nodes.clone(), l.u.clone(), l.dlambda)),
+            last_increment: self.last_increment.as_ref().map(LastIncrement::state),
             reduction: self.reduction.as_ref().map(|r| {
                 let failed = r.failed.map(|f| [f.factor, f.tried_from]);
                 (r.held, failed)
@@ -148,18 +160,10 @@ impl Simulation {
                 first_length,
                 load_factor,
                 easy_in_a_row: a.easy_in_a_row,
-                last: (a.last.clone()).map(|(nodes, u, dlambda)| LastIncrement {
-                    nodes,
-                    u,
-                    dlambda,
-                }),
+                last: a.last.clone().map(LastIncrement::from),
             }
         });
-        self.last_increment = (c.last_increment.clone()).map(|(nodes, u, dlambda)| LastIncrement {
-            nodes,
-            u,
-            dlambda,
-        });
+        self.last_increment = c.last_increment.clone().map(LastIncrement::from);
         // The materials are the case's in a fresh simulation; the
         // reduction's own are those at the factor that last held.
         self.reduction = c.reduction.map(|(held, failed)| ReductionState {
