@@ -122,7 +122,7 @@ fn the_footings_contact_tractions_add_up_to_its_reaction() {
 /// the points' own strains lock by dilatancy: the flow rule binds each of
 /// a cell's four points, and the load is +18.1% without F-bar and +19.8%
 /// with it. The cell-mean strain binds one per cell: +1.85% and +2.24%
-/// with the edge at 0.3 and 0.6 of its cell (+0.66% at B/16, `mpm study
+/// with the edge at 0.3 and 0.6 of its cell (+0.37% at B/16, `mpm study
 /// bearing`); the bound, 5%, is the target at B/16, at two
 /// placements.
 #[test]
