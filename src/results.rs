@@ -78,7 +78,15 @@ pub struct Summary<'a> {
     pub points: usize,
     pub load_steps: usize,
     pub wall_seconds: f64,
+    /// Newton iterations of the steps' converged pieces.
     pub newton_iterations: usize,
+    /// Pieces the steps were solved in (one for a step solved whole).
+    pub substeps: usize,
+    /// Tries that failed and were cut (a strength reduction's failed
+    /// trials among them).
+    pub cutbacks: usize,
+    /// Newton iterations spent on the tries that failed.
+    pub failed_iterations: usize,
     /// Why a job failed (`{kind, message, step?, iteration?, residual?}`):
     /// its steps are those finished before.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -166,6 +174,9 @@ pub struct StepSummary<'a> {
     pub load_factor: f64,
     pub newton_iterations: usize,
     pub residuals: &'a [f64],
+    pub substeps: usize,
+    pub cutbacks: usize,
+    pub failed_iterations: usize,
     pub wall_seconds: f64,
     pub active_dofs: usize,
     pub timings: &'a StepTimings,
@@ -205,6 +216,9 @@ impl<'a> Summary<'a> {
                 load_factor: s.load_factor,
                 newton_iterations: s.newton.iterations,
                 residuals: &s.newton.residuals,
+                substeps: s.substeps,
+                cutbacks: s.cutbacks,
+                failed_iterations: s.failed_iterations,
                 wall_seconds: s.timings.total,
                 active_dofs: s.active_dofs,
                 timings: &s.timings,
@@ -232,6 +246,9 @@ impl<'a> Summary<'a> {
             load_steps,
             wall_seconds,
             newton_iterations: steps.iter().map(|s| s.newton_iterations).sum(),
+            substeps: steps.iter().map(|s| s.substeps).sum(),
+            cutbacks: steps.iter().map(|s| s.cutbacks).sum(),
+            failed_iterations: steps.iter().map(|s| s.failed_iterations).sum(),
             error: None,
             peaks: Peaks::of(all),
             strength_reduction: all.iter().rev().find_map(|s| s.strength_reduction.as_ref()),

@@ -61,6 +61,18 @@ fn run_writes_summary_step_files_and_a_series() {
         .as_f64()
         .unwrap();
     assert!(tip < -2.0 && tip > -3.5, "{tip}");
+    // Each step's pieces, cut tries and their iterations, and the run's
+    // totals of them.
+    for key in [
+        "substeps",
+        "cutbacks",
+        "failed_iterations",
+        "newton_iterations",
+    ] {
+        let sum: u64 = steps.iter().map(|s| s[key].as_u64().unwrap()).sum();
+        assert_eq!(summary[key].as_u64(), Some(sum), "{key}");
+    }
+    assert!(steps.iter().all(|s| s["substeps"].as_u64() >= Some(1)));
     for k in 1..=5 {
         let step: serde_json::Value = serde_json::from_str(
             &std::fs::read_to_string(out.join(format!("steps/step_{k:04}.json"))).unwrap(),

@@ -70,13 +70,15 @@ def test_cantilever_submit_wait_steps_step_result(client: Client, cantilever_job
         assert imbalance <= 1e-6 * np.linalg.norm(applied)
     assert result.newton_iterations[0] == 0 and (result.newton_iterations[1:] > 0).all()
     assert result.newton_iterations.sum() == job["newton_iterations"]
+    # The paper's cantilever in 5 steps is solved whole: no step was cut.
+    assert result.cutbacks.shape == (6,) and not result.cutbacks.any()
 
 
 def test_to_dataframe(client: Client, cantilever_job: int) -> None:
     result = client.result(cantilever_job)
     table = result.to_dataframe()
     assert list(table.index) == [0, 1, 2, 3, 4, 5]
-    for column in ("load_factor", "tip.u_x", "tip.u_y", "support0.F_x", "support1.F_y", "applied.F_y"):
+    for column in ("load_factor", "cutbacks", "tip.u_x", "tip.u_y", "support0.F_x", "support1.F_y", "applied.F_y"):
         assert column in table.columns
     assert table.loc[5, "tip.u_y"] == result.probes["tip"]["displacement"][-1, 1]
     assert table.loc[3, "support1.F_x"] == result.reactions[3, 1, 0]

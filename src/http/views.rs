@@ -145,6 +145,9 @@ pub struct StepNewton {
     pub iterations: usize,
     pub residuals: Vec<f64>,
     pub active_dofs: usize,
+    pub substeps: usize,
+    pub cutbacks: usize,
+    pub failed_iterations: usize,
 }
 
 impl ResultView {
@@ -183,6 +186,9 @@ impl ResultView {
                     iterations: s.newton.iterations,
                     residuals: s.newton.residuals.clone(),
                     active_dofs: s.active_dofs,
+                    substeps: s.substeps,
+                    cutbacks: s.cutbacks,
+                    failed_iterations: s.failed_iterations,
                 })
                 .collect(),
             timings,

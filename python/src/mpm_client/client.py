@@ -125,7 +125,8 @@ class Result:
     `steps` (k,) step numbers; `load_factor` (k,); `applied_load` (k, 2) N/m,
     the resultant of the loads applied; `reactions` (k, supports, 2) N/m, the
     supports' reactions in the case's order (they balance `applied_load`);
-    `newton_iterations` (k,); `probes` {name: {"step" (k,), "load_factor"
+    `newton_iterations` (k,), and `cutbacks` (k,) the tries each step
+    failed and cut (0 where a server before them gives none); `probes` {name: {"step" (k,), "load_factor"
     (k,), "position" (k, 2) m, "displacement" (k, 2) m}}; `timings` summed
     wall seconds per stage; `job` the job document; `raw` the response.
     """
@@ -136,6 +137,7 @@ class Result:
     applied_load: np.ndarray
     reactions: np.ndarray
     newton_iterations: np.ndarray
+    cutbacks: np.ndarray
     probes: dict[str, dict[str, np.ndarray]]
     timings: dict
     raw: dict = field(repr=False)
@@ -153,7 +155,7 @@ class Result:
             }
             for name, history in document.get("probes", {}).items()
         }
-        newton = {n["step"]: n["iterations"] for n in document.get("newton", [])}
+        newton = {n["step"]: n for n in document.get("newton", [])}
         steps = np.array([r["step"] for r in reactions], dtype=np.int64)
         return cls(
             job=document.get("job", {}),
@@ -163,7 +165,12 @@ class Result:
             reactions=np.array([r["supports"] for r in reactions], dtype=float).reshape(
                 len(reactions), supports, 2
             ),
-            newton_iterations=np.array([newton.get(int(s), 0) for s in steps], dtype=np.int64),
+            newton_iterations=np.array(
+                [newton.get(int(s), {}).get("iterations", 0) for s in steps], dtype=np.int64
+            ),
+            cutbacks=np.array(
+                [newton.get(int(s), {}).get("cutbacks", 0) for s in steps], dtype=np.int64
+            ),
             probes=probes,
             timings=document.get("timings", {}),
             raw=dict(document),
@@ -172,7 +179,7 @@ class Result:
     def to_dataframe(self) -> Any:
         """A pandas DataFrame, one row per step (index `step`).
 
-        Columns: `load_factor`, `newton_iterations`, `applied.F_x`,
+        Columns: `load_factor`, `newton_iterations`, `cutbacks`, `applied.F_x`,
         `applied.F_y` (N/m), per probe `NAME.x`, `NAME.y` (position, m) and
         `NAME.u_x`, `NAME.u_y` (displacement, m), per support `supportI.F_x`,
         `supportI.F_y` (reaction, N/m).
@@ -187,6 +194,7 @@ class Result:
             {
                 "load_factor": self.load_factor,
                 "newton_iterations": self.newton_iterations,
+                "cutbacks": self.cutbacks,
                 "applied.F_x": self.applied_load[:, 0],
                 "applied.F_y": self.applied_load[:, 1],
             },
