@@ -16,7 +16,10 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use mpm_lab::{LabError, basis_study, bearing_study, bench, footing_study, slope_study, study};
+use mpm_lab::{
+    LabError, basis_study, bearing_study, bench, footing_study, robustness_study, slope_study,
+    study,
+};
 
 /// The built-in case `mpm run` solves when given no file.
 pub const DEFAULT_EXAMPLE: &str = "cantilever";
@@ -93,7 +96,8 @@ enum Command {
         /// sizes, and a settlement of 0.5 B) or `bearing` (N_c of a rough
         /// footing on frictional soil, the points' own strains against
         /// their cells' mean) or `slope` (Griffiths and Lane's slope: its
-        /// factor of safety by strength reduction).
+        /// factor of safety by strength reduction) or `robustness` (1,000
+        /// random valid cases, how many finish, by class).
         name: String,
         /// Output directory.
         #[arg(long, default_value = "study")]
@@ -165,8 +169,9 @@ fn main() -> ExitCode {
             "footing" => footing_study::footing(&out, quick).map_err(CliError::from),
             "slope" => slope_study::slope(&out, quick).map_err(CliError::from),
             "bearing" => bearing_study::bearing(&out, quick).map_err(CliError::from),
+            "robustness" => robustness_study::robustness(&out, quick).map_err(CliError::from),
             other => Err(CliError::input(format!(
-                "no study {other:?}; available: cantilever, bases, footing, bearing, slope"
+                "no study {other:?}; available: cantilever, bases, footing, bearing, slope, robustness"
             ))),
         },
         Command::Serve(args) => serve::serve(args),

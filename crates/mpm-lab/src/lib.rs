@@ -4,8 +4,10 @@
 //! ([`basis_study`]), the strip footing on plastic soil
 //! ([`footing_study`]) and its bearing capacity factor on frictional
 //! soil ([`bearing_study`]), a slope's factor of safety by strength reduction
-//! ([`slope_study`]), and cost against problem size written
-//! to BENCHMARKS.md ([`bench`]). They use only the solver crate.
+//! ([`slope_study`]), random valid cases run under the contract every case
+//! must keep ([`random_cases`], [`contract`], [`robustness_study`]), and
+//! cost against problem size written to BENCHMARKS.md ([`bench`]). They
+//! use only the solver crate.
 //!
 //! [`bench::bench`] measures each row in a child process (for its own peak
 //! memory) by running the current executable as `mpm bench-row SCENE
@@ -15,8 +17,11 @@
 pub mod basis_study;
 pub mod bearing_study;
 pub mod bench;
+pub mod contract;
 pub mod footing_study;
 pub mod plot;
+pub mod random_cases;
+pub mod robustness_study;
 pub mod slope_study;
 pub mod study;
 

@@ -1,0 +1,199 @@
+//! `mpm study robustness`: a batch of random valid cases
+//! ([`crate::random_cases`]) run under the contract ([`crate::contract`]),
+//! with how many finished, failed cleanly or broke the contract, by class.
+//! The failed and broken cases are written beside the table, one JSON
+//! file each, to be run again with `mpm run`.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::fs;
+use std::path::Path;
+use std::time::Instant;
+
+use crate::LabError;
+use crate::contract::{Outcome, Tried, try_case};
+use crate::random_cases::{Drawn, draw};
+
+/// The batch's seed: fixed, so that the table can be drawn again.
+pub const SEED: u64 = 2026;
+
+/// One case's draw and run.
+pub struct Entry {
+    pub drawn: Drawn,
+    pub tried: Tried,
+}
+
+/// Draws and runs cases `0..count` of `seed`, printing a line per case.
+pub fn run_batch(seed: u64, count: usize) -> Vec<Entry> {
+    (0..count)
+        .map(|index| {
+            let drawn = draw(seed, index);
+            let tried = try_case(&drawn.case.to_string());
+            eprintln!(
+                "{}: {} in {:.1} s{}",
+                drawn.label(),
+                tried.outcome.name(),
+                tried.seconds,
+                match &tried.outcome {
+                    Outcome::Finished => String::new(),
+                    other => format!(" ({})", detail(other)),
+                }
+            );
+            Entry { drawn, tried }
+        })
+        .collect()
+}
+
+/// What an outcome says beyond its name.
+pub fn detail(outcome: &Outcome) -> String {
+    match outcome {
+        Outcome::Finished => String::new(),
+        Outcome::Failed { message, .. } => message.clone(),
+        Outcome::Refused(m) | Outcome::Panicked(m) | Outcome::Broken(m) => m.clone(),
+        Outcome::TimedOut { seconds } => format!("after {seconds:.0} s"),
+    }
+}
+
+/// Counts of one class.
+#[derive(Default)]
+struct Tally {
+    cases: usize,
+    finished: usize,
+    failed: usize,
+    broken: usize,
+    seconds: Vec<f64>,
+}
+
+impl Tally {
+    fn add(&mut self, tried: &Tried) {
+        self.cases += 1;
+        match tried.outcome {
+            Outcome::Finished => self.finished += 1,
+            Outcome::Failed { .. } => self.failed += 1,
+            _ => self.broken += 1,
+        }
+        self.seconds.push(tried.seconds);
+    }
+
+    fn median_seconds(&self) -> f64 {
+        let mut s = self.seconds.clone();
+        s.sort_by(f64::total_cmp);
+        s.get(s.len() / 2).copied().unwrap_or(0.0)
+    }
+}
+
+/// The classes a case is counted in: (heading, class).
+fn classes(d: &Drawn) -> Vec<(&'static str, String)> {
+    vec![
+        ("scene", d.scene.name().to_string()),
+        ("basis", d.basis.to_string()),
+        ("material", d.model.to_string()),
+        ("load", d.load.to_string()),
+        ("support", d.support.to_string()),
+        ("points a cell", format!("{0} x {0}", d.per_cell)),
+        ("magnitude", d.magnitude.to_string()),
+        (
+            "load steps",
+            match d.load_steps {
+                1..=3 => "1-3",
+                4..=10 => "4-10",
+                _ => "11-50",
+            }
+            .to_string(),
+        ),
+    ]
+}
+
+/// The markdown report of a batch.
+pub fn markdown(seed: u64, entries: &[Entry], seconds: f64) -> String {
+    let mut s = String::new();
+    let mut total = Tally::default();
+    let mut by: BTreeMap<(&'static str, String), Tally> = BTreeMap::new();
+    for e in entries {
+        total.add(&e.tried);
+        for class in classes(&e.drawn) {
+            by.entry(class).or_default().add(&e.tried);
+        }
+    }
+    let _ = writeln!(
+        s,
+        "# Random cases that must finish (`mpm study robustness`)\n\n\
+         Written by `crates/mpm-lab/src/robustness_study.rs`: {} cases of seed {seed} drawn by \
+         `crates/mpm-lab/src/random_cases.rs` (whose doc gives the scenes and ranges), each run \
+         under the contract of `crates/mpm-lab/src/contract.rs`. `finished`: every load step \
+         converged. `failed`: a clean failure, the solver's error naming its step and cause. \
+         `broken`: the contract broken (a panic, a refused case, a non-finite number or an \
+         inverted or exploded point in a finished step, a run past its time limit). \
+         {:.0} s in all.\n",
+        entries.len(),
+        seconds
+    );
+    let pct = |n: usize, of: usize| 100.0 * n as f64 / of.max(1) as f64;
+    let _ = writeln!(
+        s,
+        "| class | cases | finished | failed | broken | finished (%) | median s |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|");
+    let row = |s: &mut String, name: &str, t: &Tally| {
+        let _ = writeln!(
+            s,
+            "| {name} | {} | {} | {} | {} | {:.1} | {:.2} |",
+            t.cases,
+            t.finished,
+            t.failed,
+            t.broken,
+            pct(t.finished, t.cases),
+            t.median_seconds()
+        );
+    };
+    row(&mut s, "**all**", &total);
+    let mut heading = "";
+    for ((h, class), t) in &by {
+        if *h != heading {
+            heading = h;
+            let _ = writeln!(s, "| *{h}* | | | | | | |");
+        }
+        row(&mut s, class, t);
+    }
+    let unfinished: Vec<&Entry> = entries
+        .iter()
+        .filter(|e| e.tried.outcome != Outcome::Finished)
+        .collect();
+    if !unfinished.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## The cases that did not finish\n\nEach is `case_INDEX.json` beside this file.\n"
+        );
+        let _ = writeln!(s, "| case | outcome | what |");
+        let _ = writeln!(s, "|---|---|---|");
+        for e in unfinished {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} |",
+                e.drawn.label(),
+                e.tried.outcome.name(),
+                detail(&e.tried.outcome).replace('|', "/")
+            );
+        }
+    }
+    s
+}
+
+/// Runs the study and writes `robustness.md` (and the cases that did not
+/// finish) to `out`: 1,000 cases, or 100 with `quick`.
+pub fn robustness(out: &Path, quick: bool) -> Result<(), LabError> {
+    fs::create_dir_all(out)?;
+    let count = if quick { 100 } else { 1000 };
+    let started = Instant::now();
+    let entries = run_batch(SEED, count);
+    for e in &entries {
+        if e.tried.outcome != Outcome::Finished {
+            let path = out.join(format!("case_{}.json", e.drawn.index));
+            let text = serde_json::to_string_pretty(&e.drawn.case).expect("JSON");
+            fs::write(path, text)?;
+        }
+    }
+    let report = markdown(SEED, &entries, started.elapsed().as_secs_f64());
+    fs::write(out.join("robustness.md"), report)?;
+    Ok(())
+}
