@@ -19,8 +19,9 @@ use serde::{Deserialize, Serialize};
 use crate::boundary::BoundaryLoop;
 use crate::report::Settled;
 
-/// The encoding's version: a checkpoint of another one is refused.
-pub(crate) const FORMAT: u32 = 4;
+/// The encoding's version: a checkpoint of another one is refused (5:
+/// the points' history holds `b - I` and `b_zz - 1` where 4 held `b`).
+pub(crate) const FORMAT: u32 = 5;
 
 /// The state of a run after `steps_done` load steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -87,15 +87,16 @@ impl DruckerPrager {
     }
 }
 
-/// The trial response to `df` from `state`, with the state to keep if the
+/// The trial response to `dF = I + grad_u` from `state`, with the state to keep if the
 /// step converges; as `von_mises`.
 pub(super) fn drucker_prager(
     m: &DruckerPrager,
     state: &History,
-    df: &Matrix2<f64>,
+    grad_u: &Matrix2<f64>,
     j_start: f64,
     want_tangent: bool,
 ) -> Response {
+    let df = &(Matrix2::identity() + grad_u);
     let Elastic { mu, .. } = m.elastic;
     let bulk = m.elastic.bulk();
     let Predictor {
@@ -104,7 +105,7 @@ pub(super) fn drucker_prager(
         deviator,
         unit,
         norm,
-    } = Predictor::new(state, df, mu);
+    } = Predictor::new(state, grad_u, mu);
     let j_trial = norm / 2f64.sqrt();
     let p_trial = bulk * volumetric;
     let strength = m.xi * m.cohesion;
@@ -211,7 +212,7 @@ mod tests {
     }
 
     fn virgin() -> History {
-        History::elastic(Matrix2::identity())
+        History::elastic(Matrix2::zeros())
     }
 
     /// `(J, p)` of a Cauchy stress (Kirchhoff when `J = 1`).
@@ -238,7 +239,7 @@ mod tests {
             let r = drucker_prager(
                 &m,
                 &virgin(),
-                &Matrix2::new(l, 0.0, 0.0, 1.0 / l),
+                &(Matrix2::new(l, 0.0, 0.0, 1.0 / l) - Matrix2::identity()),
                 1.0,
                 true,
             );
@@ -260,7 +261,7 @@ mod tests {
                 "on the cone"
             );
             let release = Matrix2::new(0.9999, 0.0, 0.0, 1.0 / 0.9999);
-            let u = drucker_prager(&m, &r.history, &release, 1.0, true);
+            let u = drucker_prager(&m, &r.history, &(release - Matrix2::identity()), 1.0, true);
             assert_eq!(u.history.plastic_strain, r.history.plastic_strain);
             let (j_after, p_after) = invariants(&u);
             assert!(
@@ -281,8 +282,8 @@ mod tests {
             hardening: 0.0,
         };
         let df = Matrix2::new(1.003, 0.001, -0.0004, 0.998);
-        let a = drucker_prager(&m, &virgin(), &df, 1.0, true);
-        let b = von_mises(&vm, &virgin(), &df, 1.0, true);
+        let a = drucker_prager(&m, &virgin(), &(df - Matrix2::identity()), 1.0, true);
+        let b = von_mises(&vm, &virgin(), &(df - Matrix2::identity()), 1.0, true);
         assert!(a.history.plastic_strain > 0.0);
         assert!((a.p - b.p).norm() < 1e-9 * m.cohesion);
         assert!((a.tangent - b.tangent).norm() < 1e-9 * b.tangent.norm());
@@ -301,11 +302,11 @@ mod tests {
             let df = Matrix2::new(0.99, 0.0, 0.0, 1.0 / 0.99);
             let zz_plastic = |e_zz: f64| {
                 let state = History {
-                    zz: (2.0 * e_zz).exp(),
+                    zz: (2.0 * e_zz).exp_m1(),
                     ..virgin()
                 };
-                let r = drucker_prager(&m, &state, &df, 1.0, true);
-                (e_zz - 0.5 * r.history.zz.ln(), r)
+                let r = drucker_prager(&m, &state, &(df - Matrix2::identity()), 1.0, true);
+                (e_zz - 0.5 * r.history.zz.ln_1p(), r)
             };
             let (mut lo, mut hi) = (-0.008, 0.005);
             assert!(
@@ -355,7 +356,7 @@ mod tests {
         let r = drucker_prager(
             &m,
             &virgin(),
-            &Matrix2::new(1.01, 0.0, 0.0, 1.01),
+            &(Matrix2::new(1.01, 0.0, 0.0, 1.01) - Matrix2::identity()),
             1.0,
             true,
         );
@@ -393,13 +394,13 @@ mod tests {
             let state = drucker_prager(
                 &m,
                 &virgin(),
-                &Matrix2::new(1.002, 0.0, 0.0, 1.0 / 1.002),
+                &(Matrix2::new(1.002, 0.0, 0.0, 1.0 / 1.002) - Matrix2::identity()),
                 1.0,
                 true,
             )
             .history;
             let state = if name == "elastic" { virgin() } else { state };
-            let plastic = drucker_prager(&m, &state, &df, 1.0, true)
+            let plastic = drucker_prager(&m, &state, &(df - Matrix2::identity()), 1.0, true)
                 .history
                 .plastic_strain
                 > state.plastic_strain;
@@ -409,7 +410,7 @@ mod tests {
                 "{name}: the case is what it says"
             );
             crate::material::assert_tangent_is_the_derivative(
-                |df| drucker_prager(&m, &state, df, 1.0, true),
+                |df| drucker_prager(&m, &state, &(df - Matrix2::identity()), 1.0, true),
                 &df,
                 1e-9,
                 1e-6,

@@ -63,11 +63,13 @@ pub struct Response {
 /// What a point carries from step to step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct History {
-    /// Hencky and the plastic models: the in-plane elastic left Cauchy-Green tensor
-    /// `b`; linear elasticity: the small strain.
+    /// Hencky and the plastic models: the in-plane elastic left Cauchy-Green tensor's
+    /// excess over the identity, `b - I` (kept rather than `b`, whose entries would
+    /// hold a small strain only to the round-off of one: `hencky::trial_excess`);
+    /// linear elasticity: the small strain.
     pub tensor: Matrix2<f64>,
-    /// The plastic models: `b`'s out-of-plane component (one for the others, whose
-    /// out-of-plane stretch stays one).
+    /// The plastic models: `b`'s out-of-plane component less one, `b_zz - 1`
+    /// (zero for the others, whose out-of-plane stretch stays one).
     pub zz: f64,
     /// Accumulated plastic strain `alpha` (zero for the elastic models).
     pub plastic_strain: f64,
@@ -78,7 +80,7 @@ impl History {
     pub fn elastic(tensor: Matrix2<f64>) -> Self {
         Self {
             tensor,
-            zz: 1.0,
+            zz: 0.0,
             plastic_strain: 0.0,
         }
     }
@@ -217,14 +219,19 @@ impl Material {
             }
             Material::Hencky(_) => {
                 let [exx, eyy] = in_plane();
-                History::elastic(Matrix2::new((2.0 * exx).exp(), 0.0, 0.0, (2.0 * eyy).exp()))
+                History::elastic(Matrix2::new(
+                    (2.0 * exx).exp_m1(),
+                    0.0,
+                    0.0,
+                    (2.0 * eyy).exp_m1(),
+                ))
             }
             Material::VonMises(_) | Material::DruckerPrager(_) | Material::MohrCoulomb(_) => {
                 let mean_part = lambda / (3.0 * lambda + 2.0 * mu) * sigma.iter().sum::<f64>();
                 let e = sigma.map(|t| (t - mean_part) / (2.0 * mu));
                 History {
-                    tensor: Matrix2::new((2.0 * e[0]).exp(), 0.0, 0.0, (2.0 * e[1]).exp()),
-                    zz: (2.0 * e[2]).exp(),
+                    tensor: Matrix2::new((2.0 * e[0]).exp_m1(), 0.0, 0.0, (2.0 * e[1]).exp_m1()),
+                    zz: (2.0 * e[2]).exp_m1(),
                     plastic_strain: 0.0,
                 }
             }
@@ -237,8 +244,8 @@ impl Material {
             Material::Hencky(_)
             | Material::VonMises(_)
             | Material::DruckerPrager(_)
-            | Material::MohrCoulomb(_) => History::elastic(Matrix2::identity()),
-            Material::LinearElastic(_) => History::elastic(Matrix2::zeros()),
+            | Material::MohrCoulomb(_)
+            | Material::LinearElastic(_) => History::elastic(Matrix2::zeros()),
         }
     }
 
@@ -270,13 +277,12 @@ impl Material {
         j_start: f64,
         want_tangent: bool,
     ) -> Response {
-        let df = Matrix2::identity() + grad_u;
         match self {
-            Material::Hencky(c) => hencky(c, &history.tensor, &df, j_start, want_tangent),
+            Material::Hencky(c) => hencky(c, &history.tensor, grad_u, j_start, want_tangent),
             Material::LinearElastic(c) => small_strain(c, &history.tensor, grad_u),
-            Material::VonMises(m) => von_mises(m, history, &df, j_start, want_tangent),
-            Material::DruckerPrager(m) => drucker_prager(m, history, &df, j_start, want_tangent),
-            Material::MohrCoulomb(m) => mohr_coulomb(m, history, &df, j_start, want_tangent),
+            Material::VonMises(m) => von_mises(m, history, grad_u, j_start, want_tangent),
+            Material::DruckerPrager(m) => drucker_prager(m, history, grad_u, j_start, want_tangent),
+            Material::MohrCoulomb(m) => mohr_coulomb(m, history, grad_u, j_start, want_tangent),
         }
     }
 }
@@ -395,7 +401,7 @@ mod tests {
         let f_n = Matrix2::new(1.1, 0.2, -0.05, 0.9);
         let history = match m {
             Material::LinearElastic(_) => Matrix2::new(0.01, 0.003, 0.003, -0.02),
-            _ => f_n * f_n.transpose(),
+            _ => f_n * f_n.transpose() - Matrix2::identity(),
         };
         (
             History::elastic(history),
@@ -422,13 +428,10 @@ mod tests {
 
     #[test]
     fn tangent_is_exact_when_eigenvalues_coincide() {
-        // b = I (unstressed) is the degenerate case of the log derivative.
+        // b = I (unstressed, its excess zero) is the degenerate case of the
+        // log derivative.
         let m = materials()[0];
-        let r = m.respond(
-            &History::elastic(Matrix2::identity()),
-            &Matrix2::zeros(),
-            1.0,
-        );
+        let r = m.respond(&History::elastic(Matrix2::zeros()), &Matrix2::zeros(), 1.0);
         // At the reference state the Hencky tangent is the linear elastic one.
         let lin =
             materials()[1].respond(&History::elastic(Matrix2::zeros()), &Matrix2::zeros(), 1.0);
@@ -443,12 +446,42 @@ mod tests {
         let (s, c) = (60f64).to_radians().sin_cos();
         let r = Matrix2::new(c, -s, s, c);
         let resp = m.respond(
-            &History::elastic(Matrix2::identity()),
+            &History::elastic(Matrix2::zeros()),
             &(r - Matrix2::identity()),
             1.0,
         );
         assert!(resp.p.norm() < 1e-9, "{}", resp.p);
         assert!(resp.cauchy.plane.iter().all(|s| s.abs() < 1e-9));
+    }
+
+    /// At a strain of 1e-9 Hencky's stress is the linear one to nine
+    /// digits (their difference is of the order of the strain). Formed
+    /// from `b = dF dF^T`, whose entries hold the strain only to the
+    /// round-off of one, it was off by some 1e-7.
+    #[test]
+    fn a_tiny_strain_keeps_its_precision() {
+        let [hencky, linear] = materials();
+        let grad_u = Matrix2::new(1.0e-9, 0.3e-9, -0.2e-9, -0.7e-9);
+        let after_a_step = hencky.respond(&hencky.initial_history(), &grad_u, 1.0);
+        for history in [hencky.initial_history(), after_a_step.history] {
+            let h = hencky.respond(&history, &grad_u, 1.0).cauchy.plane;
+            let reference = if history == hencky.initial_history() {
+                linear.respond(&linear.initial_history(), &grad_u, 1.0)
+            } else {
+                linear.respond(
+                    &linear
+                        .respond(&linear.initial_history(), &grad_u, 1.0)
+                        .history,
+                    &grad_u,
+                    1.0,
+                )
+            };
+            let l = reference.cauchy.plane;
+            let scale = l.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            for k in 0..3 {
+                assert!((h[k] - l[k]).abs() < 1e-8 * scale, "{h:?} {l:?}");
+            }
+        }
     }
 
     #[test]
@@ -459,7 +492,7 @@ mod tests {
         let m = Material::Hencky(Elastic::from_young_poisson(e, 0.0));
         let l = 0.6;
         let resp = m.respond(
-            &History::elastic(Matrix2::identity()),
+            &History::elastic(Matrix2::zeros()),
             &Matrix2::new(0.0, 0.0, 0.0, l - 1.0),
             1.0,
         );

@@ -121,17 +121,18 @@ fn ordered(s: &Vector3<f64>, tol: f64) -> bool {
     s[0] >= s[1] - tol && s[1] >= s[2] - tol
 }
 
-/// The trial response to `df` from `state`, with the state to keep if the
+/// The trial response to `dF = I + grad_u` from `state`, with the state to keep if the
 /// step converges; as `von_mises`.
 pub(super) fn mohr_coulomb(
     m: &MohrCoulomb,
     state: &History,
-    df: &Matrix2<f64>,
+    grad_u: &Matrix2<f64>,
     j_start: f64,
     want_tangent: bool,
 ) -> Response {
+    let df = &(Matrix2::identity() + grad_u);
     let Elastic { lambda, mu } = m.elastic;
-    let trial = Trial::new(state, df);
+    let trial = Trial::new(state, grad_u);
     let e = Vector3::from(trial.strains);
     let d = m.moduli();
     let tau_trial = d * e;
@@ -226,11 +227,12 @@ mod tests {
     }
 
     /// The trial of principal logarithmic strains `e` (x, y, zz) from the
-    /// virgin state: `b_zz` carries the out-of-plane one.
+    /// virgin state, and the `dF` that makes it: `b_zz` carries the
+    /// out-of-plane one.
     fn trial(e: [f64; 3]) -> (History, Matrix2<f64>) {
         let state = History {
-            tensor: Matrix2::identity(),
-            zz: (2.0 * e[2]).exp(),
+            tensor: Matrix2::zeros(),
+            zz: (2.0 * e[2]).exp_m1(),
             plastic_strain: 0.0,
         };
         (state, Matrix2::new(e[0].exp(), 0.0, 0.0, e[1].exp()))
@@ -252,7 +254,7 @@ mod tests {
             let m = soil(phi, 0.0);
             let a: f64 = 0.002;
             let (state, df) = trial([a, -a, 0.0]);
-            let r = mohr_coulomb(&m, &state, &df, 1.0, true);
+            let r = mohr_coulomb(&m, &state, &(df - Matrix2::identity()), 1.0, true);
             let s = principal(&r, &df);
             let expected = m.cohesion * phi.to_radians().cos();
             let tol = 1e-9 * m.cohesion;
@@ -275,7 +277,13 @@ mod tests {
     #[test]
     fn an_elastic_trial_accumulates_no_plastic_strain() {
         let (state, df) = trial([1e-4, -2e-4, 3e-5]);
-        let r = mohr_coulomb(&soil(30.0, 0.0), &state, &df, 1.0, false);
+        let r = mohr_coulomb(
+            &soil(30.0, 0.0),
+            &state,
+            &(df - Matrix2::identity()),
+            1.0,
+            false,
+        );
         assert_eq!(r.history.plastic_strain, 0.0);
     }
 
@@ -287,11 +295,18 @@ mod tests {
     fn without_dilation_an_expansion_to_the_apex_is_off_the_flow_rule() {
         for (psi, off) in [(0.0, true), (1.0, false), (20.0, false)] {
             let (state, df) = trial([0.01, 0.008, 0.009]);
-            let r = mohr_coulomb(&soil(20.0, psi), &state, &df, 1.0, true);
+            let r = mohr_coulomb(
+                &soil(20.0, psi),
+                &state,
+                &(df - Matrix2::identity()),
+                1.0,
+                true,
+            );
             assert_eq!(r.off_flow_rule, off, "psi {psi}");
         }
         let (state, df) = trial([0.002, -0.003, -0.0005]);
-        assert!(!mohr_coulomb(&soil(20.0, 0.0), &state, &df, 1.0, true).off_flow_rule);
+        let grad_u = df - Matrix2::identity();
+        assert!(!mohr_coulomb(&soil(20.0, 0.0), &state, &grad_u, 1.0, true).off_flow_rule);
     }
 
     /// The six planes of the hexagonal pyramid, unordered.
@@ -329,7 +344,7 @@ mod tests {
             let d = m.moduli();
             for (name, e, active_planes) in cases {
                 let (state, df) = trial(e);
-                let r = mohr_coulomb(&m, &state, &df, 1.0, true);
+                let r = mohr_coulomb(&m, &state, &(df - Matrix2::identity()), 1.0, true);
                 let s = principal(&r, &df);
                 let tol = 1e-7 * m.cohesion;
                 let values = yield_values(&m, &s);
@@ -394,7 +409,7 @@ mod tests {
                 }
                 let (state, df) = trial(e);
                 crate::material::assert_tangent_is_the_derivative(
-                    |df| mohr_coulomb(&m, &state, df, 1.0, true),
+                    |df| mohr_coulomb(&m, &state, &(df - Matrix2::identity()), 1.0, true),
                     &(df + shear),
                     1e-9,
                     1e-6,

@@ -7,7 +7,9 @@
 //! principal directions, three logarithmic strains `e_i = ln(l_i) / 2`. A
 //! model returns them in those strains exactly as in the small-strain
 //! theory ([`Returned`]); the elastic strains it keeps go back into
-//! `b = sum exp(2 e_i) n_i n_i^T`.
+//! `b = sum exp(2 e_i) n_i n_i^T`, kept as `b - I` (with `expm1`, and the
+//! trial's strains found from `b - I` with `ln_1p`) so that small strains
+//! keep their relative precision (`hencky::trial_excess`).
 //!
 //! The returns of von Mises and Drucker-Prager are isotropic tensor
 //! functions of the trial strain made of its trace and its unit deviator
@@ -19,7 +21,7 @@
 
 use nalgebra::Matrix2;
 
-use super::hencky::{SymEigen2, piola_and_tangent};
+use super::hencky::{SymEigen2, piola_and_tangent, trial_excess};
 use super::{CauchyStress, History, Response};
 
 /// The elastic predictor of a step.
@@ -30,13 +32,12 @@ pub(super) struct Trial {
 }
 
 impl Trial {
-    pub fn new(state: &History, df: &Matrix2<f64>) -> Self {
-        let eig = SymEigen2::new(&(df * state.tensor * df.transpose()));
-        let strains = [
-            0.5 * eig.values[0].ln(),
-            0.5 * eig.values[1].ln(),
-            0.5 * state.zz.ln(),
-        ];
+    /// From the history (`b_n - I`, and `b_zz - 1` out of plane) and the
+    /// step's `grad_u`, to the precision of `b - I` ([`trial_excess`]).
+    pub fn new(state: &History, grad_u: &Matrix2<f64>) -> Self {
+        let eig = SymEigen2::of_excess(&trial_excess(&state.tensor, grad_u));
+        let [e0, e1] = eig.log_strains();
+        let strains = [e0, e1, 0.5 * state.zz.ln_1p()];
         Self { eig, strains }
     }
 
@@ -144,8 +145,8 @@ pub(super) fn respond(
     };
     let tau_plane = in_plane(ret.tau);
     let next = History {
-        tensor: in_plane(ret.elastic_strains.map(|e| (2.0 * e).exp())),
-        zz: (2.0 * ret.elastic_strains[2]).exp(),
+        tensor: in_plane(ret.elastic_strains.map(|e| (2.0 * e).exp_m1())),
+        zz: (2.0 * ret.elastic_strains[2]).exp_m1(),
         plastic_strain: state.plastic_strain + ret.plastic_increment,
     };
     // An in-plane strain increment: its zz component is zero (dF_zz = 0).
@@ -185,7 +186,8 @@ pub(super) fn respond(
             }
         }
     };
-    let (p, tangent) = piola_and_tangent(&state.tensor, df, eig, &tau_plane, dtau, want_tangent);
+    let b_n = Matrix2::identity() + state.tensor;
+    let (p, tangent) = piola_and_tangent(&b_n, df, eig, &tau_plane, dtau, want_tangent);
     let j = j_start * df.determinant();
     Response {
         p,
@@ -216,8 +218,8 @@ pub(super) struct Predictor {
 }
 
 impl Predictor {
-    pub fn new(state: &History, df: &Matrix2<f64>, mu: f64) -> Self {
-        let trial = Trial::new(state, df);
+    pub fn new(state: &History, grad_u: &Matrix2<f64>, mu: f64) -> Self {
+        let trial = Trial::new(state, grad_u);
         let (volumetric, deviator) = trial.split();
         let (unit, norm) = unit(deviator.map(|e| 2.0 * mu * e));
         Self {

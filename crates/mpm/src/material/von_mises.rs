@@ -38,16 +38,17 @@ pub struct VonMises {
     pub hardening: f64,
 }
 
-/// The trial response to `df` from `state` (`tensor`: in-plane `b`, `zz`:
-/// `b_zz`, `plastic_strain`: `alpha`), with the state to keep if the step
+/// The trial response to `dF = I + grad_u` from `state` (`tensor`: in-plane
+/// `b - I`, `zz`: `b_zz - 1`, `plastic_strain`: `alpha`), with the state to keep if the step
 /// converges. `j_start` is the volume ratio at the step's start.
 pub(super) fn von_mises(
     m: &VonMises,
     state: &History,
-    df: &Matrix2<f64>,
+    grad_u: &Matrix2<f64>,
     j_start: f64,
     want_tangent: bool,
 ) -> Response {
+    let df = &(Matrix2::identity() + grad_u);
     let Elastic { mu, .. } = m.elastic;
     let kappa = m.elastic.bulk();
     let Predictor {
@@ -56,7 +57,7 @@ pub(super) fn von_mises(
         deviator,
         unit,
         norm,
-    } = Predictor::new(state, df, mu);
+    } = Predictor::new(state, grad_u, mu);
     let q_trial = (1.5f64).sqrt() * norm;
     let yield_now = m.yield_stress + m.hardening * state.plastic_strain;
     let mut moduli = InvariantModuli::elastic(kappa, mu);
@@ -114,7 +115,13 @@ mod tests {
             let mu = m.elastic.mu;
             let l: f64 = 1.01;
             let df = Matrix2::new(l, 0.0, 0.0, 1.0 / l);
-            let r = von_mises(&m, &History::elastic(Matrix2::identity()), &df, 1.0, true);
+            let r = von_mises(
+                &m,
+                &History::elastic(Matrix2::zeros()),
+                &(df - Matrix2::identity()),
+                1.0,
+                true,
+            );
             let next = r.history;
             let q_trial = 2.0 * 3f64.sqrt() * mu * l.ln();
             let alpha = (q_trial - m.yield_stress) / (3.0 * mu + hardening);
@@ -153,17 +160,17 @@ mod tests {
         let total: f64 = 1.01;
         let one = von_mises(
             &m,
-            &History::elastic(Matrix2::identity()),
-            &Matrix2::new(total, 0.0, 0.0, 1.0 / total),
+            &History::elastic(Matrix2::zeros()),
+            &(Matrix2::new(total, 0.0, 0.0, 1.0 / total) - Matrix2::identity()),
             1.0,
             true,
         );
-        let mut state = History::elastic(Matrix2::identity());
+        let mut state = History::elastic(Matrix2::zeros());
         let step = total.powf(0.1);
         let df = Matrix2::new(step, 0.0, 0.0, 1.0 / step);
         let mut last = None;
         for _ in 0..10 {
-            let r = von_mises(&m, &state, &df, 1.0, true);
+            let r = von_mises(&m, &state, &(df - Matrix2::identity()), 1.0, true);
             state = r.history;
             last = Some(r);
         }
@@ -174,7 +181,7 @@ mod tests {
         assert!((state.plastic_strain - one.history.plastic_strain).abs() < 1e-12);
         let back: f64 = 1.0001;
         let release = Matrix2::new(1.0 / back, 0.0, 0.0, back);
-        let u = von_mises(&m, &state, &release, 1.0, true);
+        let u = von_mises(&m, &state, &(release - Matrix2::identity()), 1.0, true);
         assert_eq!(u.history.plastic_strain, state.plastic_strain);
         let drop =
             (r.cauchy.plane[0] - r.cauchy.plane[1]) - (u.cauchy.plane[0] - u.cauchy.plane[1]);
@@ -200,8 +207,8 @@ mod tests {
             // strain of 2e-4 from the virgin state, well inside the surface.
             let yielded = von_mises(
                 &m,
-                &History::elastic(Matrix2::identity()),
-                &Matrix2::new(1.01, 0.0, 0.0, 1.0 / 1.01),
+                &History::elastic(Matrix2::zeros()),
+                &(Matrix2::new(1.01, 0.0, 0.0, 1.0 / 1.01) - Matrix2::identity()),
                 1.0,
                 true,
             )
@@ -210,18 +217,18 @@ mod tests {
                 (yielded, Matrix2::new(1.004, 0.0012, -0.0007, 0.9975))
             } else {
                 (
-                    History::elastic(Matrix2::identity()),
+                    History::elastic(Matrix2::zeros()),
                     Matrix2::new(1.0002, 0.0001, -0.0001, 0.9999),
                 )
             };
-            let r = von_mises(&m, &state, &df, 1.0, true);
+            let r = von_mises(&m, &state, &(df - Matrix2::identity()), 1.0, true);
             assert_eq!(
                 r.history.plastic_strain > state.plastic_strain,
                 plastic,
                 "the case is what it says"
             );
             crate::material::assert_tangent_is_the_derivative(
-                |df| von_mises(&m, &state, df, 1.0, true),
+                |df| von_mises(&m, &state, &(df - Matrix2::identity()), 1.0, true),
                 &df,
                 1e-8,
                 1e-6,

@@ -38,11 +38,13 @@ fn a_point_alone_in_a_new_cell_does_not_stall_newton() {
 #[test]
 fn without_stabilisation_the_same_case_stalls_at_the_crossing() {
     // Shows that the case above exercises the problem: plain Newton with
-    // neither the ghost penalty nor the soft background stalls when the
-    // corner point crosses (step 34 or 35, depending on round-off
-    // in the earlier steps).
+    // neither the ghost penalty nor the soft background fails when the
+    // corner point crosses (step 34 or 35, depending on round-off in the
+    // earlier steps): it stalls, or its garbage correction explodes the
+    // point (J = 11.5 at step 34 since the points keep `b - I`).
     match tip_corner_crossing(0.0, 0.0) {
-        Err(SolveError::NotConverged { step, .. }) if (30..=40).contains(&step) => {}
+        Err(SolveError::NotConverged { step, .. } | SolveError::Inadmissible { step, .. })
+            if (30..=40).contains(&step) => {}
         other => panic!("expected the stall at the crossing, got {other:?}"),
     }
 }
@@ -259,4 +261,49 @@ fn the_elastica_under_a_dead_end_load() {
         "u/L errors {coarse:?} {fine:?}"
     );
     assert!(fine.1 < 5e-3, "v/L errors {coarse:?} {fine:?}");
+}
+
+/// A block strained about 1e-5 by its own weight, in 15 load steps (a
+/// Drucker-Prager soil, E = 1.4 MPa, nu = 0.485, on a rough base held by
+/// the implicit boundary method; GIMP, 3 x 3 points a cell; found by the
+/// random cases, `mpm study robustness`, case 559 of seed 2026). Every step
+/// is elastic, so Newton converges in a few iterations. When the points
+/// kept `b` rather than `b - I` its first step stalled at a relative
+/// residual of 4e-9 against the tolerance 1e-9 (the round-off of one in
+/// `b` times E, against a weight of 1e-5 E) and the run failed.
+#[test]
+fn a_block_strained_1e_5_by_its_weight_converges_in_every_step() {
+    let case = serde_json::json!({
+        "version": 1,
+        "analysis": { "load_steps": 15 },
+        "grid": { "cell_size": 0.365, "origin": [-0.116, -0.162] },
+        "basis": "gimp",
+        "bodies": [{
+            "geometry": { "polygon": { "vertices": [[0.0, 0.0], [2.69, 0.0], [2.69, 2.55],
+                                                    [1.89, 2.55], [1.89, 4.58], [0.0, 4.58]] } },
+            "points": { "per_cell": 3 },
+            "material": { "model": "drucker_prager", "youngs_modulus": 1.4e6, "poisson_ratio": 0.485,
+                          "density": 1552.0, "cohesion": 3817.0, "friction_angle": 10.0,
+                          "dilation_angle": 10.0 }
+        }],
+        "loads": { "gravity": [0.0, -0.002] },
+        "supports": [ { "on": { "y": 0.0 }, "fix": "xy", "method": "ibm" } ]
+    });
+    let case = Case::from_json(&case.to_string()).unwrap();
+    let mut sim = Simulation::new(&case).unwrap();
+    let report = sim.run(&mut NoObserver).expect("the block finishes");
+    for s in &report.steps {
+        assert!(
+            s.newton.iterations <= 3 && s.cutbacks == 0,
+            "step {}: {} iterations, {:?}",
+            s.step,
+            s.newton.iterations,
+            s.newton.residuals
+        );
+    }
+    // The base carries the block's weight.
+    let area = 2.69 * 2.55 + 1.89 * (4.58 - 2.55);
+    let weight = 1552.0 * 0.002 * area;
+    let last = report.steps.last().unwrap();
+    assert!((last.reactions[0][1] - weight).abs() < 1e-6 * weight);
 }
