@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 use std::io::{self, Write};
 
 use mpm::StepReport;
-use mpm::report::{StepTimings, StrengthStep};
+use mpm::report::{RunWarning, StepTimings, StrengthStep};
 use mpm::vtk::write_pvd;
 use serde::Serialize;
 
@@ -97,6 +97,9 @@ pub struct Summary<'a> {
     /// safety once `found`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub strength_reduction: Option<&'a StrengthStep>,
+    /// What the case and its steps warn of (`mpm::model::warnings`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub warnings: Vec<RunWarning>,
     pub steps: Vec<StepSummary<'a>>,
 }
 
@@ -177,6 +180,8 @@ pub struct StepSummary<'a> {
     pub substeps: usize,
     pub cutbacks: usize,
     pub failed_iterations: usize,
+    /// Points whose cell is not the one they started the run in.
+    pub points_in_new_cells: usize,
     pub wall_seconds: f64,
     pub active_dofs: usize,
     pub timings: &'a StepTimings,
@@ -219,6 +224,7 @@ impl<'a> Summary<'a> {
                 substeps: s.substeps,
                 cutbacks: s.cutbacks,
                 failed_iterations: s.failed_iterations,
+                points_in_new_cells: s.points_in_new_cells,
                 wall_seconds: s.timings.total,
                 active_dofs: s.active_dofs,
                 timings: &s.timings,
@@ -252,6 +258,7 @@ impl<'a> Summary<'a> {
             error: None,
             peaks: Peaks::of(all),
             strength_reduction: all.iter().rev().find_map(|s| s.strength_reduction.as_ref()),
+            warnings: Vec::new(),
             steps,
         }
     }

@@ -64,6 +64,14 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
         tip[5]["displacement"],
         cli["report"]["probes"][0]["displacement"]
     );
+    // The bilinear basis bent past its cells: the result warns, as the
+    // CLI's summary does.
+    let cli_summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.0.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(result["warnings"][0]["kind"], "bilinear_crossing");
+    assert_eq!(result["warnings"], cli_summary["warnings"]);
+    assert_eq!(result["newton"][5]["cutbacks"], 0);
 
     let (status, vtu) = app.get(&format!("/jobs/{id}/steps/5?format=vtu"));
     assert_eq!(status, 200);

@@ -73,6 +73,10 @@ fn run_writes_summary_step_files_and_a_series() {
         assert_eq!(summary[key].as_u64(), Some(sum), "{key}");
     }
     assert!(steps.iter().all(|s| s["substeps"].as_u64() >= Some(1)));
+    // The bilinear basis, bent: points leave their cells, and the summary
+    // says what that does to its answers.
+    assert!(steps[4]["points_in_new_cells"].as_u64() > Some(0));
+    assert_eq!(summary["warnings"][0]["kind"], "bilinear_crossing");
     for k in 1..=5 {
         let step: serde_json::Value = serde_json::from_str(
             &std::fs::read_to_string(out.join(format!("steps/step_{k:04}.json"))).unwrap(),

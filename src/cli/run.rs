@@ -279,6 +279,7 @@ fn solve(
     report.steps.splice(0..0, earlier);
     let summary = Summary {
         resumed_from,
+        warnings: mpm::model::warnings(&case, &report.steps),
         ..Summary::new(
             source,
             case.title.as_deref(),

@@ -139,7 +139,11 @@ fn write_archive(
     add(&mut zip, BOUNDARY_SERIES, &pvd)?;
 
     let source = format!("job {}", job.id);
+    let warnings = mpm::Case::from_json(case)
+        .map(|case| mpm::model::warnings(&case, reports))
+        .unwrap_or_default();
     let summary = Summary {
+        warnings,
         error: job
             .error
             .as_deref()

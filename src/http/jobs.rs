@@ -341,7 +341,12 @@ pub async fn result(
 ) -> Result<Json<ResultView>, ApiError> {
     let job = find(&state.store, id).await?;
     let reports = reports(&state.store, id).await?;
-    Ok(Json(ResultView::new(&job, &reports)))
+    let case = state.store.case_json(id).await?;
+    let warnings = (case.as_deref())
+        .and_then(|text| mpm::Case::from_json(text).ok())
+        .map(|case| mpm::model::warnings(&case, &reports))
+        .unwrap_or_default();
+    Ok(Json(ResultView::new(&job, &reports, warnings)))
 }
 
 /// The reports of job `id`'s stored steps, in step order.

@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 
 use mpm::StepReport;
-use mpm::report::{StepTimings, StrengthStep};
+use mpm::report::{RunWarning, StepTimings, StrengthStep};
 use serde::Serialize;
 use serde_json::Value;
 use serde_json::value::RawValue;
@@ -114,6 +114,8 @@ pub struct ResultView {
     /// safety once found).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub strength_reduction: Option<StrengthStep>,
+    /// What the case and its finished steps warn of (`mpm::model::warnings`).
+    pub warnings: Vec<RunWarning>,
 }
 
 #[derive(Debug, Serialize)]
@@ -151,7 +153,7 @@ pub struct StepNewton {
 }
 
 impl ResultView {
-    pub fn new(job: &JobRow, steps: &[StepReport]) -> Self {
+    pub fn new(job: &JobRow, steps: &[StepReport], warnings: Vec<RunWarning>) -> Self {
         let mut probes: BTreeMap<String, Vec<ProbeSample>> = BTreeMap::new();
         let mut timings = StepTimings::default();
         for s in steps {
@@ -196,6 +198,7 @@ impl ResultView {
                 .iter()
                 .rev()
                 .find_map(|s| s.strength_reduction.clone()),
+            warnings,
         }
     }
 }

@@ -187,6 +187,10 @@ test('a finished job shows its body, boundary, slider, fields and plots', async 
   assert.ok(last.red > 500, `the boundary curve drew only ${last.red} red pixels`);
   assert.match(await page.textContent('#step-label'), /step 5 of 5, load factor 1/);
   assert.match(await page.textContent('.summary'), /cell size h = 1\.5 m/);
+  // The paper's bilinear basis, bent past its cells: the page says what
+  // that does to the answer.
+  await page.waitForSelector('.job-warnings:not([hidden])');
+  assert.match(await page.textContent('.job-warnings'), /^bilinear_crossing: \d+ points left the cell they started in/);
 
   // Step 0: the undeformed beam, drawn differently.
   await page.$eval('#step-slider', (s) => { s.value = 0; s.dispatchEvent(new Event('input')); });

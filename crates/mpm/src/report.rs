@@ -108,6 +108,10 @@ pub struct StepReport {
     #[serde(default)]
     pub failed_iterations: usize,
     pub timings: StepTimings,
+    /// Points whose cell is not the one they started the run in (the
+    /// bilinear basis's gradient jumps where they crossed).
+    #[serde(default)]
+    pub points_in_new_cells: usize,
     pub active_nodes: usize,
     /// Unconstrained degrees of freedom in the system.
     pub active_dofs: usize,
@@ -206,6 +210,14 @@ impl StepReport {
 
 fn one() -> usize {
     1
+}
+
+/// What a run's reader should know beside its numbers
+/// (`model::warnings`): `kind` for scripts, `message` for people.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunWarning {
+    pub kind: &'static str,
+    pub message: String,
 }
 
 /// Summary of a whole run.

@@ -233,6 +233,7 @@ impl Simulation {
             cutbacks: 0,
             failed_iterations: 0,
             timings: StepTimings::default(),
+            points_in_new_cells: 0,
             active_nodes: 0,
             active_dofs: 0,
             probes: self.probes.reports(),
@@ -487,6 +488,7 @@ impl Simulation {
                         cutbacks,
                         failed_iterations,
                         timings,
+                        points_in_new_cells: self.points_in_new_cells(),
                         active_nodes: settled.active_nodes,
                         active_dofs: settled.active_dofs,
                         probes: self.probes.reports(),
@@ -661,6 +663,7 @@ impl Simulation {
             cutbacks: 0,
             failed_iterations: 0,
             timings,
+            points_in_new_cells: self.points_in_new_cells(),
             active_nodes: conn.n_nodes(),
             active_dofs,
             probes: self.probes.reports(),
@@ -686,6 +689,14 @@ impl Simulation {
             self.last_increment = Some(increment.clone());
         }
         Ok((report, increment))
+    }
+
+    /// Points whose cell is not the one they started the run in.
+    fn points_in_new_cells(&self) -> usize {
+        let (grid, points) = (&self.grid, &self.points);
+        (0..points.len())
+            .filter(|&p| grid.cell_of(points.position[p]) != grid.cell_of(points.reference[p]))
+            .count()
     }
 
     /// The grid reset: every point's shape functions at its current

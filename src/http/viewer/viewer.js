@@ -199,6 +199,8 @@ async function jobPage(id, stale) {
   const heading = el('h1', {}, `Job #${id} `, statusBadge(job.status));
   const summary = el('p', { class: 'summary' });
   const errorBox = el('div', { class: 'error job-error', hidden: '' });
+  // What the case and its steps warn of (the result's `warnings`).
+  const warningBox = el('div', { class: 'warning job-warnings', hidden: '' });
   const slider = el('input', { type: 'range', min: 0, max: 0, value: 0, step: 1, id: 'step-slider' });
   const stepLabel = el('span', { id: 'step-label' });
   const fieldSelect = el('select', { id: 'field' });
@@ -223,7 +225,7 @@ async function jobPage(id, stale) {
   });
   app.replaceChildren(
     el('p', {}, el('a', { href: '#/' }, '← all jobs')),
-    heading, summary, el('p', {}, download), errorBox,
+    heading, summary, el('p', {}, download), errorBox, warningBox,
     el('div', { class: 'controls' },
       el('label', {}, 'load step ', slider), stepLabel,
       el('label', {}, 'colour by ', fieldSelect)),
@@ -293,6 +295,9 @@ async function jobPage(id, stale) {
 
   const showPlots = (result) => {
     plots.replaceChildren(...resultPlots(result, kase));
+    const warnings = result.warnings || [];
+    warningBox.hidden = warnings.length === 0;
+    warningBox.replaceChildren(...warnings.map((w) => el('p', {}, `${w.kind}: ${w.message}`)));
   };
 
   showJob(job);
