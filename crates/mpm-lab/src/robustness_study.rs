@@ -108,9 +108,18 @@ fn classes(d: &Drawn) -> Vec<(&'static str, String)> {
 pub fn markdown(seed: u64, entries: &[Entry], seconds: f64) -> String {
     let mut s = String::new();
     let mut total = Tally::default();
+    // The classes the targets name: the smooth bases (GIMP and the
+    // B-splines), and those with two or more points a cell.
+    let (mut smooth, mut held) = (Tally::default(), Tally::default());
     let mut by: BTreeMap<(&'static str, String), Tally> = BTreeMap::new();
     for e in entries {
         total.add(&e.tried);
+        if e.drawn.basis != "linear" {
+            smooth.add(&e.tried);
+            if e.drawn.per_cell >= 2 {
+                held.add(&e.tried);
+            }
+        }
         for class in classes(&e.drawn) {
             by.entry(class).or_default().add(&e.tried);
         }
@@ -147,6 +156,12 @@ pub fn markdown(seed: u64, entries: &[Entry], seconds: f64) -> String {
         );
     };
     row(&mut s, "**all**", &total);
+    row(&mut s, "**GIMP and the B-splines**", &smooth);
+    row(
+        &mut s,
+        "**GIMP and the B-splines, 2 or more points a cell**",
+        &held,
+    );
     let mut heading = "";
     for ((h, class), t) in &by {
         if *h != heading {

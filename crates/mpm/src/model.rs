@@ -613,9 +613,10 @@ pub fn warnings(case: &Case, steps: &[StepReport]) -> Vec<RunWarning> {
             message: format!(
                 "{crossed} points left the cell they started in on the bilinear basis (\"linear\"): \
                  its gradient jumps at cell edges, so on large deformation its answers move with \
-                 the load steps (14-35% on the paper's cantilever between 5 and 100 steps) and do \
-                 not converge with the cell (1.3-2.3% off on the elastica at three cells, no \
-                 trend). For large deformation use \"gimp\" or \"bspline2\" (docs/study/bases)."
+                 the load steps (7% to 35% on the paper's cantilever from 5 to 100 steps) and do \
+                 not converge with the cell (a clamped elastica's tip 10-17% off at three cells, \
+                 no trend). For large deformation use \"gimp\" or \"bspline2\" (docs/study/bases, \
+                 docs/study/robustness)."
             ),
         });
     }
