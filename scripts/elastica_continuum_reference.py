@@ -26,10 +26,10 @@ Method
 ------
 Reuses scripts/papers_cantilever_reference.py (imported, not copied): its
 Hencky stress and exact tangent `hencky` (with this problem's lambda, mu set
-in that module), its vectorised Q9 element assembly `Mesh.internal`, its
-Newton driver `solve` and, through it, scripts/cantilever_reference.py's
-Q9 basis, Gauss rule and Richardson extrapolation.  What differs is written
-here:
+in that module), its Q9 grid `Mesh._q9_grid` (nodes, element dofs, Gauss
+data), its vectorised element assembly `Mesh.internal`, its Newton driver
+`solve` and, through them, scripts/cantilever_reference.py's Q9 basis,
+Gauss rule and difference table.  What differs is written here:
 * Mesh: uniform n x n/10 square Q9 (biquadratic, 9-node Lagrange) elements,
   h = 10/n (n a multiple of 10, so (10, 0.5) is a node); 3x3 Gauss.
 * Supports: both components fixed at every node of x = 0.
@@ -133,14 +133,7 @@ import scipy.sparse as sp
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import papers_cantilever_reference as pcr  # noqa: E402
-from cantilever_reference import (  # noqa: E402
-    GAUSS3_PTS,
-    GAUSS3_WTS,
-    lagrange1d,
-    lagrange1d_deriv,
-    print_differences,
-    richardson,
-)
+from cantilever_reference import print_differences  # noqa: E402
 
 # ---------------------------------------------------------------- parameters
 LX, LY = 10.0, 1.0
@@ -169,53 +162,8 @@ class ClampedBeam(pcr.Mesh):
         m = self.m
         self.h = h = LX / n
         assert abs(LY / m - h) < 1e-14
-        nxn, nyn = 2 * n + 1, 2 * m + 1
-        self.nxn, self.nyn = nxn, nyn
-        self.ndof = ndof = 2 * nxn * nyn
-
-        def node(i, j):
-            return j * nxn + i
-        self.node = node
-        ii, jj = np.meshgrid(np.arange(nxn), np.arange(nyn), indexing="xy")
-        X = np.empty(ndof)
-        X[0::2] = ii.ravel() * h / 2.0
-        X[1::2] = jj.ravel() * h / 2.0
-        self.X = X
-
-        ei, ej = np.meshgrid(np.arange(n), np.arange(m), indexing="xy")
-        ei, ej = ei.ravel(), ej.ravel()
-        self.ne = ne = n * m
-        conn = np.empty((ne, 9), dtype=np.int64)
-        for b in range(3):
-            for a in range(3):
-                conn[:, 3 * b + a] = node(2 * ei + a, 2 * ej + b)
-        edofs = np.empty((ne, 18), dtype=np.int64)
-        edofs[:, 0::2] = 2 * conn
-        edofs[:, 1::2] = 2 * conn + 1
-        self.edofs = edofs
-
-        # Gauss-point data of the (identical, square) elements, as in
-        # papers_cantilever_reference.Mesh: dN/dX, B with vec(F - I) = B u_e,
-        # and B weighted by w * detJ.
-        jac = h / 2.0
-        dN = np.zeros((9, 9, 2))
-        wdet = np.zeros(9)
-        for qb, (eta, wy) in enumerate(zip(GAUSS3_PTS, GAUSS3_WTS)):
-            for qa, (xi, wx) in enumerate(zip(GAUSS3_PTS, GAUSS3_WTS)):
-                g = 3 * qb + qa
-                Nx, Ny = lagrange1d(xi), lagrange1d(eta)
-                dNx, dNy = lagrange1d_deriv(xi) / jac, lagrange1d_deriv(eta) / jac
-                for b in range(3):
-                    for a in range(3):
-                        dN[g, 3 * b + a, 0] = dNx[a] * Ny[b]
-                        dN[g, 3 * b + a, 1] = Nx[a] * dNy[b]
-                wdet[g] = wx * wy * jac * jac
-        B = np.zeros((9, 4, 18))
-        for i in range(2):
-            for I in range(2):
-                B[:, 2 * i + I, i::2] = dN[:, :, I]
-        self.dN, self.B = dN, B
-        self.Bw = (B * wdet[:, None, None]).reshape(36, 18)
+        node = self._q9_grid(n, m, h)
+        nxn, nyn, ndof, X, edofs = self.nxn, self.nyn, self.ndof, self.X, self.edofs
 
         # Dead traction on x = LX: consistent loads h (1, 4, 1) / 6 per edge.
         right = np.array([node(nxn - 1, j) for j in range(nyn)])

@@ -244,17 +244,13 @@ class Mesh:
     """Uniform n x n/5 Q9 mesh of [0, LX] x [0, LY] with the supports and the
     follower-pressure operator; assembles the residual and tangent."""
 
-    def __init__(self, n, pressure=PRESSURE, clamped=False):
-        assert n % 10 == 0, "n must be a multiple of 10 so that (0,1), (10,1) are nodes"
-        self.n, self.m = n, n // 5
-        m = self.m
-        self.h = h = LX / n
-        assert abs(LY / m - h) < 1e-14
-        self.pressure = pressure
+    def _q9_grid(self, n, m, h):
+        """The uniform n x m grid of square Q9 elements of side h from the
+        origin: node numbering, reference coordinates, element dofs and the
+        Gauss-point data (shared by every element)."""
         nxn, nyn = 2 * n + 1, 2 * m + 1
         self.nxn, self.nyn = nxn, nyn
-        nnodes = nxn * nyn
-        self.ndof = ndof = 2 * nnodes
+        self.ndof = ndof = 2 * nxn * nyn
 
         def node(i, j):
             return j * nxn + i
@@ -300,6 +296,17 @@ class Mesh:
         self.dN = dN
         self.B = B
         self.Bw = (B * wdet[:, None, None]).reshape(36, 18)  # stacked (g, p) rows
+        return node
+
+    def __init__(self, n, pressure=PRESSURE, clamped=False):
+        assert n % 10 == 0, "n must be a multiple of 10 so that (0,1), (10,1) are nodes"
+        self.n, self.m = n, n // 5
+        m = self.m
+        self.h = h = LX / n
+        assert abs(LY / m - h) < 1e-14
+        self.pressure = pressure
+        node = self._q9_grid(n, m, h)
+        nxn, nyn, ndof, edofs = self.nxn, self.nyn, self.ndof, self.edofs
 
         # Follower pressure.  On a top edge with current nodes x_a (a = 0,1,2),
         # x(s) = sum N_a(s) x_a, s in [-1, 1]; n da = (-x'_y, x'_x) ds (outward,
