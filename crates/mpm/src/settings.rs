@@ -31,7 +31,8 @@ pub struct NewtonSettings {
     /// How far a free full step of the line search may raise the
     /// out-of-balance force, against the larger of the step's lowest and
     /// its starting force scale (10; the model sets ten times the stiffest
-    /// material's P-wave to shear modulus ratio); see `newton::Search`.
+    /// material's P-wave to shear modulus ratio, and at least 1e3 for a
+    /// slender body's first step); see `newton::Search`.
     pub free_step_growth: f64,
 }
 
