@@ -116,23 +116,15 @@ pub fn units_hint(case: &mpm::Case, e: &SolveError) -> Option<String> {
 
 impl From<SolveError> for Failure {
     fn from(e: SolveError) -> Self {
-        let kind = match e.cause() {
-            // An arc that misses the path is Newton's failure on it.
-            SolveError::NotConverged { .. } | SolveError::ArcMissed { .. } => {
-                FailureKind::NotConverged
-            }
-            SolveError::Diverged { .. } => FailureKind::Diverged,
-            SolveError::Inadmissible {
-                reason: mpm::newton::Inadmissible::Inverted,
-                ..
-            } => FailureKind::InvertedPoint,
-            SolveError::Inadmissible { .. } => FailureKind::InadmissiblePoint,
-            SolveError::LinearSolve { .. } => FailureKind::LinearSolve,
-            SolveError::LeftGrid { .. } => FailureKind::LeftGrid,
-            SolveError::NonFinite { .. } => FailureKind::NonFinite,
-            SolveError::Cancelled { .. } => FailureKind::Cancelled,
-            // cause() never returns it.
-            SolveError::SubstepsExhausted { .. } => FailureKind::NotConverged,
+        let kind = match e.kind() {
+            mpm::newton::FailureKind::NotConverged => FailureKind::NotConverged,
+            mpm::newton::FailureKind::Diverged => FailureKind::Diverged,
+            mpm::newton::FailureKind::InvertedPoint => FailureKind::InvertedPoint,
+            mpm::newton::FailureKind::InadmissiblePoint => FailureKind::InadmissiblePoint,
+            mpm::newton::FailureKind::LinearSolve => FailureKind::LinearSolve,
+            mpm::newton::FailureKind::LeftGrid => FailureKind::LeftGrid,
+            mpm::newton::FailureKind::NonFinite => FailureKind::NonFinite,
+            mpm::newton::FailureKind::Cancelled => FailureKind::Cancelled,
         };
         let load_factor = match e {
             SolveError::SubstepsExhausted { load_factor, .. } => Some(load_factor),

@@ -8,13 +8,14 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::{Duration, Instant};
 
 use mpm::particles::admissible::MAX_STEP_VOLUME_RATIO;
-use mpm::{Case, Observer, Simulation, SolveError, StepReport, StepState};
+use mpm::{Case, Observer, Simulation, StepReport, StepState};
 
 /// How a run ended.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Outcome {
     Finished,
-    /// A clean failure: the solver's error (its `cause`'s kind) and where.
+    /// A clean failure: the solver's error (its kind, as the job service
+    /// names it) and where.
     Failed {
         kind: &'static str,
         step: usize,
@@ -69,21 +70,6 @@ pub struct Tried {
 /// profile on this project's 2-core machines, the limit being 60-400 s.
 pub fn time_limit(points: usize, steps: usize) -> Duration {
     Duration::from_secs_f64(60.0 + 5e-3 * (points * steps.max(1)) as f64)
-}
-
-/// The kind of a solver error, by its cause.
-pub fn kind(e: &SolveError) -> &'static str {
-    match e.cause() {
-        SolveError::NotConverged { .. } => "not_converged",
-        SolveError::Diverged { .. } => "diverged",
-        SolveError::Inadmissible { .. } => "inadmissible_point",
-        SolveError::LinearSolve { .. } => "linear_solve",
-        SolveError::LeftGrid { .. } => "left_grid",
-        SolveError::NonFinite { .. } => "non_finite",
-        SolveError::SubstepsExhausted { .. } => "substeps_exhausted",
-        SolveError::ArcMissed { .. } => "arc_missed",
-        SolveError::Cancelled { .. } => "cancelled",
-    }
 }
 
 /// Watches the finished steps and the clock.
@@ -209,7 +195,7 @@ pub fn try_case(case: &str) -> Tried {
             seconds: tried.seconds,
         },
         Err(e) => Outcome::Failed {
-            kind: kind(&e),
+            kind: e.kind().name(),
             step: e.location().0,
             message: e.to_string(),
         },

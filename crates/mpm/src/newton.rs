@@ -121,7 +121,62 @@ pub enum SolveError {
     },
 }
 
+/// What kind of failure a [`SolveError`] is, by its cause: the kinds the
+/// job service serves as `error.kind` and the studies count.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FailureKind {
+    /// Newton did not converge (an arc that misses the path is Newton's
+    /// failure on it).
+    NotConverged,
+    Diverged,
+    /// A point's `J` stayed at or below zero however far the step was cut.
+    InvertedPoint,
+    /// A point's trial state was otherwise not admissible.
+    InadmissiblePoint,
+    LinearSolve,
+    LeftGrid,
+    NonFinite,
+    Cancelled,
+}
+
+impl FailureKind {
+    /// Its name in `openapi.yaml`'s `error.kind`.
+    pub fn name(self) -> &'static str {
+        match self {
+            FailureKind::NotConverged => "not_converged",
+            FailureKind::Diverged => "diverged",
+            FailureKind::InvertedPoint => "inverted_point",
+            FailureKind::InadmissiblePoint => "inadmissible_point",
+            FailureKind::LinearSolve => "linear_solve",
+            FailureKind::LeftGrid => "left_grid",
+            FailureKind::NonFinite => "non_finite",
+            FailureKind::Cancelled => "cancelled",
+        }
+    }
+}
+
 impl SolveError {
+    /// The kind of failure, by [`SolveError::cause`].
+    pub fn kind(&self) -> FailureKind {
+        match self.cause() {
+            SolveError::NotConverged { .. } | SolveError::ArcMissed { .. } => {
+                FailureKind::NotConverged
+            }
+            SolveError::Diverged { .. } => FailureKind::Diverged,
+            SolveError::Inadmissible {
+                reason: Inadmissible::Inverted,
+                ..
+            } => FailureKind::InvertedPoint,
+            SolveError::Inadmissible { .. } => FailureKind::InadmissiblePoint,
+            SolveError::LinearSolve { .. } => FailureKind::LinearSolve,
+            SolveError::LeftGrid { .. } => FailureKind::LeftGrid,
+            SolveError::NonFinite { .. } => FailureKind::NonFinite,
+            SolveError::Cancelled { .. } => FailureKind::Cancelled,
+            // cause() never returns it.
+            SolveError::SubstepsExhausted { .. } => FailureKind::NotConverged,
+        }
+    }
+
     /// The linear solve of `iteration` of load step `step` failed with the
     /// message it is given (for `map_err`); `residual` is the one it was
     /// to correct.
