@@ -20,8 +20,9 @@ use crate::boundary::BoundaryLoop;
 use crate::report::Settled;
 
 /// The encoding's version: a checkpoint of another one is refused (5:
-/// the points' history holds `b - I` and `b_zz - 1` where 4 held `b`).
-pub(crate) const FORMAT: u32 = 5;
+/// the points' history holds `b - I` and `b_zz - 1` where 4 held `b`; 6:
+/// the points' stress slopes).
+pub(crate) const FORMAT: u32 = 6;
 
 /// The state of a run after `steps_done` load steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -36,6 +37,9 @@ pub struct Checkpoint {
     pub(crate) yielding: Vec<bool>,
     /// `[xx, yy, xy, zz]`.
     pub(crate) stress: Vec<[f64; 4]>,
+    /// The stress slopes of the points that have them (those seeded one a
+    /// cell or fewer), by point.
+    pub(crate) stress_slopes: Vec<(u32, [f64; 6])>,
     pub(crate) probes: Vec<[f64; 2]>,
     pub(crate) anchors_moved: Vec<[f64; 2]>,
     pub(crate) loops: Vec<LoopState>,

@@ -370,6 +370,7 @@ impl Simulation {
                 predictor: newton.predictor,
                 ghost_penalty: stabilisation.ghost_penalty,
                 hourglass: stabilisation.hourglass,
+                lone_points: stabilisation.lone_points,
                 free_step_growth,
                 ..Default::default()
             },

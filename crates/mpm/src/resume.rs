@@ -56,6 +56,10 @@ impl Simulation {
                 .iter()
                 .map(|s| [s.plane[0], s.plane[1], s.plane[2], s.zz])
                 .collect(),
+            stress_slopes: (p.stress_slopes.iter().enumerate())
+                .filter(|(_, s)| s.iter().any(|&x| x != 0.0))
+                .map(|(k, &s)| (k as u32, s))
+                .collect(),
             probes: self.probes.position.clone(),
             anchors_moved: self.anchors.iter().map(|a| a.moved()).collect(),
             loops: self.loops.iter().map(LoopState::of).collect(),
@@ -96,7 +100,8 @@ impl Simulation {
             c.yielding.len(),
             c.stress.len(),
         ];
-        if lengths.iter().any(|&l| l != n) {
+        if lengths.iter().any(|&l| l != n) || c.stress_slopes.iter().any(|&(p, _)| p as usize >= n)
+        {
             return Err(CheckpointError::OtherCase("the material point counts"));
         }
         if c.steps_done > self.load_steps {
@@ -132,6 +137,10 @@ impl Simulation {
             h.plastic_strain = s.plastic_strain;
         }
         p.yielding.clone_from(&c.yielding);
+        p.stress_slopes.fill([0.0; 6]);
+        for &(k, s) in &c.stress_slopes {
+            p.stress_slopes[k as usize] = s;
+        }
         p.stress = c
             .stress
             .iter()
@@ -391,6 +400,10 @@ mod tests {
                 resumed.points.position, straight.points.position,
                 "after {stop_after}"
             );
+            assert_eq!(
+                resumed.points.stress_slopes, straight.points.stress_slopes,
+                "after {stop_after}"
+            );
         }
     }
 
@@ -417,6 +430,31 @@ mod tests {
         let last = whole.steps.last().unwrap().load_factor;
         assert!(last > 0.3 && last < 0.5, "{last}");
         resumes_to_the_bit(&case, &whole, &straight, &[1, 4]);
+    }
+
+    /// A beam seeded one point a cell, bent by a tip load in four steps,
+    /// resumes with its points' stress slopes (what the stabilisation of
+    /// one-point cells holds of the bending): stopped after its second
+    /// step, it ends where the straight run ends, to the bit.
+    #[test]
+    fn a_one_point_a_cell_beam_resumes_with_its_stress_slopes() {
+        let mut v = crate::fixtures::block([4.0, 1.0], [8, 2], 0.5, [0.0, 0.0]);
+        v["analysis"] = serde_json::json!({ "load_steps": 4 });
+        v["basis"] = "gimp".into();
+        v["loads"] =
+            serde_json::json!({ "boundary": [{ "on": { "x": 4.0 }, "traction": [0.0, -2e3] }] });
+        v["supports"] = serde_json::json!([{ "on": { "x": 0.0 }, "fix": "xy" }]);
+        let case = Case::from_json(&v.to_string()).unwrap();
+        let mut straight = Simulation::new(&case).unwrap();
+        let whole = straight.run(&mut crate::NoObserver).unwrap();
+        let bent = straight
+            .points
+            .stress_slopes
+            .iter()
+            .flatten()
+            .filter(|s| s.abs() > 1.0);
+        assert!(bent.count() > 8, "the slopes hold the bending");
+        resumes_to_the_bit(&case, &whole, &straight, &[2]);
     }
 
     /// A strength-reduction run (the same block flowing at `2 sigma_y /

@@ -28,6 +28,9 @@ pub struct NewtonSettings {
     /// The cell-mean strain's hourglass stiffness, relative to twice the
     /// material's shear modulus (1e-2); see [`crate::assembly::cell_mean`].
     pub hourglass: f64,
+    /// Stiffen the bending of points alone in their cells with their
+    /// material's moduli (true); see [`crate::assembly::lone_points`].
+    pub lone_points: bool,
     /// How far a free full step of the line search may raise the
     /// out-of-balance force, against the larger of the step's lowest and
     /// its starting force scale (10; the model sets ten times the stiffest
@@ -47,6 +50,7 @@ impl Default for NewtonSettings {
             predictor: true,
             ghost_penalty: 1e-3,
             hourglass: 1e-2,
+            lone_points: true,
             free_step_growth: 10.0,
         }
     }

@@ -18,9 +18,11 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use nalgebra::Matrix2;
+
 use crate::assembly;
 use crate::assembly::cell_mean::CellMean;
-use crate::assembly::{FbarCells, GhostFaces, SoftCells, StepTerm};
+use crate::assembly::{FbarCells, GhostFaces, LonePoints, SoftCells, StepTerm, lone_points};
 use crate::boundary::BoundaryLoop;
 use crate::boundary::ibm::{self, Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
@@ -620,6 +622,21 @@ impl Simulation {
         self.analysed = Some(converged.analysed);
         let states = converged.states;
         let moves = self.stages[self.stage].geostatic.is_none();
+        // The stress slopes of the points alone in their cells, before the
+        // points move: the others' are zero.
+        let mut slopes = Vec::new();
+        for carried in &converged.carried {
+            if let Some(lone) = carried.downcast_ref::<LonePoints>() {
+                slopes = lone.settled(&u, |p| {
+                    let grad_u = increment(conn.point_links(p), &u).1;
+                    lone_points::polar_rotation(&(Matrix2::identity() + grad_u))
+                });
+            }
+        }
+        self.points.stress_slopes.fill([0.0; 6]);
+        for (p, s) in slopes {
+            self.points.stress_slopes[p] = s;
+        }
         if moves {
             update::commit(&mut self.points, &conn, &u, &states);
         } else {
@@ -742,6 +759,12 @@ impl Simulation {
         }
         if let Some(ghost) = self.ghost_faces(&start) {
             terms.push(Box::new(ghost));
+        }
+        if self.settings.lone_points {
+            let lone = LonePoints::new(&start);
+            if !lone.is_empty() {
+                terms.push(Box::new(lone));
+            }
         }
         // The band always: it moves the anchors, those without a band
         // point this step with their material points.

@@ -437,6 +437,13 @@ pub struct StabilisationSpec {
     /// Larger is easier for Newton and stronger in collapse.
     #[serde(default = "default_hourglass")]
     pub hourglass: f64,
+    /// Give a point alone in its cell the bending stiffness its domain has
+    /// (Belytschko & Bindeman's physical hourglass stabilisation, with the
+    /// material's own moduli; default true). One point cannot hold a
+    /// cell's hourglass modes: without it a body seeded one point a cell
+    /// bends far too easily. Cells of two or more points are untouched.
+    #[serde(default = "default_lone_points")]
+    pub lone_points: bool,
 }
 
 impl Default for StabilisationSpec {
@@ -445,6 +452,7 @@ impl Default for StabilisationSpec {
             ghost_penalty: default_ghost_penalty(),
             tangent_regularisation: default_tangent_regularisation(),
             hourglass: default_hourglass(),
+            lone_points: default_lone_points(),
         }
     }
 }
@@ -464,6 +472,7 @@ impl Analysis {
                 .tangent_regularisation
                 .unwrap_or(self.stabilisation.tangent_regularisation),
             hourglass: self.stabilisation.hourglass,
+            lone_points: self.stabilisation.lone_points,
         }
     }
 }
@@ -482,6 +491,9 @@ fn default_ghost_penalty() -> f64 {
 }
 fn default_hourglass() -> f64 {
     NewtonSettings::default().hourglass
+}
+fn default_lone_points() -> bool {
+    NewtonSettings::default().lone_points
 }
 fn default_line_search() -> bool {
     NewtonSettings::default().line_search
@@ -1027,6 +1039,7 @@ mod tests {
             ghost_penalty: 0.02,
             tangent_regularisation: 1e-6,
             hourglass: 1e-2,
+            lone_points: true,
         };
         assert_eq!(settings(old.clone()), expected);
         assert_eq!(settings(new.clone()), expected);
@@ -1036,6 +1049,7 @@ mod tests {
                 ghost_penalty: 1e-3,
                 tangent_regularisation: 0.0,
                 hourglass: 1e-2,
+                lone_points: true,
             }
         );
         let mut both = new.clone();

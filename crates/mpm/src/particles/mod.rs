@@ -34,6 +34,11 @@ pub struct MaterialPoints {
     /// Whether the point flowed plastically in the last step.
     pub yielding: Vec<bool>,
     pub stress: Vec<CauchyStress>,
+    /// The stress's slopes across the point's domain, `dsigma_ij/dx_k`
+    /// in the order `[xx,x; xx,y; yy,x; yy,y; xy,x; xy,y]`: what a point
+    /// alone in its cell holds of its bending (`assembly::lone_points`);
+    /// zero for the others.
+    pub stress_slopes: Vec<[f64; 6]>,
     /// One material per body of the case.
     pub materials: Vec<Material>,
 }
@@ -65,6 +70,7 @@ impl MaterialPoints {
             + size_of_val(self.history.as_slice())
             + size_of_val(self.yielding.as_slice())
             + size_of_val(self.stress.as_slice())
+            + size_of_val(self.stress_slopes.as_slice())
     }
 
     /// Adds a body's points, seeded in its reference state, with their
@@ -84,6 +90,7 @@ impl MaterialPoints {
             self.history.push(material.initial_history());
             self.yielding.push(false);
             self.stress.push(CauchyStress::default());
+            self.stress_slopes.push([0.0; 6]);
         }
     }
 

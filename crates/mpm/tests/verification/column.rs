@@ -49,12 +49,12 @@ pub fn top_displacement_under_weight(modulus: f64, rho_g: f64, length: f64) -> f
     (f(0.0) + f(length) + inner) * h / 3.0
 }
 
-fn exact_top_displacement() -> f64 {
+pub fn exact_top_displacement() -> f64 {
     top_displacement_under_weight(E, RHO_G, L)
 }
 
 /// The column with `cells` cells over the height and 2x2 points per cell.
-fn column(cells: usize) -> serde_json::Value {
+pub fn column(cells: usize) -> serde_json::Value {
     let h = L / cells as f64;
     let mut case = example("column");
     case["grid"]["cell_size"] = h.into();
@@ -68,7 +68,7 @@ fn column(cells: usize) -> serde_json::Value {
 /// The same column with its base (fixed) and sides (rollers) held by the
 /// implicit boundary method on the boundary curve instead of grid nodes,
 /// and no grid extent: the grid goes on below and beside the column.
-fn ibm_column(cells: usize) -> serde_json::Value {
+pub fn ibm_column(cells: usize) -> serde_json::Value {
     let h = L / cells as f64;
     let mut case = column(cells);
     case["grid"] = serde_json::json!({ "cell_size": h });

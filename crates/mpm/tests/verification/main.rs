@@ -16,6 +16,7 @@ mod ibm;
 mod lame;
 mod locking;
 mod newton_convergence;
+mod one_point_cells;
 mod plasticity;
 mod pressure;
 mod stages;

@@ -250,11 +250,15 @@ fn a_confined_sample_without_dilation_flows_at_its_strength_with_every_point_adm
             );
             assert!(sim.points.yielding.iter().all(|&y| y), "{model}");
             assert!(report.steps.iter().all(|s| s.cutbacks == 0), "{model}");
-            // From the last increment (the predictor) every step after
-            // the first converges in two corrections (measured: two in
-            // every one); from no displacement, at a quadratic rate.
-            for s in &report.steps[1..] {
-                assert!(s.newton.iterations <= 3, "{model}: {s:?}");
+            // From the last increment (the predictor) every step once
+            // the sample flows, from the third, converges in two
+            // corrections (measured: two in every one); the second, where
+            // it starts to flow, in two to four (four with the grid's
+            // lines on the sample's edges); from no displacement, at a
+            // quadratic rate.
+            for (k, s) in report.steps.iter().enumerate().skip(1) {
+                let most = if k == 1 { 4 } else { 2 };
+                assert!(s.newton.iterations <= most, "{model}: {s:?}");
             }
             let mut from_zero = confined_sample(model, origin, "gimp");
             from_zero["analysis"]["newton"] = json!({ "predictor": false });

@@ -41,7 +41,7 @@ pub(super) fn bspline_1d(degree: usize, h: f64, x: f64, lp: f64, w: &mut Weights
         } else {
             f(d)
         };
-        if n > 0.0 || dn != 0.0 {
+        if super::reaches(n, dn) {
             w.push((i, n.max(0.0), dn / h));
         }
     }

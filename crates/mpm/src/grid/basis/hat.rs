@@ -20,6 +20,11 @@ pub(super) fn linear_1d(h: f64, x: f64, w: &mut Weights1d) {
 
 /// GIMP's 1D weights at `x`, for a domain of half-width `lp`.
 pub(super) fn gimp_1d(h: f64, x: f64, lp: f64, w: &mut Weights1d) {
+    if lp <= 1e-12 * h {
+        // No domain (a cell crushed flat): the hats at the point, where
+        // the average's 0 / 0 is not a number.
+        return linear_1d(h, x, w);
+    }
     let lp = lp.min(h); // a wider domain would need more than four nodes
     let first = ((x - lp - h) / h).ceil() as i64;
     let last = ((x + lp + h) / h).floor() as i64;
@@ -27,7 +32,7 @@ pub(super) fn gimp_1d(h: f64, x: f64, lp: f64, w: &mut Weights1d) {
         let d = x - h * i as f64;
         let s = (hat_integral(d + lp, h) - hat_integral(d - lp, h)) / (2.0 * lp);
         let ds = (hat(d + lp, h) - hat(d - lp, h)) / (2.0 * lp);
-        if s > 0.0 || ds != 0.0 {
+        if super::reaches(s, ds * h) {
             w.push((i, s.max(0.0), ds));
         }
     }

@@ -1,0 +1,484 @@
+//! Physical hourglass stabilisation of points alone in their cell: the
+//! bending a single point cannot feel, restored with the material's own
+//! stiffness (docs/one_point_cells.md has the derivation, the literature
+//! and the prototype).
+//!
+//! A point carries one stress, so it restrains only the mean strain over
+//! its domain. With one point a cell the rest of the grid field is free:
+//! the bilinear cell's hourglass modes `u ∝ (x - x_c)(y - y_c)`, GIMP's
+//! zigzags where domains straddle grid lines, the B-splines'
+//! checkerboards. A beam one point a cell deep then has almost no bending
+//! stiffness, and Newton wanders in the near-null modes.
+//!
+//! The term is Belytschko & Bindeman's assumed-strain stabilisation
+//! (1991, CMAME 88, "ASQBI"; Belytschko, Liu & Moran, *Nonlinear Finite
+//! Elements*, ch. 8) written for a point's domain instead of an element.
+//! It measures six slopes of the step's increment across the domain, with
+//! the basis's 1D moments ([`crate::grid::Basis::moments_1d`]: averages
+//! `a`, `b` of value and gradient, slopes `c`, `d`):
+//!
+//! | row | slope | coefficients | on | weight | modulus |
+//! |---|---|---|---|---|---|
+//! | 1 | of `du_x/dx` in y (bending) | `b_i c_j` | `u_x` | `l_y^2/3` | `E'` |
+//! | 2 | of `du_y/dy` in x (bending) | `c_i b_j` | `u_y` | `l_x^2/3` | `E'` |
+//! | 3 | of `du_x/dx` in x | `d_i a_j` | `u_x` | `l_x^2/3` | `E'` |
+//! | 4 | of `du_y/dy` in y | `a_i d_j` | `u_y` | `l_y^2/3` | `E'` |
+//! | 5 | of `du_y/dx` in x | `d_i a_j` | `u_y` | `l_x^2/3` | `mu` |
+//! | 6 | of `du_x/dy` in y | `a_i d_j` | `u_x` | `l_y^2/3` | `mu` |
+//!
+//! with `l` the domain's half-widths, `E' = 4 mu (lambda + mu) / (lambda +
+//! 2 mu) = 2 mu / (1 - nu)`, and each row's stored slope `s` of the stress
+//! (`dsigma_xx/dy` for row 1, and so on: [`crate::particles::MaterialPoints::stress_slopes`]).
+//! The slope of `du_x/dy` in x and of `du_y/dx` in y are left out: they are
+//! the bilinear element's parasitic shear, which ASQBI removes, so a
+//! rectangle bends exactly and does not lock near incompressibility.
+//!
+//! Point `p`'s potential in a step is `V_p sum_k w_k (s_k k_k + D_k
+//! k_k^2 / 2)`: force `V w (s + D k) g` on the row's nodes, tangent `V w D
+//! g g^T`, symmetric and exact. Every row is zero on an affine increment
+//! (a rigid rotation included), so the patch tests hold. Once the step
+//! converges, each slope takes its increment `D k` and the six turn with
+//! the step's rotation as the components of `dsigma_ij/dx_k`.
+//!
+//! It acts on the points seeded one a cell or fewer (a reference volume of
+//! at least [`LONE_VOLUME`] of a cell's), for the whole run. Two or more
+//! points a cell restrain the modes themselves, and their results are
+//! untouched. Counting the points in each cell at every step instead lost
+//! the bending held by points that met another point in a cell (a clamped
+//! elastica at one point a cell, GIMP at h = 0.25: 8.4% off in `u_x`
+//! against 4.1%), and changed cases of two points a cell whose edge cells
+//! hold one. A point that flowed plastically in the
+//! last step lends [`YIELDED_SHARE`] of its moduli, as it does the ghost
+//! penalty. A domain that is not an upright rectangle is measured on the
+//! upright rectangle of its area and of its bounding box's proportions.
+
+use nalgebra::Matrix2;
+use rayon::prelude::*;
+
+use super::ghost_faces::YIELDED_SHARE;
+use super::{Pattern, Side, StepTerm};
+use crate::configuration::Configuration;
+use crate::grid::basis::quadrilateral_domain;
+use crate::grid::{Basis, LatticeIndex, Support, node_indices};
+use crate::parallel;
+
+/// A point is stabilised when its reference volume is at least this
+/// share of a cell's: a body seeded with fewer than two points a cell.
+pub const LONE_VOLUME: f64 = 0.5;
+
+/// The six rows: the moment taken in x and in y (0 `a`, 1 `b`, 2 `c`, 3
+/// `d`), the component, the direction of the weight, whether the modulus
+/// is the shear modulus, and the stress slope stored.
+const ROWS: [Row; 6] = [
+    Row::new(1, 2, 0, 1, false, 1),
+    Row::new(2, 1, 1, 0, false, 2),
+    Row::new(3, 0, 0, 0, false, 0),
+    Row::new(0, 3, 1, 1, false, 3),
+    Row::new(3, 0, 1, 0, true, 4),
+    Row::new(0, 3, 0, 1, true, 5),
+];
+
+#[derive(Clone, Copy)]
+struct Row {
+    moments: [usize; 2],
+    component: usize,
+    across: usize,
+    shear: bool,
+    slope: usize,
+}
+
+impl Row {
+    const fn new(
+        mx: usize,
+        my: usize,
+        component: usize,
+        across: usize,
+        shear: bool,
+        slope: usize,
+    ) -> Self {
+        Self {
+            moments: [mx, my],
+            component,
+            across,
+            shear,
+            slope,
+        }
+    }
+}
+
+/// One stabilised point of a step.
+struct LonePoint {
+    point: u32,
+    /// Its entries' range in `LonePoints::nodes` and `coefficients`.
+    start: usize,
+    end: usize,
+    /// Per row, `V w`.
+    scale: [f64; 6],
+    /// Per row, `D`.
+    modulus: [f64; 6],
+    /// Per row, the stored slope `s` at the step's start.
+    slope: [f64; 6],
+}
+
+/// The step's points seeded one a cell or fewer, and their rows.
+pub struct LonePoints {
+    points: Vec<LonePoint>,
+    /// Active node of each entry.
+    nodes: Vec<u32>,
+    /// Per entry, its coefficient in each of the six rows.
+    coefficients: Vec<[f64; 6]>,
+}
+
+impl LonePoints {
+    /// The points of `start` seeded one a cell or fewer, with their rows.
+    pub fn new(start: &Configuration) -> Self {
+        let Configuration {
+            grid,
+            basis,
+            conn,
+            points,
+        } = *start;
+        let alone: Vec<u32> = (0..points.len() as u32)
+            .filter(|&p| points.volume0[p as usize] >= LONE_VOLUME * grid.h * grid.h)
+            .collect();
+        let node_coordinates: Vec<(i64, i64)> =
+            conn.nodes.iter().map(|&k| node_indices(k)).collect();
+        let index = LatticeIndex::new(&node_coordinates);
+        let built: Vec<(LonePoint, Vec<u32>, Vec<[f64; 6]>)> = alone
+            .par_iter()
+            .with_min_len(parallel::BOOKKEEPING)
+            .map(|&p| {
+                let p = p as usize;
+                let x = points.position[p];
+                let l = half_widths(basis, grid.h, points.support(p), points.volume(p));
+                let m = [0, 1].map(|d| basis.moments_1d(grid.h, x[d] - grid.origin[d], l[d]));
+                let linked: Vec<u32> = conn.point_links(p).iter().map(|k| k.node).collect();
+                let (mut nodes, mut coefficients) = (Vec::new(), Vec::new());
+                for &(j, my) in &m[1] {
+                    for &(i, mx) in &m[0] {
+                        let Some(a) = index.get(i, j).map(|a| a as u32) else {
+                            continue;
+                        };
+                        if !linked.contains(&a) {
+                            continue;
+                        }
+                        nodes.push(a);
+                        coefficients.push(ROWS.map(|r| mx[r.moments[0]] * my[r.moments[1]]));
+                    }
+                }
+                let elastic = points.materials[points.material[p] as usize].elastic();
+                let share = if points.yielding[p] {
+                    YIELDED_SHARE
+                } else {
+                    1.0
+                };
+                let (lambda, mu) = (elastic.lambda, elastic.mu);
+                let bending = share * 4.0 * mu * (lambda + mu) / (lambda + 2.0 * mu);
+                let volume = points.volume(p);
+                let lone = LonePoint {
+                    point: p as u32,
+                    start: 0,
+                    end: 0,
+                    scale: ROWS.map(|r| volume * l[r.across] * l[r.across] / 3.0),
+                    modulus: ROWS.map(|r| if r.shear { share * mu } else { bending }),
+                    slope: ROWS.map(|r| points.stress_slopes[p][r.slope]),
+                };
+                (lone, nodes, coefficients)
+            })
+            .collect();
+        let mut out = Self {
+            points: Vec::with_capacity(built.len()),
+            nodes: Vec::new(),
+            coefficients: Vec::new(),
+        };
+        for (mut lone, nodes, coefficients) in built {
+            lone.start = out.nodes.len();
+            out.nodes.extend(nodes);
+            out.coefficients.extend(coefficients);
+            lone.end = out.nodes.len();
+            out.points.push(lone);
+        }
+        out
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Per row of `lone`, its slope `k` of the increment `u`.
+    fn slopes_of(&self, lone: &LonePoint, u: &[f64]) -> [f64; 6] {
+        let mut k = [0.0; 6];
+        for e in lone.start..lone.end {
+            let node = self.nodes[e] as usize;
+            for (r, row) in ROWS.iter().enumerate() {
+                k[r] += self.coefficients[e][r] * u[2 * node + row.component];
+            }
+        }
+        k
+    }
+
+    /// Each stabilised point's stress slopes once the step converged at
+    /// increment `u`, turned with the step's rotation `rotation(p)` (the
+    /// order of [`crate::particles::MaterialPoints::stress_slopes`]).
+    pub fn settled(
+        &self,
+        u: &[f64],
+        rotation: impl Fn(usize) -> Matrix2<f64>,
+    ) -> Vec<(usize, [f64; 6])> {
+        self.points
+            .iter()
+            .map(|lone| {
+                let k = self.slopes_of(lone, u);
+                let mut slopes = [0.0; 6];
+                for (r, row) in ROWS.iter().enumerate() {
+                    slopes[row.slope] = lone.slope[r] + lone.modulus[r] * k[r];
+                }
+                let p = lone.point as usize;
+                (p, rotated(slopes, &rotation(p)))
+            })
+            .collect()
+    }
+}
+
+impl StepTerm for LonePoints {
+    fn side(&self) -> Side {
+        Side::Stabilisation
+    }
+
+    /// Adds `V w (s + D k) g` per row.
+    fn add_force(&self, u: &[f64], f: &mut [f64]) {
+        for lone in &self.points {
+            let k = self.slopes_of(lone, u);
+            let t: [f64; 6] =
+                std::array::from_fn(|r| lone.scale[r] * (lone.slope[r] + lone.modulus[r] * k[r]));
+            for e in lone.start..lone.end {
+                let node = self.nodes[e] as usize;
+                for (r, row) in ROWS.iter().enumerate() {
+                    f[2 * node + row.component] += t[r] * self.coefficients[e][r];
+                }
+            }
+        }
+    }
+
+    /// Adds `V w D g g^T` per row: one block per pair of the point's nodes.
+    fn add_stiffness(&self, _u: &[f64], pattern: &Pattern, values: &mut [f64]) {
+        for lone in &self.points {
+            let weight: [f64; 6] = std::array::from_fn(|r| lone.scale[r] * lone.modulus[r]);
+            for a in lone.start..lone.end {
+                for b in lone.start..lone.end {
+                    let mut k = [0.0; 2];
+                    for (r, row) in ROWS.iter().enumerate() {
+                        k[row.component] +=
+                            weight[r] * self.coefficients[a][r] * self.coefficients[b][r];
+                    }
+                    let (base, stride) = pattern.block(self.nodes[a], self.nodes[b]);
+                    for (c, kc) in k.into_iter().enumerate() {
+                        values[base + c + c * stride] += kc;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Itself: the stepper takes the stress slopes from it
+    /// ([`LonePoints::settled`]).
+    fn into_carried(self: Box<Self>) -> Option<Box<dyn std::any::Any>> {
+        Some(self)
+    }
+}
+
+/// The half-widths a point's bending is measured over: its upright
+/// domain's; for a turned or mapped domain, the upright rectangle of its
+/// area and its bounding box's proportions; for the bilinear basis, which
+/// has no domain, the square of the point's volume.
+fn half_widths(basis: Basis, h: f64, support: Support, volume: f64) -> [f64; 2] {
+    let l = match (basis, support) {
+        (Basis::Linear, _) => return [0.5 * volume.sqrt(); 2],
+        (_, Support::Rectangle(l)) => l,
+        (_, Support::Quadrilateral(corners)) => {
+            let (lo, hi) = quadrilateral_domain::bounds(&corners);
+            let half = [0.5 * (hi[0] - lo[0]), 0.5 * (hi[1] - lo[1])];
+            let area = quadrilateral_domain::area(&corners).abs();
+            let k = (area / (4.0 * half[0] * half[1])).sqrt();
+            if k.is_finite() {
+                half.map(|x| k * x)
+            } else {
+                [0.0; 2]
+            }
+        }
+    };
+    l.map(|x| x.min(basis.widest_domain(h)))
+}
+
+/// The stress slopes `T_ijk = dsigma_ij/dx_k` turned by `r`: `T'_ijk =
+/// R_ia R_jb R_kc T_abc`, in the order of [`crate::particles::MaterialPoints::stress_slopes`]:
+/// `[T_xxx, T_xxy, T_yyx, T_yyy, T_xyx, T_xyy]`.
+pub fn rotated(s: [f64; 6], r: &Matrix2<f64>) -> [f64; 6] {
+    let mut t = [[[0.0; 2]; 2]; 2];
+    t[0][0] = [s[0], s[1]];
+    t[1][1] = [s[2], s[3]];
+    t[0][1] = [s[4], s[5]];
+    t[1][0] = [s[4], s[5]];
+    let turned = |i: usize, j: usize, k: usize| {
+        let mut sum = 0.0;
+        for (a, ta) in t.iter().enumerate() {
+            for (b, tab) in ta.iter().enumerate() {
+                for (c, tabc) in tab.iter().enumerate() {
+                    sum += r[(i, a)] * r[(j, b)] * r[(k, c)] * tabc;
+                }
+            }
+        }
+        sum
+    };
+    [
+        turned(0, 0, 0),
+        turned(0, 0, 1),
+        turned(1, 1, 0),
+        turned(1, 1, 1),
+        turned(0, 1, 0),
+        turned(0, 1, 1),
+    ]
+}
+
+/// The rotation of the polar decomposition of a 2x2 `F` with `det F > 0`.
+pub fn polar_rotation(f: &Matrix2<f64>) -> Matrix2<f64> {
+    let angle = (f[(1, 0)] - f[(0, 1)]).atan2(f[(0, 0)] + f[(1, 1)]);
+    let (s, c) = angle.sin_cos();
+    Matrix2::new(c, -s, s, c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::assembly::Pattern;
+    use crate::fixtures;
+
+    const BASES: [&str; 4] = ["linear", "gimp", "bspline2", "bspline3"];
+
+    /// A 2 m x 1 m block of `count` points on cells of 0.5 m with a node
+    /// at `origin`: its term, its pattern and its active nodes' positions.
+    fn block(
+        basis: &str,
+        count: [u32; 2],
+        origin: [f64; 2],
+    ) -> (LonePoints, Pattern, Vec<[f64; 2]>) {
+        let mut case = fixtures::block([2.0, 1.0], count, 0.5, origin);
+        case["basis"] = basis.into();
+        let sim = fixtures::simulation(&case);
+        let conn = sim.reset_grid();
+        let lone = LonePoints::new(&sim.configuration(&conn));
+        let nodes = conn
+            .nodes
+            .iter()
+            .map(|&k| sim.grid.node_position(k))
+            .collect();
+        (lone, Pattern::build(&conn, &[]), nodes)
+    }
+
+    /// One point a cell is stabilised, every point; two a cell, none.
+    #[test]
+    fn one_point_a_cell_is_stabilised_and_two_are_not() {
+        for basis in BASES {
+            assert_eq!(
+                block(basis, [4, 2], [0.0, 0.0]).0.points.len(),
+                8,
+                "{basis}"
+            );
+            assert!(block(basis, [8, 4], [0.0, 0.0]).0.is_empty(), "{basis}");
+        }
+    }
+
+    /// Every row measures zero on an affine increment, a finite rigid
+    /// rotation `(R - I) x` included (every basis reproduces linear fields
+    /// with the nodes' own values), on aligned and offset grids; pure
+    /// bending `u_x = kappa x y` (bilinear, reproduced likewise) is row
+    /// 1's `kappa` and nothing else.
+    #[test]
+    fn affine_increments_have_no_slopes_and_bending_is_row_one() {
+        let (s, c) = 0.9f64.sin_cos();
+        for basis in BASES {
+            for origin in [[0.0, 0.0], [0.13, -0.21]] {
+                let (lone, _, nodes) = block(basis, [4, 2], origin);
+                let field = |f: &dyn Fn([f64; 2]) -> [f64; 2]| -> Vec<f64> {
+                    nodes.iter().flat_map(|&x| f(x)).collect()
+                };
+                let affine = field(&|[x, y]| [0.3 + 0.2 * x - 0.7 * y, -0.1 + 0.5 * x + 0.4 * y]);
+                let rotation = field(&|[x, y]| [(c - 1.0) * x - s * y, s * x + (c - 1.0) * y]);
+                let kappa = 0.37;
+                let bending = field(&|[x, y]| [kappa * x * y, 0.0]);
+                for p in &lone.points {
+                    for u in [&affine, &rotation] {
+                        let k = lone.slopes_of(p, u);
+                        assert!(
+                            k.iter().all(|k| k.abs() < 1e-12),
+                            "{basis} {origin:?} {k:?}"
+                        );
+                    }
+                    let k = lone.slopes_of(p, &bending);
+                    assert!((k[0] - kappa).abs() < 1e-12, "{basis} {origin:?} {k:?}");
+                    assert!(
+                        k[1..].iter().all(|k| k.abs() < 1e-12),
+                        "{basis} {origin:?} {k:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The tangent is the force's derivative: the force is `K u` plus the
+    /// stored slopes' part, so `f(u) - f(0)` must be the assembled `K`
+    /// times `u`, for a random `u` on every basis.
+    #[test]
+    fn the_tangent_is_the_derivative_of_the_force() {
+        for basis in BASES {
+            let (mut lone, pattern, nodes) = block(basis, [4, 2], [0.13, -0.21]);
+            for (i, p) in lone.points.iter_mut().enumerate() {
+                p.slope = std::array::from_fn(|r| 1e3 * (i + r) as f64);
+            }
+            let n = 2 * nodes.len();
+            let u: Vec<f64> = (0..n)
+                .map(|i| ((i * 7919) % 101) as f64 / 101.0 - 0.5)
+                .collect();
+            let (mut f0, mut f) = (vec![0.0; n], vec![0.0; n]);
+            lone.add_force(&vec![0.0; n], &mut f0);
+            lone.add_force(&u, &mut f);
+            let mut values = vec![0.0; pattern.row_idx.len()];
+            lone.add_stiffness(&u, &pattern, &mut values);
+            let mut ku = vec![0.0; n];
+            for col in 0..n {
+                for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
+                    ku[pattern.row_idx[k] as usize] += values[k] * u[col];
+                }
+            }
+            let scale = f.iter().map(|x| x.abs()).fold(0.0, f64::max);
+            for i in 0..n {
+                assert!(
+                    (f[i] - f0[i] - ku[i]).abs() <= 1e-12 * scale,
+                    "{basis} dof {i}"
+                );
+            }
+        }
+    }
+
+    /// The slopes `dsigma_ij/dx_k` turn as a third-order tensor: a
+    /// quarter turn takes `dsigma_xx/dy` to `-dsigma_yy/dx` (the field
+    /// `sigma_xx = y` turned is `sigma'_yy = -x'`), and turning back
+    /// restores them.
+    #[test]
+    fn the_slopes_turn_as_a_third_order_tensor() {
+        let quarter = Matrix2::new(0.0, -1.0, 1.0, 0.0);
+        let turned = rotated([0.0, 1.0, 0.0, 0.0, 0.0, 0.0], &quarter);
+        assert!((turned[2] + 1.0).abs() < 1e-15);
+        assert!(
+            turned
+                .iter()
+                .enumerate()
+                .all(|(k, t)| k == 2 || t.abs() < 1e-15)
+        );
+        let s = [1.0, -2.0, 3.0, 0.5, -0.25, 4.0];
+        let r = polar_rotation(&Matrix2::new(1.1, -0.4, 0.7, 0.9));
+        let back = rotated(rotated(s, &r), &r.transpose());
+        assert!(s.iter().zip(back).all(|(a, b)| (a - b).abs() < 1e-13));
+        assert!((r.transpose() * r - Matrix2::identity()).norm() < 1e-15);
+    }
+}
