@@ -32,11 +32,10 @@ fn a_fixed_batch_of_random_cases_keeps_the_contract_and_finishes() {
         broken.join("\n")
     );
     // The classes held to finishing: the smooth bases (GIMP and the
-    // B-splines) with two or more points a cell. One point a cell and the
-    // bilinear basis are held to the contract only (docs/study/robustness
-    // says why).
+    // B-splines), at any number of points a cell. The bilinear basis is
+    // held to the contract only (docs/study/robustness says why).
     let held: Vec<_> = (entries.iter())
-        .filter(|e| e.drawn.basis != "linear" && e.drawn.per_cell >= 2)
+        .filter(|e| e.drawn.basis != "linear")
         .collect();
     let unfinished: Vec<String> = (held.iter())
         .filter(|e| e.tried.outcome != Outcome::Finished)
@@ -51,7 +50,7 @@ fn a_fixed_batch_of_random_cases_keeps_the_contract_and_finishes() {
             .filter(|e| e.tried.outcome == Outcome::Finished)
             .count()
     );
-    assert!(held.len() >= CASES / 3, "{} held cases", held.len());
+    assert!(held.len() >= CASES / 2, "{} held cases", held.len());
     // At least 99%: with this batch's size, every one.
     assert!(
         100 * finished >= 99 * held.len(),

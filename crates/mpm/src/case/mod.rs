@@ -437,11 +437,12 @@ pub struct StabilisationSpec {
     /// Larger is easier for Newton and stronger in collapse.
     #[serde(default = "default_hourglass")]
     pub hourglass: f64,
-    /// Give a point alone in its cell the bending stiffness its domain has
-    /// (Belytschko & Bindeman's physical hourglass stabilisation, with the
-    /// material's own moduli; default true). One point cannot hold a
-    /// cell's hourglass modes: without it a body seeded one point a cell
-    /// bends far too easily. Cells of two or more points are untouched.
+    /// Give each point of a body seeded one point a cell or fewer the
+    /// bending stiffness its domain has (Belytschko & Bindeman's physical
+    /// hourglass stabilisation, with the material's own moduli; default
+    /// true). One point cannot hold a cell's hourglass modes: without it
+    /// such a body bends far too easily. Bodies of two or more points a
+    /// cell are untouched.
     #[serde(default = "default_lone_points")]
     pub lone_points: bool,
 }

@@ -54,12 +54,13 @@ fn a_column_one_point_a_cell_settles_as_the_exact_solution() {
 /// 20 steps, clamped by the implicit boundary method) one point a cell,
 /// against the continuum's tip (10, 0.5) at u_x / L = -0.554028, u_y / L
 /// = -0.825415 (`scripts/elastica_continuum_reference.py`, Q9 elements
-/// extrapolated, to 4e-6). Measured errors in u_x (u_y within 0.6%):
+/// extrapolated, to 4e-6). Measured errors `u_x / u_x,ref - 1` (positive:
+/// the tip moves further; u_y within 0.6%):
 /// - bspline2 at h = 0.5, 0.25, 0.125: -1.49%, -0.22%, +0.13%;
 /// - GIMP: +4.4%, +4.1%, +3.7%. Its upright domains, which follow the
 ///   points' stretch but not their rotation, leave a drift with the step
 ///   count that two points a cell show too, smaller (two a cell at h =
-///   0.25: -1.2% in 20 steps, +2.1% in 80; one a cell +4.1% and +5.1%);
+///   0.25: +1.2% in 20 steps, +2.1% in 80; one a cell +4.1% and +5.1%);
 /// - without the stabilisation both failed at 0.8-0.9 of the load.
 ///
 /// Tolerances: bspline2 0.5% at h = 0.25 (twice the measured); GIMP 6%.
