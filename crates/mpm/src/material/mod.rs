@@ -167,6 +167,11 @@ impl Material {
         }
     }
 
+    /// Whether the model is elastic (no yield surface).
+    pub fn is_elastic(&self) -> bool {
+        matches!(self, Material::Hencky(_) | Material::LinearElastic(_))
+    }
+
     /// Whether the tangent `dP/d(dF)` has major symmetry (then so has the
     /// stiffness it makes): for the elastic models and associated flow,
     /// not for a dilation angle other than the friction angle.

@@ -21,13 +21,15 @@ fn plastic_moment() -> f64 {
     K * DEPTH * DEPTH / 2.0
 }
 
-/// A beam from x = 0 to `length`, with `supports`, pushed in `steps`.
+/// A beam from x = 0 to `length`, with `supports`, pushed in `steps`,
+/// seeded `per_cell` points a cell each way.
 fn beam(
     length: f64,
     offset: f64,
     fbar: bool,
     steps: u32,
     supports: serde_json::Value,
+    per_cell: u32,
 ) -> serde_json::Value {
     let h = DEPTH / CELLS_OVER_DEPTH;
     json!({
@@ -37,7 +39,7 @@ fn beam(
         "basis": "gimp",
         "bodies": [{
             "geometry": { "rectangle": { "min": [0.0, 0.0], "max": [length, DEPTH] } },
-            "points": { "per_cell": 2 },
+            "points": { "per_cell": per_cell },
             "material": { "model": "von_mises", "youngs_modulus": 1.0e8, "poisson_ratio": 0.3,
                           "density": 0.0, "yield_stress": 3f64.sqrt() * K }
         }],
@@ -53,14 +55,14 @@ fn beam(
 /// sections away from the held end carry the exact fully plastic state
 /// (no clamp constrains them). Returns each step's moment over `M_p`, from
 /// the end's contact tractions.
-fn pure_bending(offset: f64, fbar: bool) -> Vec<f64> {
+pub fn pure_bending(offset: f64, fbar: bool, per_cell: u32) -> Vec<f64> {
     let half = 2.0 * DEPTH;
     let supports = json!([
         { "on": { "x": 0.0 }, "fix": "x", "method": "ibm" },
         { "on": { "x": half }, "fix": "xy", "method": "ibm",
           "rotation": { "angle": -1.0, "center": [half, DEPTH / 2.0] } }
     ]);
-    let (_, report) = run(&beam(half, offset, fbar, 20, supports));
+    let (_, report) = run(&beam(half, offset, fbar, 20, supports, per_cell));
     report
         .steps
         .iter()
@@ -86,7 +88,7 @@ fn pure_bending(offset: f64, fbar: bool) -> Vec<f64> {
 #[test]
 fn a_beam_in_pure_bending_carries_the_plastic_moment_and_no_more() {
     for offset in [0.3, 0.65] {
-        let moments = pure_bending(offset, true);
+        let moments = pure_bending(offset, true, 2);
         eprintln!("pure bending, offset {offset}: M / M_p {moments:.4?}");
         let last = *moments.last().expect("steps");
         assert!((last - 1.0).abs() < 0.01, "offset {offset}: {last}");
@@ -107,7 +109,7 @@ fn cantilever(length: f64) -> f64 {
         { "on": { "x": 0.0 }, "fix": "xy", "method": "ibm" },
         { "on": { "x": length }, "fix": "y", "method": "ibm", "displacement": [0.0, -push] }
     ]);
-    let (_, report) = run(&beam(length, 0.3, true, 20, supports));
+    let (_, report) = run(&beam(length, 0.3, true, 20, supports, 2));
     let last = report.steps.last().expect("steps");
     last.reactions[1][1].abs() / (plastic_moment() / length)
 }
