@@ -66,6 +66,7 @@
 use nalgebra::Matrix2;
 use rayon::prelude::*;
 
+use super::pattern::SharedValues;
 use super::{Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
 use crate::grid::basis::quadrilateral_domain;
@@ -133,6 +134,8 @@ struct LonePoint {
 /// The step's points seeded one a cell or fewer, and their rows.
 pub struct LonePoints {
     points: Vec<LonePoint>,
+    /// Per material point, its place in `points` (`u32::MAX`: none).
+    place: Vec<u32>,
     /// Active node of each entry.
     nodes: Vec<u32>,
     /// Per entry, its coefficient in each of the six rows.
@@ -192,8 +195,13 @@ impl LonePoints {
                 (lone, nodes, coefficients)
             })
             .collect();
+        let mut place = vec![u32::MAX; points.len()];
+        for (k, &p) in alone.iter().enumerate() {
+            place[p as usize] = k as u32;
+        }
         let mut out = Self {
             points: Vec::with_capacity(built.len()),
+            place,
             nodes: Vec::new(),
             coefficients: Vec::new(),
         };
@@ -246,6 +254,32 @@ impl LonePoints {
     }
 }
 
+impl LonePoints {
+    /// `lone`'s stiffness, passed to `add` as (place in the pattern's
+    /// values, value).
+    fn add_point_stiffness(
+        &self,
+        lone: &LonePoint,
+        pattern: &Pattern,
+        mut add: impl FnMut(usize, f64),
+    ) {
+        let weight: [f64; 6] = std::array::from_fn(|r| lone.scale[r] * lone.modulus[r]);
+        for a in lone.start..lone.end {
+            for b in lone.start..lone.end {
+                let mut k = [0.0; 2];
+                for (r, row) in ROWS.iter().enumerate() {
+                    k[row.component] +=
+                        weight[r] * self.coefficients[a][r] * self.coefficients[b][r];
+                }
+                let (base, stride) = pattern.block(self.nodes[a], self.nodes[b]);
+                for (c, kc) in k.into_iter().enumerate() {
+                    add(base + c + c * stride, kc);
+                }
+            }
+        }
+    }
+}
+
 impl StepTerm for LonePoints {
     fn side(&self) -> Side {
         Side::Stabilisation
@@ -266,23 +300,28 @@ impl StepTerm for LonePoints {
         }
     }
 
-    /// Adds `V w D g g^T` per row: one block per pair of the point's nodes.
+    /// Adds `V w D g g^T` per row: one block per pair of the point's nodes,
+    /// the pattern's tiles of one colour in parallel, as the points' own
+    /// stiffness is summed (`super::stiffness`).
     fn add_stiffness(&self, _u: &[f64], pattern: &Pattern, values: &mut [f64]) {
-        for lone in &self.points {
-            let weight: [f64; 6] = std::array::from_fn(|r| lone.scale[r] * lone.modulus[r]);
-            for a in lone.start..lone.end {
-                for b in lone.start..lone.end {
-                    let mut k = [0.0; 2];
-                    for (r, row) in ROWS.iter().enumerate() {
-                        k[row.component] +=
-                            weight[r] * self.coefficients[a][r] * self.coefficients[b][r];
-                    }
-                    let (base, stride) = pattern.block(self.nodes[a], self.nodes[b]);
-                    for (c, kc) in k.into_iter().enumerate() {
-                        values[base + c + c * stride] += kc;
-                    }
+        let tiles = &pattern.tiles;
+        let shared = SharedValues(values.as_mut_ptr());
+        for colour in 0..4 {
+            tiles.of_colour(colour).into_par_iter().for_each(|t| {
+                let shared = &shared;
+                for &p in tiles.points(t) {
+                    let Some(lone) = self.points.get(self.place[p as usize] as usize) else {
+                        continue;
+                    };
+                    self.add_point_stiffness(lone, pattern, |at, v| {
+                        // SAFETY: the place is inside `values` (the
+                        // pattern's own), in a block of two of this point's
+                        // nodes, which no other tile of this colour links
+                        // (`PointTiles`); colours run one after another.
+                        unsafe { *shared.0.add(at) += v }
+                    });
                 }
-            }
+            });
         }
     }
 
