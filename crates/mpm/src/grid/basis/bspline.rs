@@ -41,7 +41,7 @@ pub(super) fn bspline_1d(degree: usize, h: f64, x: f64, lp: f64, w: &mut Weights
         } else {
             f(d)
         };
-        if super::reaches(n, dn) {
+        if super::reaches(n, dn, xi, (2.0 * l).max(1.0)) {
             w.push((i, n.max(0.0), dn / h));
         }
     }

@@ -32,7 +32,7 @@ pub(super) fn gimp_1d(h: f64, x: f64, lp: f64, w: &mut Weights1d) {
         let d = x - h * i as f64;
         let s = (hat_integral(d + lp, h) - hat_integral(d - lp, h)) / (2.0 * lp);
         let ds = (hat(d + lp, h) - hat(d - lp, h)) / (2.0 * lp);
-        if super::reaches(s, ds * h) {
+        if super::reaches(s, ds * h, x / h, 2.0 * lp / h) {
             w.push((i, s.max(0.0), ds));
         }
     }

@@ -245,14 +245,19 @@ impl Basis {
 }
 
 /// Whether a node's averaged function, of value `n` and gradient `dn_h`
-/// (times the cell size), reaches the point: more than round-off. A
-/// domain that ends on a grid line reaches the nodes beyond it by a
-/// rounding of its edge, with a gradient of 1e-16: a node with no
-/// stiffness that no support holds and no ghost face ties, which left the
-/// step's tangent singular (a beam clamped by grid nodes at x = 0, its
-/// points' domains ending there, failed at load factor 0 at any load).
-fn reaches(n: f64, dn_h: f64) -> bool {
-    n > ROUND_OFF || dn_h.abs() > ROUND_OFF
+/// (times the cell size), reaches a point at `x_h` cells from the origin
+/// whose domain is `width_h` cells wide: more than round-off. A domain
+/// that ends on a grid line reaches the nodes beyond it by a rounding of
+/// its edge, about `eps x_h` cells, which makes the hat's averaged
+/// gradient `eps x_h / width_h`: a node with no stiffness that no support
+/// holds and no ghost face ties, which left the step's tangent singular (a
+/// beam clamped by grid nodes at x = 0, its points' domains ending there,
+/// failed at load factor 0 at any load). The B-splines' functions start
+/// at their knots as a square or a cube, so the rounding leaves them
+/// nothing above the floor.
+fn reaches(n: f64, dn_h: f64, x_h: f64, width_h: f64) -> bool {
+    let floor = ROUND_OFF.max(64.0 * f64::EPSILON * (x_h.abs() + 1.0) / width_h);
+    n > floor || dn_h.abs() > floor
 }
 
 /// What [`reaches`] takes for round-off in a value of order one.
@@ -497,12 +502,16 @@ mod tests {
     fn a_domain_ending_on_a_grid_line_reaches_no_node_beyond() {
         let h = 0.105_957_455_315_182_69;
         let mut beyond = 0;
-        for k in 1..2000 {
-            let width = h * (0.5 + k as f64 / 4000.0);
-            for basis in [Basis::Gimp, Basis::BSpline3] {
-                let w = basis.eval_1d(h, width / 2.0, width / 2.0);
-                let reach = if basis == Basis::Gimp { -1 } else { -2 };
-                beyond += w.as_slice().iter().filter(|(i, ..)| *i <= reach).count();
+        // At the origin and a million cells from it (site coordinates).
+        for edge in [0_i64, 1_000_000] {
+            for k in 1..2000 {
+                let width = h * (0.5 + k as f64 / 4000.0);
+                let x = edge as f64 * h + width / 2.0;
+                for basis in [Basis::Gimp, Basis::BSpline3] {
+                    let w = basis.eval_1d(h, x, width / 2.0);
+                    let reach = edge + if basis == Basis::Gimp { -1 } else { -2 };
+                    beyond += w.as_slice().iter().filter(|(i, ..)| *i <= reach).count();
+                }
             }
         }
         assert_eq!(beyond, 0);
