@@ -615,7 +615,7 @@ const BENDING_FREE_GROWTH: f64 = 1e3;
 ///   cells off (nothing then holds a cell's hourglass modes); or on GIMP
 ///   or the bilinear basis, whose large rotations drift with the load steps
 ///   more than at two points a cell (docs/study/robustness). Elastic
-///   bodies on the B-splines, stabilised, are within 1.5% on a clamped
+///   bodies on the B-splines, stabilised, are within 1.3% on a clamped
 ///   elastica two cells deep (two points a cell: 2.7%) and are not warned
 ///   of.
 pub fn warnings(case: &Case, steps: &[StepReport]) -> Vec<RunWarning> {
@@ -673,7 +673,7 @@ pub fn warnings(case: &Case, steps: &[StepReport]) -> Vec<RunWarning> {
                 "{} has one point a cell or fewer, on {}: the stabilisation of one-point \
                  cells holds their bending, but large rotation drifts with the load steps more \
                  than at two points a cell (a clamped elastica's tip 3.7-4.4% off on GIMP, \
-                 against 0.5-2.7% at two a cell and 0.1-1.5% on \"bspline2\" at one; the \
+                 against 0.5-2.7% at two a cell and 0.35-1.3% on \"bspline2\" at one; the \
                  bilinear basis also crosses cells: its self-weight column 10-22% off). Use two \
                  or more a cell, or \"bspline2\" (docs/study/robustness).",
                 name(),

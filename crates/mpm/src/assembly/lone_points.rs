@@ -13,38 +13,41 @@
 //! The term is Belytschko & Bindeman's assumed-strain stabilisation
 //! (1991, CMAME 88, "ASQBI"; Belytschko, Liu & Moran, *Nonlinear Finite
 //! Elements*, ch. 8) written for a point's domain instead of an element.
-//! It measures six slopes of the step's increment across the domain, with
-//! the basis's 1D moments ([`crate::grid::Basis::moments_1d`]: averages
-//! `a`, `b` of value and gradient, slopes `c`, `d`):
+//! It measures the six slopes of the step's strain increment across the
+//! domain, `e = [eps_xx in x, eps_xx in y, eps_yy in x, eps_yy in y,
+//! gamma_xy in x, gamma_xy in y]`, with the basis's 1D moments
+//! ([`crate::grid::Basis::moments_1d`]: averages `a`, `b` of value and
+//! gradient, slopes `c`, `d`; node `(i, j)`):
 //!
-//! | row | slope | coefficients | on | weight | modulus |
-//! |---|---|---|---|---|---|
-//! | 1 | of `du_x/dx` in y (bending) | `b_i c_j` | `u_x` | `l_y^2/3` | `E'` |
-//! | 2 | of `du_y/dy` in x (bending) | `c_i b_j` | `u_y` | `l_x^2/3` | `E'` |
-//! | 3 | of `du_x/dx` in x | `d_i a_j` | `u_x` | `l_x^2/3` | `E'` |
-//! | 4 | of `du_y/dy` in y | `a_i d_j` | `u_y` | `l_y^2/3` | `E'` |
-//! | 5 | of `du_y/dx` in x | `d_i a_j` | `u_y` | `l_x^2/3` | `mu` |
-//! | 6 | of `du_x/dy` in y | `a_i d_j` | `u_x` | `l_y^2/3` | `mu` |
+//! | slope | on `u_x` | on `u_y` | weight |
+//! |---|---|---|---|
+//! | `eps_xx` in x | `d_i a_j` | | `l_x^2/3` |
+//! | `eps_xx` in y (bending) | `b_i c_j` | | `l_y^2/3` |
+//! | `eps_yy` in x (bending) | | `c_i b_j` | `l_x^2/3` |
+//! | `eps_yy` in y | | `a_i d_j` | `l_y^2/3` |
+//! | `gamma_xy` in x | `c_i b_j` (B-splines) | `d_i a_j` | `l_x^2/3` |
+//! | `gamma_xy` in y | `a_i d_j` | `b_i c_j` (B-splines) | `l_y^2/3` |
 //!
-//! with `l` the domain's half-widths, `E' = 4 mu (lambda + mu) / (lambda +
-//! 2 mu) = 2 mu / (1 - nu)`, and each row's stored slope `s` of the stress
-//! (`dsigma_xx/dy` for row 1, and so on: [`crate::particles::MaterialPoints::stress_slopes`]).
-//! The slope of `du_x/dy` in x and of `du_y/dx` in y are left out: they are
-//! the bilinear element's parasitic shear, which ASQBI removes, so on the
-//! bilinear basis (where rows 3-6 vanish) a rectangle bends exactly and
-//! does not lock near incompressibility. Where rows 3-6 do not vanish (the
-//! B-splines, GIMP domains across grid lines) they also penalise the
-//! Poisson slope of `du_y/dy` and the curvature `d2u_y/dx2` of a true
-//! bending field, which are not hourglass modes: an excess of about
-//! `0.46 / N^2` of the bending energy at `nu = 0.2`, N cells through the
-//! depth (docs/one_point_cells.md, section 6).
+//! with `l` the domain's half-widths. On the hats (bilinear, GIMP) the
+//! shear strain's slopes leave out `d2u_x/dxdy` and `d2u_y/dxdy`: they are
+//! the bilinear field's parasitic shear in bending, which ASQBI removes.
+//! The moduli `M` take the strain's slopes to the stress's, `T = M e`
+//! ([`moduli`]): on the hats ASQBI's, `E' = 4 mu (lambda + mu) / (lambda +
+//! 2 mu) = 2 mu / (1 - nu)` on each normal strain's slope and `mu` on the
+//! shear strain's, so that on the bilinear basis (where only the bending
+//! slopes are not zero inside a cell) a rectangle bends exactly and does
+//! not lock near incompressibility; on the B-splines, which hold a bending
+//! field exactly, an energy that a true plane-strain bending field (its
+//! Poisson slope and zero shear-strain slopes) meets with the beam's `E'
+//! kappa^2 / 2`, with no `lambda`.
 //!
-//! Point `p`'s potential in a step is `V_p sum_k w_k (s_k k_k + D_k
-//! k_k^2 / 2)`: force `V w (s + D k) g` on the row's nodes, tangent `V w D
-//! g g^T`, symmetric and exact. Every row is zero on an affine increment
-//! (a rigid rotation included), so the patch tests hold. Once the step
-//! converges, each slope takes its increment `D k` and the six turn with
-//! the step's rotation as the components of `dsigma_ij/dx_k`.
+//! Point `p`'s potential in a step is `V_p sum_k w_k (T_k e_k + e_k (M
+//! e)_k / 2)`: force `V w (T + M e) g`, tangent `V w M g g^T`, symmetric
+//! and exact. Every slope is zero on an affine increment (a rigid rotation
+//! included), so the patch tests hold. Once the step converges, the stored
+//! slopes `T` ([`crate::particles::MaterialPoints::stress_slopes`]) take
+//! their increment `M e` and turn with the step's rotation as the
+//! components of `dsigma_ij/dx_k`.
 //!
 //! It acts on the points seeded one a cell or fewer (a reference volume of
 //! at least [`LONE_VOLUME`] of a cell's), for the whole run. Two or more
@@ -83,45 +86,13 @@ use crate::parallel;
 /// share of a cell's: a body seeded with fewer than two points a cell.
 pub const LONE_VOLUME: f64 = 0.5;
 
-/// The six rows: the moment taken in x and in y (0 `a`, 1 `b`, 2 `c`, 3
-/// `d`), the component, the direction of the weight, whether the modulus
-/// is the shear modulus, and the stress slope stored.
-const ROWS: [Row; 6] = [
-    Row::new(1, 2, 0, 1, false, 1),
-    Row::new(2, 1, 1, 0, false, 2),
-    Row::new(3, 0, 0, 0, false, 0),
-    Row::new(0, 3, 1, 1, false, 3),
-    Row::new(3, 0, 1, 0, true, 4),
-    Row::new(0, 3, 0, 1, true, 5),
-];
+/// The direction each slope is taken in (0: x, 1: y), in the order of
+/// [`crate::particles::MaterialPoints::stress_slopes`]: `[xx,x; xx,y;
+/// yy,x; yy,y; xy,x; xy,y]`.
+const ACROSS: [usize; 6] = [0, 1, 0, 1, 0, 1];
 
-#[derive(Clone, Copy)]
-struct Row {
-    moments: [usize; 2],
-    component: usize,
-    across: usize,
-    shear: bool,
-    slope: usize,
-}
-
-impl Row {
-    const fn new(
-        mx: usize,
-        my: usize,
-        component: usize,
-        across: usize,
-        shear: bool,
-        slope: usize,
-    ) -> Self {
-        Self {
-            moments: [mx, my],
-            component,
-            across,
-            shear,
-            slope,
-        }
-    }
-}
+/// A node's coefficients in the six strain slopes, on `u_x` and on `u_y`.
+type Slopes = [[f64; 2]; 6];
 
 /// One stabilised point of a step.
 struct LonePoint {
@@ -129,11 +100,12 @@ struct LonePoint {
     /// Its entries' range in `LonePoints::nodes` and `coefficients`.
     start: usize,
     end: usize,
-    /// Per row, `V w`.
+    /// Per slope, `V w`: the domain's volume times its second moment per
+    /// area in the slope's direction.
     scale: [f64; 6],
-    /// Per row, `D`.
-    modulus: [f64; 6],
-    /// Per row, the stored slope `s` at the step's start.
+    /// The moduli `M` taking the strain's slopes to the stress's.
+    moduli: [[f64; 6]; 6],
+    /// The stored stress slopes `T` at the step's start.
     slope: [f64; 6],
 }
 
@@ -144,8 +116,8 @@ pub struct LonePoints {
     place: Vec<u32>,
     /// Active node of each entry.
     nodes: Vec<u32>,
-    /// Per entry, its coefficient in each of the six rows.
-    coefficients: Vec<[f64; 6]>,
+    /// Per entry, its coefficients in each of the six strain slopes.
+    coefficients: Vec<Slopes>,
 }
 
 impl LonePoints {
@@ -164,7 +136,7 @@ impl LonePoints {
         let node_coordinates: Vec<(i64, i64)> =
             conn.nodes.iter().map(|&k| node_indices(k)).collect();
         let index = LatticeIndex::new(&node_coordinates);
-        let built: Vec<(LonePoint, Vec<u32>, Vec<[f64; 6]>)> = alone
+        let built: Vec<(LonePoint, Vec<u32>, Vec<Slopes>)> = alone
             .par_iter()
             .with_min_len(parallel::BOOKKEEPING)
             .map(|&p| {
@@ -172,6 +144,7 @@ impl LonePoints {
                 let x = points.position[p];
                 let l = half_widths(basis, grid.h, points.support(p), points.volume(p));
                 let m = [0, 1].map(|d| basis.moments_1d(grid.h, x[d] - grid.origin[d], l[d]));
+                let elastic = points.materials[points.material[p] as usize].elastic();
                 let linked: Vec<u32> = conn.point_links(p).iter().map(|k| k.node).collect();
                 let (mut nodes, mut coefficients, mut at) = (Vec::new(), Vec::new(), Vec::new());
                 let mut dropped = false;
@@ -184,24 +157,21 @@ impl LonePoints {
                         };
                         nodes.push(a);
                         at.push([(i - m[0][0].0) as f64, (j - m[1][0].0) as f64]);
-                        coefficients.push(ROWS.map(|r| mx[r.moments[0]] * my[r.moments[1]]));
+                        coefficients.push(strain_slopes(basis, mx, my));
                     }
                 }
                 if dropped && !without_affine_part(&mut coefficients, &at) {
                     coefficients.clear();
                     nodes.clear();
                 }
-                let elastic = points.materials[points.material[p] as usize].elastic();
-                let (lambda, mu) = (elastic.lambda, elastic.mu);
-                let bending = 4.0 * mu * (lambda + mu) / (lambda + 2.0 * mu);
                 let volume = points.volume(p);
                 let lone = LonePoint {
                     point: p as u32,
                     start: 0,
                     end: 0,
-                    scale: ROWS.map(|r| volume * l[r.across] * l[r.across] / 3.0),
-                    modulus: ROWS.map(|r| if r.shear { mu } else { bending }),
-                    slope: ROWS.map(|r| points.stress_slopes[p][r.slope]),
+                    scale: ACROSS.map(|d| volume * l[d] * l[d] / 3.0),
+                    moduli: moduli(basis, elastic.lambda, elastic.mu),
+                    slope: points.stress_slopes[p],
                 };
                 (lone, nodes, coefficients)
             })
@@ -235,8 +205,8 @@ impl LonePoints {
         let mut k = [0.0; 6];
         for e in lone.start..lone.end {
             let node = self.nodes[e] as usize;
-            for (r, row) in ROWS.iter().enumerate() {
-                k[r] += self.coefficients[e][r] * u[2 * node + row.component];
+            for (r, g) in self.coefficients[e].iter().enumerate() {
+                k[r] += g[0] * u[2 * node] + g[1] * u[2 * node + 1];
             }
         }
         k
@@ -253,11 +223,10 @@ impl LonePoints {
         self.points
             .iter()
             .map(|lone| {
-                let k = self.slopes_of(lone, u);
-                let mut slopes = [0.0; 6];
-                for (r, row) in ROWS.iter().enumerate() {
-                    slopes[row.slope] = lone.slope[r] + lone.modulus[r] * k[r];
-                }
+                let e = self.slopes_of(lone, u);
+                let slopes: [f64; 6] = std::array::from_fn(|i| {
+                    lone.slope[i] + (0..6).map(|j| lone.moduli[i][j] * e[j]).sum::<f64>()
+                });
                 let p = lone.point as usize;
                 (p, rotated(slopes, &rotation(p)))
             })
@@ -274,17 +243,24 @@ impl LonePoints {
         pattern: &Pattern,
         mut add: impl FnMut(usize, f64),
     ) {
-        let weight: [f64; 6] = std::array::from_fn(|r| lone.scale[r] * lone.modulus[r]);
+        let weight: [[f64; 6]; 6] =
+            std::array::from_fn(|i| std::array::from_fn(|j| lone.scale[i] * lone.moduli[i][j]));
         for a in lone.start..lone.end {
+            // The slopes' stresses per unit displacement of node `a`.
+            let ga = &self.coefficients[a];
+            let stress: [[f64; 6]; 2] = std::array::from_fn(|c| {
+                std::array::from_fn(|j| (0..6).map(|i| ga[i][c] * weight[i][j]).sum())
+            });
             for b in lone.start..lone.end {
-                let mut k = [0.0; 2];
-                for (r, row) in ROWS.iter().enumerate() {
-                    k[row.component] +=
-                        weight[r] * self.coefficients[a][r] * self.coefficients[b][r];
-                }
+                let gb = &self.coefficients[b];
                 let (base, stride) = pattern.block(self.nodes[a], self.nodes[b]);
-                for (c, kc) in k.into_iter().enumerate() {
-                    add(base + c + c * stride, kc);
+                for (c, row) in stress.iter().enumerate() {
+                    for d in 0..2 {
+                        let k: f64 = (0..6).map(|j| row[j] * gb[j][d]).sum();
+                        if k != 0.0 {
+                            add(base + c + d * stride, k);
+                        }
+                    }
                 }
             }
         }
@@ -299,13 +275,16 @@ impl StepTerm for LonePoints {
     /// Adds `V w (s + D k) g` per row.
     fn add_force(&self, u: &[f64], f: &mut [f64]) {
         for lone in &self.points {
-            let k = self.slopes_of(lone, u);
-            let t: [f64; 6] =
-                std::array::from_fn(|r| lone.scale[r] * (lone.slope[r] + lone.modulus[r] * k[r]));
+            let e = self.slopes_of(lone, u);
+            let t: [f64; 6] = std::array::from_fn(|i| {
+                let m: f64 = (0..6).map(|j| lone.moduli[i][j] * e[j]).sum();
+                lone.scale[i] * (lone.slope[i] + m)
+            });
             for e in lone.start..lone.end {
                 let node = self.nodes[e] as usize;
-                for (r, row) in ROWS.iter().enumerate() {
-                    f[2 * node + row.component] += t[r] * self.coefficients[e][r];
+                for (r, g) in self.coefficients[e].iter().enumerate() {
+                    f[2 * node] += t[r] * g[0];
+                    f[2 * node + 1] += t[r] * g[1];
                 }
             }
         }
@@ -351,22 +330,80 @@ impl StepTerm for LonePoints {
 /// point's own domain does not (a turned domain measured on an upright
 /// rectangle; the grid's extent) would measure a translation. False when
 /// the nodes left span no plane.
-fn without_affine_part(coefficients: &mut [[f64; 6]], at: &[[f64; 2]]) -> bool {
+fn without_affine_part(coefficients: &mut [Slopes], at: &[[f64; 2]]) -> bool {
     let phi = |a: &[f64; 2]| Vector3::new(1.0, a[0], a[1]);
     let gram: Matrix3<f64> = at.iter().map(|a| phi(a) * phi(a).transpose()).sum();
     let Some(inverse) = gram.try_inverse() else {
         return false;
     };
     for r in 0..6 {
-        let moment: Vector3<f64> = (coefficients.iter().zip(at))
-            .map(|(g, a)| phi(a) * g[r])
-            .sum();
-        let alpha = inverse * moment;
-        for (g, a) in coefficients.iter_mut().zip(at) {
-            g[r] -= phi(a).dot(&alpha);
+        for c in 0..2 {
+            let moment: Vector3<f64> = (coefficients.iter().zip(at))
+                .map(|(g, a)| phi(a) * g[r][c])
+                .sum();
+            let alpha = inverse * moment;
+            for (g, a) in coefficients.iter_mut().zip(at) {
+                g[r][c] -= phi(a).dot(&alpha);
+            }
         }
     }
     true
+}
+
+/// A node's coefficients in the six strain slopes (the order of the
+/// stress slopes: `eps_xx` in x and y, `eps_yy` in x and y, `gamma_xy` in
+/// x and y), on `u_x` and `u_y`, from its 1D moments `mx`, `my` (`[a, b,
+/// c, d]`). On the hats (bilinear, GIMP) the shear strain's slopes leave
+/// out `d2u_x/dxdy` and `d2u_y/dxdy`, the bilinear field's parasitic shear
+/// in bending, as ASQBI does; the B-splines hold a bending field exactly
+/// and keep them.
+fn strain_slopes(basis: Basis, mx: [f64; 4], my: [f64; 4]) -> Slopes {
+    let [ax, bx, cx, dx] = mx;
+    let [ay, by, cy, dy] = my;
+    let parasitic = if basis.degree() == 1 { 0.0 } else { 1.0 };
+    [
+        [dx * ay, 0.0],
+        [bx * cy, 0.0],
+        [0.0, cx * by],
+        [0.0, ax * dy],
+        [parasitic * cx * by, dx * ay],
+        [ax * dy, parasitic * bx * cy],
+    ]
+}
+
+/// The moduli taking the strain slopes to the stress slopes, per
+/// direction (no coupling across directions), from the Lame constants.
+/// - On the hats, ASQBI's: `E' = 2 mu / (1 - nu)` on each normal strain's
+///   slope, `mu` on the shear strain's. Along the bilinear basis only the
+///   bending slopes (`eps_xx` in y, `eps_yy` in x) are not zero inside a
+///   cell, and `E'` is exact in pure bending.
+/// - On the B-splines, the energy `E' q^2 / 2 + mu (p + nu' q)^2 + mu
+///   g^2 / 2` per direction, `q` the bending slope (`eps_xx` in y, `eps_yy`
+///   in x), `p` the other normal strain's slope in that direction, `g` the
+///   shear strain's, `nu' = nu / (1 - nu)`: a true plane-strain bending
+///   field (`p = -nu' q`, `g = 0`) costs `E' q^2 / 2`, the plane-strain
+///   bending energy, and a zigzag of one component (`p` alone) is held by
+///   `2 mu`. No `lambda` appears, so nothing locks near incompressibility.
+fn moduli(basis: Basis, lambda: f64, mu: f64) -> [[f64; 6]; 6] {
+    let bending = 4.0 * mu * (lambda + mu) / (lambda + 2.0 * mu);
+    let mut m = [[0.0; 6]; 6];
+    if basis.degree() == 1 {
+        for (i, row) in m.iter_mut().enumerate() {
+            row[i] = if i < 4 { bending } else { mu };
+        }
+        return m;
+    }
+    let poisson = lambda / (lambda + 2.0 * mu);
+    // (q, p) per direction: x: (eps_yy,x = 2, eps_xx,x = 0); y: (1, 3).
+    for (q, p) in [(2, 0), (1, 3)] {
+        m[q][q] = bending + 2.0 * mu * poisson * poisson;
+        m[q][p] = 2.0 * mu * poisson;
+        m[p][q] = 2.0 * mu * poisson;
+        m[p][p] = 2.0 * mu;
+    }
+    m[4][4] = mu;
+    m[5][5] = mu;
+    m
 }
 
 /// The half-widths a point's bending is measured over: its upright
@@ -482,20 +519,35 @@ mod tests {
         }
     }
 
-    /// Every row measures zero on an affine increment, a finite rigid
+    /// Every strain slope is zero on an affine increment, a finite rigid
     /// rotation `(R - I) x` included (every basis reproduces linear fields
-    /// with the nodes' own values), on aligned and offset grids; pure
-    /// bending `u_x = kappa x y` (bilinear, reproduced likewise) is row
-    /// 1's `kappa` and nothing else.
+    /// with the nodes' own values), on aligned and offset grids. Bending
+    /// costs the plane-strain beam's energy `E' kappa^2 / 2` per unit `V
+    /// w_y` and nothing else: on the hats `u_x = -kappa x y` (bilinear,
+    /// reproduced likewise; the slopes leave out its parasitic shear); on
+    /// the B-splines the true bending field `u_x = -kappa x y`, `u_y =
+    /// kappa (x^2 + nu' y^2) / 2` with `nu' = nu / (1 - nu)` (reproduced
+    /// with `x_i^2` less a constant, which no slope sees), whose Poisson
+    /// slope and shear-strain slopes are not hourglass modes. The block's
+    /// `nu` is 0.3, `E` 1e6.
     #[test]
-    fn affine_increments_have_no_slopes_and_bending_is_row_one() {
+    fn affine_increments_have_no_slopes_and_bending_costs_the_beams_energy() {
+        let (kappa, nu, e) = (0.37, 0.3, 1e6);
+        let poisson = nu / (1.0 - nu);
+        let beam = e / (1.0 - nu * nu) * kappa * kappa / 2.0;
         for basis in BASES {
             for origin in [[0.0, 0.0], [0.13, -0.21]] {
                 let (lone, _, nodes) = block(basis, [4, 2], origin);
-                let kappa = 0.37;
+                let hats = basis == "linear" || basis == "gimp";
                 let bending: Vec<f64> = nodes
                     .iter()
-                    .flat_map(|&[x, y]| [kappa * x * y, 0.0])
+                    .flat_map(|&[x, y]| {
+                        if hats {
+                            [-kappa * x * y, 0.0]
+                        } else {
+                            [-kappa * x * y, kappa * (x * x + poisson * y * y) / 2.0]
+                        }
+                    })
                     .collect();
                 for p in &lone.points {
                     for u in &affine_fields(&nodes) {
@@ -506,10 +558,20 @@ mod tests {
                         );
                     }
                     let k = lone.slopes_of(p, &bending);
-                    assert!((k[0] - kappa).abs() < 1e-12, "{basis} {origin:?} {k:?}");
+                    assert!((k[1] + kappa).abs() < 1e-12, "{basis} {origin:?} {k:?}");
+                    let poisson_slope = if hats { 0.0 } else { poisson * kappa };
+                    assert!((k[3] - poisson_slope).abs() < 1e-12, "{basis} {k:?}");
                     assert!(
-                        k[1..].iter().all(|k| k.abs() < 1e-12),
-                        "{basis} {origin:?} {k:?}"
+                        [k[0], k[2], k[4], k[5]].iter().all(|k| k.abs() < 1e-12),
+                        "{k:?}"
+                    );
+                    let energy: f64 = (0..6)
+                        .flat_map(|i| (0..6).map(move |j| (i, j)))
+                        .map(|(i, j)| k[i] * p.moduli[i][j] * k[j] / 2.0)
+                        .sum();
+                    assert!(
+                        (energy / beam - 1.0).abs() < 1e-12,
+                        "{basis}: {energy} {beam}"
                     );
                 }
             }
