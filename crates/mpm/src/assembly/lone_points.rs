@@ -75,7 +75,6 @@
 use nalgebra::{Matrix2, Matrix3, Vector3};
 use rayon::prelude::*;
 
-use super::pattern::SharedValues;
 use super::{Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
 use crate::grid::basis::quadrilateral_domain;
@@ -294,25 +293,11 @@ impl StepTerm for LonePoints {
     /// the pattern's tiles of one colour in parallel, as the points' own
     /// stiffness is summed (`super::stiffness`).
     fn add_stiffness(&self, _u: &[f64], pattern: &Pattern, values: &mut [f64]) {
-        let tiles = &pattern.tiles;
-        let shared = SharedValues(values.as_mut_ptr());
-        for colour in 0..4 {
-            tiles.of_colour(colour).into_par_iter().for_each(|t| {
-                let shared = &shared;
-                for &p in tiles.points(t) {
-                    let Some(lone) = self.points.get(self.place[p as usize] as usize) else {
-                        continue;
-                    };
-                    self.add_point_stiffness(lone, pattern, |at, v| {
-                        // SAFETY: the place is inside `values` (the
-                        // pattern's own), in a block of two of this point's
-                        // nodes, which no other tile of this colour links
-                        // (`PointTiles`); colours run one after another.
-                        unsafe { *shared.0.add(at) += v }
-                    });
-                }
-            });
-        }
+        pattern.tiles.sum_into(values, |p, add| {
+            if let Some(lone) = self.points.get(self.place[p] as usize) {
+                self.add_point_stiffness(lone, pattern, add);
+            }
+        });
     }
 
     /// Itself: the stepper takes the stress slopes from it

@@ -266,6 +266,34 @@ pub(crate) struct PointTiles {
 const MIN_TILE_SIDE: i64 = 8;
 
 impl PointTiles {
+    /// Calls `add_point(p, add)` for every point `p`, the tiles of one
+    /// colour in parallel, colour after colour; `add(place, value)` adds
+    /// to `values` (a pattern's, over the tiles' points), and `add_point`
+    /// may add only in blocks of two of point `p`'s linked nodes.
+    pub(crate) fn sum_into(
+        &self,
+        values: &mut [f64],
+        add_point: impl Fn(usize, &mut dyn FnMut(usize, f64)) + Sync,
+    ) {
+        let shared = SharedValues(values.as_mut_ptr());
+        let len = values.len();
+        for colour in 0..4 {
+            self.of_colour(colour).into_par_iter().for_each(|t| {
+                let shared = &shared;
+                for &p in self.points(t) {
+                    add_point(p as usize, &mut |at, v| {
+                        debug_assert!(at < len);
+                        // SAFETY: the place is inside `values`, and in a
+                        // block of two nodes of this tile's points, which
+                        // no other tile of this colour has (the type's
+                        // docs); colours run one after another.
+                        unsafe { *shared.0.add(at) += v }
+                    });
+                }
+            });
+        }
+    }
+
     fn build(conn: &Connectivity) -> Self {
         let coordinates: Vec<(i64, i64)> = conn
             .nodes

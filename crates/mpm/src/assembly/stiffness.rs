@@ -1,10 +1,8 @@
 //! The material part of the tangent stiffness.
 
 use nalgebra::Matrix4;
-use rayon::prelude::*;
 
 use super::Pattern;
-use super::pattern::SharedValues;
 use crate::grid::Connectivity;
 use crate::particles::MaterialPoints;
 
@@ -65,23 +63,9 @@ fn sum_tiles(
     k: &mut [f64],
 ) {
     assert_eq!(k.len(), pattern.nnz());
-    let tiles = &pattern.tiles;
-    let shared = SharedValues(k.as_mut_ptr());
-    for colour in 0..4 {
-        tiles.of_colour(colour).into_par_iter().for_each(|t| {
-            let shared = &shared;
-            for &p in tiles.points(t) {
-                let p = p as usize;
-                add_point(conn, pattern, points, p, &tangent(p), symmetric, |at, v| {
-                    // SAFETY: the place is inside `k` (the pattern's own),
-                    // and in a block of two nodes of this tile's points,
-                    // which no other tile of this colour has
-                    // (`PointTiles`); colours run one after another.
-                    unsafe { *shared.0.add(at) += v }
-                });
-            }
-        });
-    }
+    pattern.tiles.sum_into(k, |p, add| {
+        add_point(conn, pattern, points, p, &tangent(p), symmetric, add);
+    });
 }
 
 /// Below this many tiles a thread, the points are summed by threads'
