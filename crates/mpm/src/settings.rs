@@ -28,7 +28,7 @@ pub struct NewtonSettings {
     /// The cell-mean strain's hourglass stiffness, relative to twice the
     /// material's shear modulus (1e-2); see [`crate::assembly::cell_mean`].
     pub hourglass: f64,
-    /// Stiffen the bending of points alone in their cells with their
+    /// Stiffen the bending of points seeded one a cell or fewer with their
     /// material's moduli (true); see [`crate::assembly::lone_points`].
     pub lone_points: bool,
     /// How far a free full step of the line search may raise the

@@ -622,8 +622,9 @@ impl Simulation {
         self.analysed = Some(converged.analysed);
         let states = converged.states;
         let moves = self.stages[self.stage].geostatic.is_none();
-        // The stress slopes of the points alone in their cells, before the
-        // points move: the others' are zero.
+        // The stress slopes of the points the one-point cells' term holds
+        // (seeded one a cell or fewer), taken before the points move; the
+        // others' are zero.
         let mut slopes = Vec::new();
         for carried in &converged.carried {
             if let Some(lone) = carried.downcast_ref::<LonePoints>() {

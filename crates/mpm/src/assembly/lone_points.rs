@@ -1,4 +1,4 @@
-//! Physical hourglass stabilisation of points alone in their cell: the
+//! Physical hourglass stabilisation of bodies seeded one point a cell: the
 //! bending a single point cannot feel, restored with the material's own
 //! stiffness (docs/one_point_cells.md has the derivation, the literature
 //! and the prototype).

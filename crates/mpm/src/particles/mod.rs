@@ -36,8 +36,8 @@ pub struct MaterialPoints {
     pub stress: Vec<CauchyStress>,
     /// The stress's slopes across the point's domain, `dsigma_ij/dx_k`
     /// in the order `[xx,x; xx,y; yy,x; yy,y; xy,x; xy,y]`: what a point
-    /// alone in its cell holds of its bending (`assembly::lone_points`);
-    /// zero for the others.
+    /// of an elastic body seeded one a cell or fewer holds of its bending
+    /// (`assembly::lone_points`); zero for the others.
     pub stress_slopes: Vec<[f64; 6]>,
     /// One material per body of the case.
     pub materials: Vec<Material>,
