@@ -108,7 +108,7 @@ struct LonePoint {
     slope: [f64; 6],
 }
 
-/// The step's points seeded one a cell or fewer, and their rows.
+/// The step's points seeded one a cell or fewer, and their strain slopes.
 pub struct LonePoints {
     points: Vec<LonePoint>,
     /// Per material point, its place in `points` (`u32::MAX`: none).
@@ -120,7 +120,7 @@ pub struct LonePoints {
 }
 
 impl LonePoints {
-    /// The points of `start` seeded one a cell or fewer, with their rows.
+    /// The points of `start` seeded one a cell or fewer, with their strain slopes.
     pub fn new(start: &Configuration) -> Self {
         let Configuration {
             grid,
@@ -199,7 +199,7 @@ impl LonePoints {
         self.points.is_empty()
     }
 
-    /// Per row of `lone`, its slope `k` of the increment `u`.
+    /// The six strain slopes `e` of `lone` under the increment `u`.
     fn slopes_of(&self, lone: &LonePoint, u: &[f64]) -> [f64; 6] {
         let mut k = [0.0; 6];
         for e in lone.start..lone.end {
@@ -271,7 +271,7 @@ impl StepTerm for LonePoints {
         Side::Stabilisation
     }
 
-    /// Adds `V w (s + D k) g` per row.
+    /// Adds `V w (T + M e) g` over the six slopes.
     fn add_force(&self, u: &[f64], f: &mut [f64]) {
         for lone in &self.points {
             let e = self.slopes_of(lone, u);
@@ -289,7 +289,7 @@ impl StepTerm for LonePoints {
         }
     }
 
-    /// Adds `V w D g g^T` per row: one block per pair of the point's nodes,
+    /// Adds `V w M g g^T` over the six slopes: one block per pair of the point's nodes,
     /// the pattern's tiles of one colour in parallel, as the points' own
     /// stiffness is summed (`super::stiffness`).
     fn add_stiffness(&self, _u: &[f64], pattern: &Pattern, values: &mut [f64]) {
@@ -307,11 +307,11 @@ impl StepTerm for LonePoints {
     }
 }
 
-/// Takes out of each row's coefficients (over nodes at lattice places
-/// `at`) their part along the affine fields `1, i, j`, so that the row
-/// measures nothing on an affine increment. The rows of a full set of a
+/// Takes out of each slope's coefficients (over nodes at lattice places
+/// `at`) their part along the affine fields `1, i, j`, so that the slope
+/// measures nothing on an affine increment. The slopes of a full set of a
 /// point's nodes have none (the bases reproduce affine fields with the
-/// nodes' own values); a row missing nodes its rectangle reaches and the
+/// nodes' own values); a slope missing nodes its rectangle reaches and the
 /// point's own domain does not (a turned domain measured on an upright
 /// rectangle; the grid's extent) would measure a translation. False when
 /// the nodes left span no plane.
@@ -565,9 +565,9 @@ mod tests {
 
     /// A body turned 30 and 45 degrees (turned domains, measured on
     /// upright rectangles that may reach nodes the domain does not) on
-    /// grids at two placements: no row measures an affine increment or a
+    /// grids at two placements: no slope measures an affine increment or a
     /// finite rigid rotation, on any basis. Without the affine part taken
-    /// out of rows missing nodes, GIMP at 30 degrees measured 0.01-0.02.
+    /// out of slopes missing nodes, GIMP at 30 degrees measured 0.01-0.02.
     #[test]
     fn turned_domains_measure_nothing_on_affine_increments() {
         for basis in BASES {
