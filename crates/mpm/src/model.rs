@@ -609,8 +609,9 @@ const BENDING_FREE_GROWTH: f64 = 1e3;
 ///   deformation its answers move with the load steps and do not converge
 ///   with the cell (docs/study/bases).
 /// - `one_point_a_cell`: a body filled with one point a cell or fewer
-///   (`per_cell` 1, or a `spacing` of 0.71 cells or more, as the
-///   stabilisation of one-point cells counts them; not yet a `count`) where that costs
+///   (`per_cell` 1, a `spacing` of 0.71 cells or more, or a `count` of
+///   as much area a point, as the stabilisation of one-point cells counts
+///   them) where that costs
 ///   accuracy: a plastic body, or any with the stabilisation of one-point
 ///   cells off (nothing then holds a cell's hourglass modes); or on GIMP
 ///   or the bilinear basis, whose large rotations drift with the load steps
@@ -643,10 +644,20 @@ pub fn warnings(case: &Case, steps: &[StepReport]) -> Vec<RunWarning> {
         // Seeded as sparsely as the stabilisation of one-point cells takes
         // a body (a point's area at least `LONE_VOLUME` of a cell's).
         let h = case.grid.cell_size;
-        let sparse = match density(body, h) {
-            Density::Spacing(s) => s * s >= 0.999 * LONE_VOLUME * h * h,
-            Density::Count(_) => false,
+        let area_a_point = match density(body, h) {
+            Density::Spacing(s) => s * s,
+            Density::Count([nx, ny]) => {
+                let area = match &body.geometry {
+                    Geometry::Rectangle { min, max, .. } => (max[0] - min[0]) * (max[1] - min[1]),
+                    Geometry::Quadrilateral { vertices } => {
+                        crate::geometry::signed_area(vertices).abs()
+                    }
+                    _ => 0.0,
+                };
+                area / (f64::from(nx) * f64::from(ny))
+            }
         };
+        let sparse = area_a_point >= 0.999 * LONE_VOLUME * h * h;
         let name = || body.name.clone().unwrap_or_else(|| format!("bodies[{k}]"));
         let elastic = matches!(
             body.material,
@@ -803,6 +814,13 @@ mod tests {
         for basis in ["bspline2", "bspline3"] {
             assert!(kinds(basis, 1, true).is_empty(), "{basis}");
             assert_eq!(kinds(basis, 1, false), ["one_point_a_cell"], "{basis}");
+        }
+        // A `count` of one point a cell is as sparse; of two, not.
+        for (count, warned) in [([4, 2], true), ([8, 4], false)] {
+            let mut v = fixtures::block([2.0, 1.0], count, 0.5, [0.0, 0.0]);
+            v["basis"] = "gimp".into();
+            let kinds = super::warnings(&fixtures::case(&v), &[]).len();
+            assert_eq!(kinds == 1, warned, "{count:?}");
         }
         // A plastic body: the stabilisation leaves it out.
         let mut v = fixtures::block([2.0, 1.0], [4, 2], 0.5, [0.0, 0.0]);
