@@ -39,7 +39,14 @@
 //! not lock near incompressibility; on the B-splines, which hold a bending
 //! field exactly, an energy that a true plane-strain bending field (its
 //! Poisson slope and zero shear-strain slopes) meets with the beam's `E'
-//! kappa^2 / 2`, with no `lambda`.
+//! kappa^2 / 2`, with moduli that stay bounded as `nu` nears 1/2 (`E' <= 4
+//! mu`, `nu' <= 1`), so nothing locks. `T` is the stress's slope on a
+//! bending field along the grid's axes, not in general: `M` is not
+//! isotropic (on a square domain at `nu = 0.3` a bending field turned 45
+//! degrees costs 9% less than `E' kappa^2 / 2`), yet `T` is turned as a
+//! third-order tensor. GIMP's domains across grid lines keep the hats'
+//! slopes and so still see a bending field's Poisson slope and
+//! `d2u_y/dx2` (docs/one_point_cells.md, section 6).
 //!
 //! Point `p`'s potential in a step is `V_p sum_k w_k (T_k e_k + e_k (M
 //! e)_k / 2)`: force `V w (T + M e) g`, tangent `V w M g g^T`, symmetric
@@ -102,7 +109,7 @@ struct LonePoint {
     /// Per slope, `V w`: the domain's volume times its second moment per
     /// area in the slope's direction.
     scale: [f64; 6],
-    /// The moduli `M` taking the strain's slopes to the stress's.
+    /// The moduli `M` taking the strain's slopes to the stored slopes `T`.
     moduli: [[f64; 6]; 6],
     /// The stored stress slopes `T` at the step's start.
     slope: [f64; 6],
@@ -293,11 +300,15 @@ impl StepTerm for LonePoints {
     /// the pattern's tiles of one colour in parallel, as the points' own
     /// stiffness is summed (`super::stiffness`).
     fn add_stiffness(&self, _u: &[f64], pattern: &Pattern, values: &mut [f64]) {
-        pattern.tiles.sum_into(values, |p, add| {
-            if let Some(lone) = self.points.get(self.place[p] as usize) {
-                self.add_point_stiffness(lone, pattern, add);
-            }
-        });
+        // SAFETY: a point's entries are among its linked nodes (`new`),
+        // and their blocks the pattern's own places.
+        unsafe {
+            pattern.tiles.sum_into(values, |p, values| {
+                if let Some(lone) = self.points.get(self.place[p] as usize) {
+                    self.add_point_stiffness(lone, pattern, |at, v| values.add(at, v));
+                }
+            });
+        }
     }
 
     /// Itself: the stepper takes the stress slopes from it

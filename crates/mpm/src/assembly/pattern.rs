@@ -238,6 +238,24 @@ impl Pattern {
 pub(crate) struct SharedValues(pub(crate) *mut f64);
 unsafe impl Sync for SharedValues {}
 
+/// Where one tile's points add to a pattern's values ([`PointTiles::sum_into`]).
+pub(crate) struct TileValues<'a> {
+    shared: &'a SharedValues,
+    len: usize,
+}
+
+impl TileValues<'_> {
+    /// Adds `value` at `place`.
+    #[inline]
+    pub(crate) fn add(&mut self, place: usize, value: f64) {
+        debug_assert!(place < self.len);
+        // SAFETY: `sum_into`'s caller adds only inside the values and in
+        // blocks of this tile's points' nodes, which no other tile of this
+        // colour has; colours run one after another.
+        unsafe { *self.shared.0.add(place) += value }
+    }
+}
+
 /// The points of a step in tiles of the grid, for an assembly that writes
 /// from many points at once without accumulators of its own.
 ///
@@ -266,29 +284,30 @@ pub(crate) struct PointTiles {
 const MIN_TILE_SIDE: i64 = 8;
 
 impl PointTiles {
-    /// Calls `add_point(p, add)` for every point `p`, the tiles of one
-    /// colour in parallel, colour after colour; `add(place, value)` adds
-    /// to `values` (a pattern's, over the tiles' points), and `add_point`
-    /// may add only in blocks of two of point `p`'s linked nodes.
-    pub(crate) fn sum_into(
+    /// Calls `add_point(p, values)` for every point `p`, the tiles of one
+    /// colour in parallel, colour after colour; `values.add(place, value)`
+    /// adds to `values` (a pattern's, over the tiles' points).
+    ///
+    /// # Safety
+    ///
+    /// `add_point` must add for point `p` only at places inside `values`
+    /// in blocks of two of `p`'s linked nodes: two tiles of one colour then
+    /// never write the same place (the type's docs).
+    pub(crate) unsafe fn sum_into(
         &self,
         values: &mut [f64],
-        add_point: impl Fn(usize, &mut dyn FnMut(usize, f64)) + Sync,
+        add_point: impl Fn(usize, &mut TileValues) + Sync,
     ) {
         let shared = SharedValues(values.as_mut_ptr());
         let len = values.len();
         for colour in 0..4 {
             self.of_colour(colour).into_par_iter().for_each(|t| {
-                let shared = &shared;
+                let mut values = TileValues {
+                    shared: &shared,
+                    len,
+                };
                 for &p in self.points(t) {
-                    add_point(p as usize, &mut |at, v| {
-                        debug_assert!(at < len);
-                        // SAFETY: the place is inside `values`, and in a
-                        // block of two nodes of this tile's points, which
-                        // no other tile of this colour has (the type's
-                        // docs); colours run one after another.
-                        unsafe { *shared.0.add(at) += v }
-                    });
+                    add_point(p as usize, &mut values);
                 }
             });
         }

@@ -63,9 +63,15 @@ fn sum_tiles(
     k: &mut [f64],
 ) {
     assert_eq!(k.len(), pattern.nnz());
-    pattern.tiles.sum_into(k, |p, add| {
-        add_point(conn, pattern, points, p, &tangent(p), symmetric, add);
-    });
+    // SAFETY: a point's K_p lies in blocks of its linked nodes, the
+    // pattern's own places.
+    unsafe {
+        pattern.tiles.sum_into(k, |p, values| {
+            add_point(conn, pattern, points, p, &tangent(p), symmetric, |at, v| {
+                values.add(at, v)
+            });
+        });
+    }
 }
 
 /// Below this many tiles a thread, the points are summed by threads'
