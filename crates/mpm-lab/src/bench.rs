@@ -13,7 +13,7 @@ use std::fs;
 use std::path::Path;
 use std::time::Instant;
 
-use mpm::linsolve::{FillOrdering, SolverSettings, SymmetricMethod};
+use mpm::linsolve::{FillOrdering, SolverSettings, SymmetricMethod, UnsymmetricMethod};
 use mpm::report::{StepMemory, StepTimings};
 use mpm::{Case, NoObserver, Simulation};
 use serde_json::{Value, json};
@@ -26,7 +26,10 @@ struct Scene {
     build: fn(usize) -> Value,
 }
 
-const SCENES: [Scene; 2] = [
+/// The scenes: the size, memory and symmetric-solve tables run the first
+/// [`SYMMETRIC_SCENES`], whose tangents are symmetric; the unsymmetric
+/// table the rest.
+const SCENES: [Scene; 3] = [
     Scene {
         name: "column (10 m x 50 m, GIMP, Hencky)",
         build: wide_column,
@@ -35,7 +38,12 @@ const SCENES: [Scene; 2] = [
         name: "cantilever-grid (10 m x 2 m, linear, Hencky)",
         build: cantilever,
     },
+    Scene {
+        name: "paper's cantilever (10 m x 2 m, GIMP, follower pressure)",
+        build: paper_cantilever,
+    },
 ];
+const SYMMETRIC_SCENES: usize = 2;
 
 /// Cells across the short side so that 2x2 points per cell give about
 /// `points` points on a 1 x 5 domain: points = 4 * m * 5m.
@@ -57,6 +65,18 @@ pub fn wide_column(points: usize) -> Value {
     case["bodies"][0]["geometry"]["rectangle"]["max"] = json!([10.0, 50.0]);
     case["supports"][1]["on"]["x"] = 10.0.into();
     case["probes"][0]["at"] = json!([5.0, 50.0]);
+    case
+}
+
+/// The paper's cantilever (`mpm example cantilever`: 1500 Pa of follower
+/// pressure on its B-spline boundary in 5 steps, supports by the IBM) on
+/// GIMP with about `points` points, 2x2 a cell.
+fn paper_cantilever(points: usize) -> Value {
+    let across = 2 * cells_across(points);
+    let mut case = example("cantilever");
+    case["basis"] = json!("gimp");
+    case["grid"]["cell_size"] = (4.0 / across as f64).into();
+    case["bodies"][0]["points"] = json!({ "count": [5 * across, across] });
     case
 }
 
@@ -139,7 +159,7 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabErr
     report.push_str("| scene | points | active DOFs | s / step | s / iteration | iterations / step | grid | point loop | assembly | factorisation | solve | update | points/s | peak MiB |\n");
     report.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     let mut largest = Vec::new();
-    for (index, scene) in SCENES.iter().enumerate() {
+    for (index, scene) in SCENES[..SYMMETRIC_SCENES].iter().enumerate() {
         let mut target = 1_000;
         while target <= max_points {
             let row = measure_in_child(index, target)?;
@@ -174,6 +194,7 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabErr
     }
     report.push_str(&memory_by_component(&largest));
     report.push_str(&symmetric_methods(max_points)?);
+    report.push_str(&unsymmetric_methods(max_points)?);
     report.push_str(&ordering_comparison(max_points)?);
     report.push_str(&symbolic_reuse()?);
     report.push_str(&return_map_cost()?);
@@ -275,6 +296,9 @@ const ORDERING_VARIABLE: &str = "MPM_BENCH_FILL_ORDERING";
 /// `direct`, `kept_factor_cg` or `multigrid`: how the child solves symmetric tangents
 /// whatever their size ([`SolverSettings::symmetric`]).
 const METHOD_VARIABLE: &str = "MPM_BENCH_SYMMETRIC_METHOD";
+/// `direct` or `gmres`: how the child solves tangents that are not
+/// symmetric whatever their size ([`SolverSettings::unsymmetric`]).
+const UNSYMMETRIC_VARIABLE: &str = "MPM_BENCH_UNSYMMETRIC_METHOD";
 
 /// Heap bytes per point by component at the largest size of each scene,
 /// beside the peak resident set per point.
@@ -336,32 +360,80 @@ fn symmetric_methods(max_points: usize) -> Result<String, LabError> {
          | scene | points | active DOFs | method | s / step | factorisation s / step | solve s / step | Newton iterations | factorisations | CG solves | CG iterations | peak MiB |\n\
          |---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
-    for (index, scene) in SCENES.iter().enumerate() {
+    for (index, scene) in SCENES[..SYMMETRIC_SCENES].iter().enumerate() {
         let mut target = 10_000;
         while target <= max_points {
             for method in ["direct", "kept_factor_cg", "multigrid"] {
                 let row = measure_in_child_with(index, target, &[(METHOD_VARIABLE, method)])?;
-                let steps = row.steps as f64;
-                let line = format!(
-                    "| {} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} | {} | {} | {} |\n",
-                    scene.name,
-                    row.points,
-                    row.dofs,
-                    match method {
-                        "direct" => "direct",
-                        "kept_factor_cg" => "kept factor + CG",
-                        _ => "multigrid + CG",
-                    },
-                    row.timings.total / steps,
-                    row.timings.factorisation / steps,
-                    row.timings.solve / steps,
-                    row.iterations,
-                    row.fresh_factorisations,
-                    row.cg_solves,
-                    row.cg_iterations,
-                    row.peak_mib
-                        .map_or("n/a".to_string(), |m| format!("{m:.0}")),
-                );
+                let label = match method {
+                    "direct" => "direct",
+                    "kept_factor_cg" => "kept factor + CG",
+                    _ => "multigrid + CG",
+                };
+                let line = solve_row(scene.name, label, &row);
+                eprint!("{line}");
+                text.push_str(&line);
+            }
+            target *= 10;
+        }
+    }
+    Ok(text)
+}
+
+/// A row of the solve tables: the scene, the method's label, and the
+/// row's times per step, iterations, factorisations, Krylov solves and
+/// peak memory.
+fn solve_row(scene: &str, label: &str, row: &Row) -> String {
+    let steps = row.steps as f64;
+    format!(
+        "| {scene} | {} | {} | {label} | {:.3} | {:.3} | {:.3} | {} | {} | {} | {} | {} |\n",
+        row.points,
+        row.dofs,
+        row.timings.total / steps,
+        row.timings.factorisation / steps,
+        row.timings.solve / steps,
+        row.iterations,
+        row.fresh_factorisations,
+        row.cg_solves,
+        row.cg_iterations,
+        row.peak_mib
+            .map_or("n/a".to_string(), |m| format!("{m:.0}")),
+    )
+}
+
+/// The largest size at which the unsymmetric table factorises every
+/// tangent by LU (sequential, COLAMD: about 1 s a factorisation at 26k
+/// DOFs, and growing faster than the Cholesky factors).
+const UNSYMMETRIC_DIRECT_MAX_POINTS: usize = 100_000;
+
+/// Tangents that are not symmetric solved by LU every Newton iteration
+/// (direct) against GMRES preconditioned by the kept Cholesky factor of
+/// the symmetric part, from 1e4 points up.
+fn unsymmetric_methods(max_points: usize) -> Result<String, LabError> {
+    let mut text = String::from(
+        "\n## Unsymmetric solves: LU against GMRES\n\n\
+         The follower pressure's load stiffness makes the paper's cantilever's tangent unsymmetric. Direct: \
+         every Newton iteration's tangent factorised by LU (faer, COLAMD, sequential). GMRES: restarted \
+         GMRES (`crates/mpm/src/krylov.rs`) to the accuracy Newton's forcing term asks for, preconditioned \
+         on the right by the single-precision Cholesky factor (nested dissection, as for symmetric tangents) \
+         of the symmetric part `(K + K^T) / 2` of an earlier tangent of the pattern, refreshed as CG's kept \
+         factor is; a tangent whose symmetric part is not positive definite is solved by LU \
+         (`crates/mpm/src/linsolve.rs`). The default switches from LU to GMRES at 2,000 DOFs. First two \
+         load steps; fresh factorisations (Cholesky's of the symmetric part; LU's are not counted), GMRES \
+         solves and their iterations over both.\n\n\
+         | scene | points | active DOFs | method | s / step | factorisation s / step | solve s / step | Newton iterations | factorisations | GMRES solves | GMRES iterations | peak MiB |\n\
+         |---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for (index, scene) in SCENES.iter().enumerate().skip(SYMMETRIC_SCENES) {
+        let mut target = 10_000;
+        while target <= max_points {
+            for method in ["direct", "gmres"] {
+                if method == "direct" && target > UNSYMMETRIC_DIRECT_MAX_POINTS {
+                    continue;
+                }
+                let row = measure_in_child_with(index, target, &[(UNSYMMETRIC_VARIABLE, method)])?;
+                let label = if method == "direct" { "LU" } else { "GMRES" };
+                let line = solve_row(scene.name, label, &row);
                 eprint!("{line}");
                 text.push_str(&line);
             }
@@ -508,12 +580,23 @@ pub fn bench_row(scene: usize, target: usize) -> Result<(), LabError> {
             )));
         }
     };
+    let unsymmetric = match std::env::var(UNSYMMETRIC_VARIABLE).as_deref() {
+        Ok("direct") => Some(UnsymmetricMethod::Direct),
+        Ok("gmres") => Some(UnsymmetricMethod::SymmetricPartGmres),
+        Err(_) => None,
+        Ok(other) => {
+            return Err(LabError::Input(format!(
+                "{UNSYMMETRIC_VARIABLE}={other}: not direct or gmres"
+            )));
+        }
+    };
     let row = measure(
         scene,
         target,
         SolverSettings {
             ordering,
             symmetric,
+            unsymmetric,
         },
     )?;
     println!(

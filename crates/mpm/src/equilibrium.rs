@@ -163,21 +163,16 @@ impl<'a> StepEquilibrium<'a> {
             previous => {
                 // Freed before the new order and factor are made.
                 drop(previous);
-                // The nodes' grid coordinates, for the tangents that are
-                // symmetric: Cholesky's nested-dissection order and the
-                // multigrid's aggregates are made from them. LU orders its
-                // own columns.
-                let solver = SparseSolver::new(conn.n_dofs(), None, settings, tally.clone());
-                if symmetric_tangent(&terms, fbar.is_some() || cell_mean.is_some(), start.points) {
-                    solver.with_grid(
-                        conn.nodes
-                            .iter()
-                            .map(|&key| node_coordinates(key))
-                            .collect(),
-                    )
-                } else {
-                    solver
-                }
+                // The nodes' grid coordinates: Cholesky's nested-dissection
+                // order (of a symmetric tangent, or of the symmetric part
+                // that preconditions GMRES) and the multigrid's aggregates
+                // are made from them. LU orders its own columns.
+                SparseSolver::new(conn.n_dofs(), None, settings, tally.clone()).with_grid(
+                    conn.nodes
+                        .iter()
+                        .map(|&key| node_coordinates(key))
+                        .collect(),
+                )
             }
         };
         Self {

@@ -40,6 +40,7 @@ use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::traits::ComplexField;
 use faer::{Conj, Mat, MatMut, Par, Side};
+use rayon::prelude::*;
 
 use crate::assembly::Pattern;
 use crate::krylov;
@@ -69,6 +70,9 @@ pub struct SolverSettings {
     /// default) chooses by size ([`symmetric_method`]). Benchmarks compare
     /// the methods this way.
     pub symmetric: Option<SymmetricMethod>,
+    /// How tangents that are not symmetric are solved whatever their
+    /// size; `None` (the default) chooses by size ([`unsymmetric_method`]).
+    pub unsymmetric: Option<UnsymmetricMethod>,
 }
 
 /// What a run's solvers did, summed over them (one per pattern), for
@@ -131,13 +135,15 @@ impl SolveTally {
 }
 
 /// What produced a solution: a factorisation (of the tangent, or an
-/// earlier one preconditioning CG), or CG preconditioned by multigrid.
+/// earlier one preconditioning CG), CG preconditioned by multigrid, or
+/// GMRES preconditioned by the Cholesky factor of a symmetric part.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Factorisation {
     Cholesky,
     Lu,
     Multigrid,
+    Gmres,
 }
 
 /// From this many unknowns up, Cholesky factorises on rayon's threads:
@@ -189,6 +195,23 @@ pub struct SparseSolver {
     nodes: Option<Vec<[i64; 2]>>,
     /// The multigrid hierarchy of an earlier tangent of this pattern.
     hierarchy: Option<Hierarchy>,
+    unsymmetric: UnsymmetricMethod,
+    /// The method chosen for the pattern, to which each load step returns
+    /// (`unsymmetric` falls back to LU within one).
+    unsymmetric_choice: UnsymmetricMethod,
+    /// Whether the kept factor is of a symmetric part (GMRES's).
+    kept_symmetric_part: bool,
+    /// Solves in a row left to LU because the symmetric part was not
+    /// positive definite ([`GMRES_INDEFINITE_LIMIT`]).
+    indefinite_solves: usize,
+    /// Where each entry's transpose lies in the pattern (`K_ji` for the
+    /// entry `K_ij`), made at the first GMRES solve; `None` before, and
+    /// for a pattern that is not structurally symmetric (then LU solves).
+    transpose: Option<Vec<usize>>,
+    /// GMRES's buffers: the tangent's symmetric part, and its transpose
+    /// (whose column products make `K x`).
+    symmetric_part: Vec<f64>,
+    transposed: Vec<f64>,
 }
 
 /// The smallest relative residual (CG's recurrence's) CG is asked to reach
@@ -281,6 +304,57 @@ pub fn symmetric_method(n: usize) -> SymmetricMethod {
     }
 }
 
+/// How tangents that are not symmetric are solved.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum UnsymmetricMethod {
+    /// Every tangent factorised by LU.
+    Direct,
+    /// GMRES ([`krylov::preconditioned_gmres`]) preconditioned by the
+    /// kept Cholesky factor of the symmetric part `(K + K^T) / 2` of this
+    /// or an earlier tangent of the pattern, refreshed when GMRES slows
+    /// down as CG's is. The load stiffness of a follower pressure, F-bar's
+    /// averaging and non-associated flow leave `K` close to its symmetric
+    /// part. When that part is not positive definite, or GMRES does not
+    /// converge with a fresh factor, LU solves, for the rest of the
+    /// pattern.
+    SymmetricPartGmres,
+}
+
+/// From this many unknowns up, tangents that are not symmetric are solved
+/// by [`UnsymmetricMethod::SymmetricPartGmres`] (BENCHMARKS.md,
+/// Unsymmetric solves). Below it every answer is LU's.
+const GMRES_FROM_DOFS: usize = 2_000;
+
+/// GMRES's products with `K` allowed with a fresh factor of the symmetric
+/// part before it is judged not to serve, and with a stale one before a
+/// fresh one is made; the basis vectors a cycle holds.
+const GMRES_MAX_ITERATIONS: usize = 60;
+const GMRES_MAX_ITERATIONS_STALE: usize = 30;
+const GMRES_RESTART: usize = 30;
+
+/// The method a solver of `n` unknowns uses by default for tangents that
+/// are not symmetric.
+pub fn unsymmetric_method(n: usize) -> UnsymmetricMethod {
+    if n >= GMRES_FROM_DOFS {
+        UnsymmetricMethod::SymmetricPartGmres
+    } else {
+        UnsymmetricMethod::Direct
+    }
+}
+
+/// Why GMRES left a system to LU.
+enum GmresFailure {
+    /// The symmetric part is not positive definite in double precision.
+    NotPositiveDefinite,
+    /// GMRES did not converge with a fresh double factor of it, or the
+    /// pattern is not structurally symmetric.
+    NotConverging,
+}
+
+/// Solves in a row whose symmetric part was not positive definite after
+/// which LU solves the rest of the pattern's tangents.
+const GMRES_INDEFINITE_LIMIT: usize = 3;
+
 /// What the kept-factor path made of a symmetric system.
 enum Kept {
     Solved(Vec<f64>, Timing),
@@ -299,6 +373,81 @@ impl KeptFactor {
         match self {
             KeptFactor::Single(v) => std::mem::size_of_val(v.as_slice()),
             KeptFactor::Double(v) => std::mem::size_of_val(v.as_slice()),
+        }
+    }
+}
+
+/// The inverse of a kept factor, applied in place, with its scratch.
+struct KeptSolve<'a> {
+    symbolic: &'a SymbolicCholesky<usize>,
+    kept: &'a KeptFactor,
+    /// Parallel triangular solves of a supernodal factor in postorder.
+    schedule: Option<&'a SubtreeSchedule>,
+    par: Par,
+    scratch: MemBuffer,
+    single: Vec<f32>,
+    permuted: Vec<f64>,
+}
+
+impl<'a> KeptSolve<'a> {
+    fn new(
+        symbolic: &'a SymbolicCholesky<usize>,
+        kept: &'a KeptFactor,
+        schedule: Option<&'a SubtreeSchedule>,
+        par: Par,
+    ) -> Self {
+        let scratch = MemBuffer::new(
+            symbolic
+                .solve_in_place_scratch::<f64>(1, par)
+                .or(symbolic.solve_in_place_scratch::<f32>(1, par)),
+        );
+        Self {
+            symbolic,
+            kept,
+            schedule,
+            par,
+            scratch,
+            single: Vec::new(),
+            permuted: Vec::new(),
+        }
+    }
+
+    /// `z <- M^-1 z`, `M` the kept factor's matrix.
+    fn apply(&mut self, z: &mut [f64]) {
+        let (symbolic, par, n) = (self.symbolic, self.par, z.len());
+        let stack = MemStack::new(&mut self.scratch);
+        match (self.kept, self.schedule) {
+            (KeptFactor::Double(values), Some(schedule)) => {
+                schedule.solve(symbolic, values, z, &mut self.permuted);
+            }
+            (KeptFactor::Single(values), Some(schedule)) => {
+                schedule.solve(symbolic, values, z, &mut self.permuted);
+            }
+            // A simplicial factor, or supernodes out of postorder: faer's
+            // sequential solve.
+            (KeptFactor::Double(values), None) => {
+                let column = MatMut::from_column_major_slice_mut(z, n, 1);
+                LltRef::new(symbolic, values).solve_in_place_with_conj(
+                    Conj::No,
+                    column,
+                    par,
+                    stack,
+                );
+            }
+            (KeptFactor::Single(values), None) => {
+                self.single.clear();
+                self.single.extend(z.iter().map(|&v| v as f32));
+                let column = MatMut::from_column_major_slice_mut(&mut self.single, n, 1);
+                LltRef::new(symbolic, values).solve_in_place_with_conj(
+                    Conj::No,
+                    column,
+                    par,
+                    stack,
+                );
+                for (z, s) in z.iter_mut().zip(&self.single) {
+                    *z = f64::from(*s);
+                }
+            }
         }
     }
 }
@@ -352,6 +501,17 @@ impl SparseSolver {
             refresh: false,
             nodes: None,
             hierarchy: None,
+            unsymmetric: settings
+                .unsymmetric
+                .unwrap_or_else(|| unsymmetric_method(n)),
+            unsymmetric_choice: settings
+                .unsymmetric
+                .unwrap_or_else(|| unsymmetric_method(n)),
+            kept_symmetric_part: false,
+            indefinite_solves: 0,
+            transpose: None,
+            symmetric_part: Vec::new(),
+            transposed: Vec::new(),
         }
     }
 
@@ -375,6 +535,15 @@ impl SparseSolver {
     pub fn reused(mut self) -> Self {
         SolveTally::add(&self.tally.reused, 1);
         self.reuses += 1;
+        // GMRES starts each load step afresh, as a resumed run does (a
+        // checkpoint keeps no factor), so that both give the same bits.
+        if self.kept_symmetric_part {
+            self.kept = None;
+            self.double_kept = false;
+            self.kept_symmetric_part = false;
+        }
+        self.unsymmetric = self.unsymmetric_choice;
+        self.indefinite_solves = 0;
         self
     }
 
@@ -467,14 +636,7 @@ impl SparseSolver {
                 return Kept::NotPositiveDefinite;
             };
             let t = std::time::Instant::now();
-            let mut scratch = MemBuffer::new(
-                symbolic
-                    .solve_in_place_scratch::<f64>(1, par)
-                    .or(symbolic.solve_in_place_scratch::<f32>(1, par)),
-            );
-            let mut single = Vec::new();
-            let mut permuted = Vec::new();
-            let n = self.n;
+            let mut inverse = KeptSolve::new(symbolic, kept, self.schedule.as_ref(), par);
             // A fresh double factor is exact: its solve is the answer.
             let direct = fresh && matches!(kept, KeptFactor::Double(_));
             let max_iterations = match (direct, fresh) {
@@ -484,44 +646,7 @@ impl SparseSolver {
             };
             let (x, outcome) = krylov::preconditioned_cg(
                 |x, y| krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, values, x, y),
-                |z| {
-                    let stack = MemStack::new(&mut scratch);
-                    match (kept, &self.schedule) {
-                        (KeptFactor::Double(values), Some(schedule)) => {
-                            schedule.solve(symbolic, values, z, &mut permuted);
-                        }
-                        (KeptFactor::Single(values), Some(schedule)) => {
-                            schedule.solve(symbolic, values, z, &mut permuted);
-                        }
-                        // A simplicial factor, or supernodes out of
-                        // postorder: faer's sequential solve.
-                        (kept, None) => match kept {
-                            KeptFactor::Double(values) => {
-                                let column = MatMut::from_column_major_slice_mut(z, n, 1);
-                                LltRef::new(symbolic, values).solve_in_place_with_conj(
-                                    Conj::No,
-                                    column,
-                                    par,
-                                    stack,
-                                );
-                            }
-                            KeptFactor::Single(values) => {
-                                single.clear();
-                                single.extend(z.iter().map(|&v| v as f32));
-                                let column = MatMut::from_column_major_slice_mut(&mut single, n, 1);
-                                LltRef::new(symbolic, values).solve_in_place_with_conj(
-                                    Conj::No,
-                                    column,
-                                    par,
-                                    stack,
-                                );
-                                for (z, s) in z.iter_mut().zip(&single) {
-                                    *z = f64::from(*s);
-                                }
-                            }
-                        },
-                    }
-                },
+                |z| inverse.apply(z),
                 rhs,
                 accuracy.max(CG_FLOOR),
                 max_iterations,
@@ -591,15 +716,145 @@ impl SparseSolver {
                 },
             );
             timing.solve += t.elapsed().as_secs_f64();
-            self.last_cg = Some(outcome);
-            if outcome.converged {
-                self.tally.cg_solve(outcome.iterations);
-                self.refresh = !fresh && contraction(&outcome) > MULTIGRID_REFRESH_RATE;
+            if self.krylov_finished(outcome, fresh, MULTIGRID_REFRESH_RATE) {
                 return Some((x, timing));
             }
             if fresh {
                 self.hierarchy = None;
                 return None;
+            }
+            self.refresh = true;
+        }
+    }
+
+    /// Records how a Krylov solve with a kept preconditioner ended, and
+    /// whether it converged; if it did with a stale preconditioner that
+    /// reduced the residual by less than `rate` an iteration, the next
+    /// solve makes a fresh one.
+    fn krylov_finished(&mut self, outcome: krylov::CgOutcome, fresh: bool, rate: f64) -> bool {
+        self.last_cg = Some(outcome);
+        if outcome.converged {
+            self.tally.cg_solve(outcome.iterations);
+            self.refresh = !fresh && contraction(&outcome) > rate;
+        }
+        outcome.converged
+    }
+
+    /// Makes the symbolic Cholesky analysis of the pattern, once: in
+    /// nested-dissection order when the solver has the grid (or was given
+    /// an order), with the kept factor's parallel triangular solves when
+    /// `schedule`.
+    fn analyse_cholesky(&mut self, pattern: &Pattern, schedule: bool) -> Result<(), String> {
+        if self.llt.is_some() {
+            return Ok(());
+        }
+        if self.order.is_none() && self.nested_dissection {
+            self.order = self
+                .nodes
+                .as_deref()
+                .map(|nodes| with_inverse(ordering::nested_dissection(nodes, pattern)));
+        }
+        let (col_ptr, row_idx) = upper_triangle(pattern);
+        let structure =
+            SymbolicSparseColMatRef::new_checked(self.n, self.n, &col_ptr, None, &row_idx);
+        let ordering = match &self.order {
+            Some((order, inverse)) => {
+                SymmetricOrdering::Custom(PermRef::new_checked(order, inverse, self.n))
+            }
+            None => SymmetricOrdering::Amd,
+        };
+        let llt = factorize_symbolic_cholesky(structure, Side::Upper, ordering, Default::default())
+            .map_err(|e| format!("{e:?}"))?;
+        if schedule {
+            self.schedule = SubtreeSchedule::new(&llt, rayon::current_num_threads());
+        }
+        self.llt = Some(llt);
+        Ok(())
+    }
+
+    /// Solves `K x = rhs` for a `K` that is not symmetric by GMRES
+    /// preconditioned by the kept Cholesky factor of the symmetric part of
+    /// this or an earlier tangent of the pattern, to the relative residual
+    /// `accuracy` (at least [`CG_FLOOR`]). A fresh factor is made when
+    /// there is none, when GMRES with a stale one converged slower than
+    /// [`REFRESH_RATE`] last time, or when GMRES fails with a stale one; in
+    /// single precision until a fresh single one fails to serve, then in
+    /// double. An error when LU must solve: the symmetric part is not
+    /// positive definite, GMRES does not converge with a fresh double
+    /// factor of it, or the pattern is not structurally symmetric.
+    fn gmres_with_kept_factor(
+        &mut self,
+        pattern: &Pattern,
+        values: &[f64],
+        rhs: &[f64],
+        accuracy: f64,
+        par: Par,
+    ) -> Result<(Vec<f64>, Timing), GmresFailure> {
+        let mut timing = Timing::default();
+        if self.transpose.is_none() {
+            self.transpose = Some(transpose_places(pattern).ok_or(GmresFailure::NotConverging)?);
+        }
+        let transpose = self.transpose.as_ref().ok_or(GmresFailure::NotConverging)?;
+        // K^T in compressed columns is K in compressed rows: its column
+        // products make `K x`.
+        self.transposed.resize(values.len(), 0.0);
+        (self.transposed.par_iter_mut())
+            .zip(transpose)
+            .for_each(|(t, &k)| *t = values[k]);
+        loop {
+            let fresh = self.kept.is_none() || self.refresh;
+            if fresh {
+                let t = std::time::Instant::now();
+                self.refresh = false;
+                let mut symmetric_part = std::mem::take(&mut self.symmetric_part);
+                symmetric_part.resize(values.len(), 0.0);
+                (symmetric_part.par_iter_mut())
+                    .zip(values.par_iter().zip(&self.transposed))
+                    .for_each(|(s, (k, t))| *s = 0.5 * (k + t));
+                let factorised = self.factorise_kept(pattern, &symmetric_part, par);
+                self.kept_symmetric_part = factorised;
+                self.symmetric_part = symmetric_part;
+                timing.factorise += t.elapsed().as_secs_f64();
+                if !factorised {
+                    if self.double_kept {
+                        // Not a matter of precision: the symmetric part is
+                        // not positive definite.
+                        return Err(GmresFailure::NotPositiveDefinite);
+                    }
+                    self.double_kept = true;
+                    continue;
+                }
+            }
+            let (Some(symbolic), Some(kept)) = (self.llt.as_ref(), self.kept.as_ref()) else {
+                return Err(GmresFailure::NotPositiveDefinite);
+            };
+            let t = std::time::Instant::now();
+            let mut inverse = KeptSolve::new(symbolic, kept, self.schedule.as_ref(), par);
+            let transposed = &self.transposed;
+            let (x, outcome) = krylov::preconditioned_gmres(
+                |x, y| {
+                    krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, transposed, x, y)
+                },
+                |z| inverse.apply(z),
+                rhs,
+                accuracy.max(CG_FLOOR),
+                if fresh {
+                    GMRES_MAX_ITERATIONS
+                } else {
+                    GMRES_MAX_ITERATIONS_STALE
+                },
+                GMRES_RESTART,
+            );
+            timing.solve += t.elapsed().as_secs_f64();
+            if self.krylov_finished(outcome, fresh, REFRESH_RATE) {
+                return Ok((x, timing));
+            }
+            if fresh {
+                if self.double_kept {
+                    return Err(GmresFailure::NotConverging);
+                }
+                // A fresh single factor may be too imprecise.
+                self.double_kept = true;
             }
             self.refresh = true;
         }
@@ -697,38 +952,7 @@ impl SparseSolver {
         }
         let b = Mat::from_fn(self.n, rhs.len(), |i, j| rhs[j][i]);
         if symmetric {
-            if self.llt.is_none() {
-                if self.order.is_none() && self.nested_dissection {
-                    self.order = self
-                        .nodes
-                        .as_deref()
-                        .map(|nodes| with_inverse(ordering::nested_dissection(nodes, pattern)));
-                }
-                let (col_ptr, row_idx) = upper_triangle(pattern);
-                let structure =
-                    SymbolicSparseColMatRef::new_checked(self.n, self.n, &col_ptr, None, &row_idx);
-                let ordering = match &self.order {
-                    Some((order, inverse)) => {
-                        SymmetricOrdering::Custom(PermRef::new_checked(order, inverse, self.n))
-                    }
-                    None => SymmetricOrdering::Amd,
-                };
-                self.llt = Some(
-                    factorize_symbolic_cholesky(
-                        structure,
-                        Side::Upper,
-                        ordering,
-                        Default::default(),
-                    )
-                    .map_err(|e| format!("{e:?}"))?,
-                );
-                if self.method == SymmetricMethod::KeptFactorCg {
-                    self.schedule = self
-                        .llt
-                        .as_ref()
-                        .and_then(|llt| SubtreeSchedule::new(llt, rayon::current_num_threads()));
-                }
-            }
+            self.analyse_cholesky(pattern, self.method == SymmetricMethod::KeptFactorCg)?;
             let par = if self.n >= PARALLEL_FROM_DOFS {
                 Par::rayon(0)
             } else {
@@ -774,6 +998,57 @@ impl SparseSolver {
                 }
             }
         }
+        if !symmetric && self.unsymmetric == UnsymmetricMethod::SymmetricPartGmres {
+            self.analyse_cholesky(pattern, true)?;
+            let par = if self.n >= PARALLEL_FROM_DOFS {
+                Par::rayon(0)
+            } else {
+                Par::Seq
+            };
+            // The symbolic analysis, if this solve made it, counts as
+            // factorisation.
+            let mut total = Timing {
+                factorise: t0.elapsed().as_secs_f64(),
+                solve: 0.0,
+            };
+            let mut solved = Vec::with_capacity(rhs.len());
+            let mut failure = None;
+            for b in rhs {
+                match self.gmres_with_kept_factor(pattern, values, b, accuracy, par) {
+                    Ok((x, timing)) => {
+                        total.add(timing);
+                        solved.push(x);
+                    }
+                    Err(why) => {
+                        failure = Some(why);
+                        break;
+                    }
+                }
+            }
+            match failure {
+                None => {
+                    self.indefinite_solves = 0;
+                    return Ok((solved, Factorisation::Gmres, total));
+                }
+                // An iterate far from equilibrium (compression, an early
+                // overshoot) can make the symmetric part indefinite where
+                // the later ones are not: LU solves this one, and the next
+                // tries a fresh factor again, up to a limit in a row.
+                Some(GmresFailure::NotPositiveDefinite) => {
+                    self.indefinite_solves += 1;
+                    if self.indefinite_solves >= GMRES_INDEFINITE_LIMIT {
+                        self.unsymmetric = UnsymmetricMethod::Direct;
+                    }
+                }
+                // The tangent is too far from its symmetric part.
+                Some(GmresFailure::NotConverging) => {
+                    self.unsymmetric = UnsymmetricMethod::Direct;
+                }
+            }
+            self.kept = None;
+            self.double_kept = false;
+            self.kept_symmetric_part = false;
+        }
         // faer's LU takes `usize` row indices: a copy for the solve.
         let row_idx: Vec<usize> = pattern.row_idx.iter().map(|&r| r as usize).collect();
         let structure =
@@ -798,6 +1073,28 @@ fn with_inverse(order: Vec<usize>) -> (Vec<usize>, Vec<usize>) {
         inverse[dof] = k;
     }
     (order, inverse)
+}
+
+/// Where each entry's transpose lies in `pattern`: `places[k]` holds
+/// `K_ji` for the entry `k` holding `K_ij`. `None` when some `K_ji` has no
+/// place (the pattern is not structurally symmetric). Rows are sorted in
+/// each column.
+fn transpose_places(pattern: &Pattern) -> Option<Vec<usize>> {
+    let n = pattern.col_ptr.len() - 1;
+    let places: Vec<Option<usize>> = (0..n)
+        .into_par_iter()
+        .flat_map_iter(|j| {
+            let range = pattern.col_ptr[j]..pattern.col_ptr[j + 1];
+            pattern.row_idx[range].iter().map(move |&i| {
+                let column = pattern.col_ptr[i as usize]..pattern.col_ptr[i as usize + 1];
+                let rows = &pattern.row_idx[column.clone()];
+                rows.binary_search(&(j as u32))
+                    .ok()
+                    .map(|k| column.start + k)
+            })
+        })
+        .collect();
+    places.into_iter().collect()
 }
 
 /// How a kept single-precision factor takes `K`'s entries: in single
