@@ -10,6 +10,9 @@
 //!   edge) at three cell sizes: the pressure `q / c` against Prandtl's
 //!   `2 + pi`; at the finest, with the edge at five places in its cell;
 //!   and held pointwise, the candidate it replaced, at h = 0.125 m;
+//! - the same on clay ten times stiffer, pushed 0.001 B: the load read
+//!   before the geometry changes (Prandtl's is a small-deformation
+//!   collapse), at the three cells and the finest's five placements;
 //! - the same clay under a uniform pressure on the footing's stretch,
 //!   ramped until the solve stops;
 //! - frictional soil (phi = 20 degrees, associated, nu = 0.3, no F-bar) as
@@ -52,6 +55,11 @@ const PHI: f64 = 20.0;
 /// Settlement of the refinement runs (fraction of B), and their steps.
 const SETTLEMENT: f64 = 0.01;
 const SETTLEMENT_STEPS: usize = 40;
+/// The stiff clay's Young's modulus (Pa, ten times the case's) and its
+/// push (fraction of B): collapse within a tenth of the settlement, so
+/// that the load is read before the geometry has changed.
+const STIFF_MODULUS: f64 = 1.0e9;
+const STIFF_SETTLEMENT: f64 = 0.001;
 /// The large-deformation run: settlement (fraction of B), steps, cell.
 const LARGE_SETTLEMENT: f64 = 0.5;
 const LARGE_STEPS: usize = 100;
@@ -136,6 +144,24 @@ pub fn footing_case(h: f64, soil: Soil, loading: Loading, steps: usize) -> Value
         }
     }
     case
+}
+
+/// The stiff clay's push.
+fn stiff_loading(rough: bool) -> Loading {
+    Loading::Pushed {
+        settlement: STIFF_SETTLEMENT * 2.0 * HALF_WIDTH,
+        rough,
+    }
+}
+
+/// The undrained footing on clay ten times stiffer (`STIFF_MODULUS`),
+/// pushed `STIFF_SETTLEMENT` B in the study's steps, the grid's origin at
+/// `-offset h` in x.
+fn stiff_case(h: f64, offset: f64, rough: bool) -> Value {
+    let loading = stiff_loading(rough);
+    let mut case = footing_case(h, Soil::Undrained, loading, SETTLEMENT_STEPS);
+    case["bodies"][0]["material"]["youngs_modulus"] = json!(STIFF_MODULUS);
+    placed(case, h, offset)
 }
 
 /// `case` under arc-length control (`analysis.control`).
@@ -276,6 +302,10 @@ struct Results {
     /// `BLOCK_STEPS` and twice as many steps, and loaded by a pressure
     /// under arc-length control.
     block: Option<[Curve; 3]>,
+    /// Undrained, pushed on the stiff clay: `(rough, h, offset, curve)`,
+    /// each cell at the study's origin (-0.3 h) and the finest at every
+    /// placement.
+    stiff: Vec<(bool, f64, f64, Curve)>,
 }
 
 /// The stiff block's pushed run: steps to `BLOCK_SETTLEMENT` B.
@@ -312,6 +342,7 @@ pub fn footing(out: &Path, quick: bool) -> Result<(), LabError> {
         pointwise: Vec::new(),
         arc_pressure: Vec::new(),
         block: None,
+        stiff: Vec::new(),
     };
     for &h in cells {
         for rough in [false, true] {
@@ -362,6 +393,23 @@ pub fn footing(out: &Path, quick: bool) -> Result<(), LabError> {
         eprintln!("undrained pressure, arc length, h {h}: {}", summary(&curve));
         results.arc_pressure.push((h, curve, q_max));
     }
+    let finest = *cells.last().expect("cells");
+    let stiff_runs = cells.iter().map(|&h| (h, 0.3)).chain(
+        PLACEMENTS
+            .iter()
+            .filter(|&&o| o != 0.3)
+            .map(|&o| (finest, o)),
+    );
+    for (h, offset) in stiff_runs {
+        for rough in [false, true] {
+            let curve = run_curve(&stiff_case(h, offset, rough), stiff_loading(rough))?;
+            eprintln!(
+                "stiff h {h} offset {offset} rough {rough}: {}",
+                summary(&curve)
+            );
+            results.stiff.push((rough, h, offset, curve));
+        }
+    }
     let block = |loading, steps| run_curve(&block_case(CELLS[0], loading, steps), loading);
     let pushed_block = |steps| {
         let loading = Loading::Pushed {
@@ -381,7 +429,6 @@ pub fn footing(out: &Path, quick: bool) -> Result<(), LabError> {
         eprintln!("block: {}", summary(c));
     }
     results.block = Some(curves);
-    let finest = *cells.last().expect("cells");
     for rough in [false, true] {
         let loading = pushed(rough);
         for offset in PLACEMENTS {
@@ -542,6 +589,7 @@ fn markdown(r: &Results, quick: bool) -> String {
         let _ = writeln!(md, "\nObserved orders of the error: {}.\n", orders(&errors));
     }
     placements_markdown(&mut md, r);
+    stiff_markdown(&mut md, r);
     for (model, runs, n_c) in [
         ("undrained, von Mises", &r.undrained_pressure, p),
         (
@@ -743,6 +791,66 @@ fn arc_markdown(md: &mut String, r: &Results) {
 }
 
 /// The placement sweep, the pointwise candidate and the contact pressure.
+/// The undrained footing on the stiff clay: the cells, and the finest's
+/// placements.
+fn stiff_markdown(md: &mut String, r: &Results) {
+    let p = prandtl();
+    let _ = writeln!(
+        md,
+        "## Undrained on clay ten times stiffer (E = {:.0} GPa), pushed {STIFF_SETTLEMENT} B in {SETTLEMENT_STEPS} steps\n\n\
+         Prandtl's load is a small-deformation collapse. On the case's clay the footing reaches it \
+         near 0.003 B and the load then keeps rising as the soil heaves and the footing sinks \
+         (the large-deformation run below; from 0.005 B to 0.01 B the load above rises 0.5-1.1%). \
+         Ten times stiffer, the same clay collapses within 0.0003 B and the load is read \
+         before the geometry has changed: this is the method's error in Prandtl's own \
+         problem. The placements are at the finest cell, the edge at (0.5 / h + offset) mod 1 \
+         of its cell.\n\n\
+         | roughness | h (m) | offset (cells) | q / c at {:.4} B | q / c at {STIFF_SETTLEMENT} B | error | Newton iterations | wall (s) |\n\
+         |---|---|---|---|---|---|---|---|",
+        STIFF_MODULUS / 1e9,
+        STIFF_SETTLEMENT / 2.0
+    );
+    let mut notes = Vec::new();
+    for rough in [false, true] {
+        let name = if rough { "rough" } else { "smooth" };
+        let runs: Vec<_> = r.stiff.iter().filter(|run| run.0 == rough).collect();
+        let mut errors = Vec::new();
+        for &(_, h, offset, c) in &runs {
+            let half = c.points.get(SETTLEMENT_STEPS / 2).map_or(f64::NAN, |p| p.1);
+            let q = end_pressure(c);
+            if *offset == 0.3 {
+                errors.push(q - p);
+            }
+            let _ = writeln!(
+                md,
+                "| {name} | {h} | {offset} | {half:.4} | {q:.4} | {:+.2}% | {} | {:.1} |",
+                100.0 * (q - p) / p,
+                c.newton_iterations,
+                c.seconds
+            );
+        }
+        let finest = runs.iter().map(|run| run.1).fold(f64::INFINITY, f64::min);
+        let qs: Vec<f64> = (runs.iter())
+            .filter(|run| run.1 == finest)
+            .map(|run| end_pressure(&run.3))
+            .collect();
+        let (lo, hi) = (qs.iter()).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &q| {
+            (lo.min(q), hi.max(q))
+        });
+        let mean = qs.iter().sum::<f64>() / qs.len().max(1) as f64;
+        notes.push(format!(
+            "{name}: observed orders of the error {}; at h = {finest}, over {} placements, \
+             q / c {lo:.4} to {hi:.4} ({:+.2}% to {:+.2}%), a spread of {:.2}% of the mean.",
+            orders(&errors),
+            qs.len(),
+            100.0 * (lo - p) / p,
+            100.0 * (hi - p) / p,
+            100.0 * (hi - lo) / mean
+        ));
+    }
+    let _ = writeln!(md, "\n{}\n", notes.join(" "));
+}
+
 fn placements_markdown(md: &mut String, r: &Results) {
     let p = prandtl();
     let Some(finest) = r.smooth.last().map(|(h, _)| *h) else {
@@ -849,6 +957,10 @@ fn csv(r: &Results) -> String {
     }
     if let Some(c) = &r.large {
         rows("undrained_smooth_large", LARGE_CELL, c);
+    }
+    for (rough, h, offset, c) in &r.stiff {
+        let name = if *rough { "rough" } else { "smooth" };
+        rows(&format!("stiff_{name}_origin_{offset}"), *h, c);
     }
     for (rough, offset, c) in &r.placements {
         let h = r.smooth.last().map_or(f64::NAN, |(h, _)| *h);
