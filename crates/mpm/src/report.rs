@@ -7,7 +7,8 @@ use serde::Serialize;
 use crate::linsolve::{Factorisation, SolverMemory};
 use crate::particles::MaterialPoints;
 
-/// Wall-clock seconds spent in each stage of a load step.
+/// Wall-clock seconds spent in each stage of a load step. The stages add
+/// up to `total`, the step's wall time, within the clock's laps.
 #[derive(Debug, Clone, Copy, Default, Serialize, serde::Deserialize, PartialEq)]
 pub struct StepTimings {
     /// Grid reset: shape functions, active nodes, stiffness pattern, loads.
@@ -22,6 +23,15 @@ pub struct StepTimings {
     pub solve: f64,
     /// Moving points and probes, committing state.
     pub update: f64,
+    /// Newton's own work besides the point loop, the assembly and the
+    /// solves: residuals and their norms, the step terms' forces, the line
+    /// search.
+    #[serde(default)]
+    pub newton: f64,
+    /// Tries of the step that failed and were cut (their work is done
+    /// again in smaller pieces), whole.
+    #[serde(default)]
+    pub failed: f64,
     pub total: f64,
 }
 
@@ -34,6 +44,8 @@ impl std::ops::AddAssign<&StepTimings> for StepTimings {
         self.factorisation += t.factorisation;
         self.solve += t.solve;
         self.update += t.update;
+        self.newton += t.newton;
+        self.failed += t.failed;
         self.total += t.total;
     }
 }

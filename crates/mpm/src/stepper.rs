@@ -318,6 +318,7 @@ impl Simulation {
         let mut done = 0.0_f64;
         let mut report: Option<StepReport> = None;
         let (mut cutbacks, mut failed_iterations) = (0, 0);
+        let mut failed_seconds = 0.0;
         let mut converged: Option<(LastIncrement, f64)> = None;
         while done < 1.0 {
             let last = done + size >= 1.0 - 1e-12;
@@ -330,6 +331,7 @@ impl Simulation {
             let extent_checked_after = if done > 0.0 { step } else { step - 1 };
             let from = (step_in_stage as f64 - 1.0 + done) / n;
             let to = Increment::To(from, load_factor);
+            let started = Instant::now();
             match self.increment(step, extent_checked_after, to, observer) {
                 Ok((sub, increment)) => {
                     converged = Some((increment, reach - done));
@@ -354,6 +356,7 @@ impl Simulation {
                 Err(e) if self.worth_cutting(&e) => {
                     cutbacks += 1;
                     failed_iterations += e.location().1.unwrap_or(0);
+                    failed_seconds += started.elapsed().as_secs_f64();
                     easy_in_a_row = 0;
                     size *= 0.5;
                     if size < self.substepping.min_fraction
@@ -389,6 +392,8 @@ impl Simulation {
         let mut report = report.expect("the loop converged at least once");
         report.cutbacks = cutbacks;
         report.failed_iterations = failed_iterations;
+        report.timings.failed += failed_seconds;
+        report.timings.total += failed_seconds;
         Ok(report)
     }
 
@@ -403,11 +408,13 @@ impl Simulation {
         observer: &mut dyn Observer,
     ) -> Result<StepReport, SolveError> {
         let (mut cutbacks, mut failed_iterations) = (0, 0);
+        let mut failed_seconds = 0.0;
         loop {
             let on = Increment::Arc {
                 length: arc.length,
                 load_factor: arc.load_factor,
             };
+            let started = Instant::now();
             match self.increment(step, step - 1, on, observer) {
                 Ok((mut report, increment)) => {
                     arc.load_factor = report.load_factor;
@@ -424,11 +431,14 @@ impl Simulation {
                     self.arc = Some(arc);
                     report.cutbacks = cutbacks;
                     report.failed_iterations = failed_iterations;
+                    report.timings.failed += failed_seconds;
+                    report.timings.total += failed_seconds;
                     return Ok(report);
                 }
                 Err(e) if self.worth_cutting(&e) => {
                     cutbacks += 1;
                     failed_iterations += e.location().1.unwrap_or(0);
+                    failed_seconds += started.elapsed().as_secs_f64();
                     arc.easy_in_a_row = 0;
                     arc.length *= 0.5;
                     let fraction = arc.length / arc.first_length;
@@ -518,7 +528,9 @@ impl Simulation {
                 Err(e) if e.may_pass_when_cut() => {
                     cutbacks += 1;
                     failed_iterations += e.location().1.unwrap_or(0);
-                    timings.total += started.elapsed().as_secs_f64();
+                    let seconds = started.elapsed().as_secs_f64();
+                    timings.failed += seconds;
+                    timings.total += seconds;
                     failure = Some(format!("F = {factor:.5}: {e}"));
                     reduction.record(factor, false);
                     self.points.materials = reduction.materials_at(reduction.held);
@@ -603,7 +615,7 @@ impl Simulation {
                 newton::solve_arc_length(&mut eq, &self.settings, step, observer, arc)?
             }
         };
-        clock.lap();
+        let newton_seconds = clock.lap();
 
         let reactions = eq.reactions(&u, self.stages[self.stage].n_supports);
         let applied_load = eq.applied_load();
@@ -665,9 +677,13 @@ impl Simulation {
         {
             return Err(non_finite("support tractions"));
         }
+        let parts = &converged.timings;
         let timings = StepTimings {
             grid: grid_seconds,
             update: clock.lap(),
+            newton: (newton_seconds
+                - (parts.point_loop + parts.assembly + parts.factorisation + parts.solve))
+                .max(0.0),
             total: clock.total(),
             ..converged.timings
         };
@@ -926,9 +942,9 @@ impl Stopwatch {
         seconds
     }
 
-    /// Seconds since the start.
+    /// Seconds from the start to the last lap: the laps' sum.
     fn total(&self) -> f64 {
-        self.start.elapsed().as_secs_f64()
+        (self.lap - self.start).as_secs_f64()
     }
 }
 

@@ -110,8 +110,9 @@ fn the_papers_cantilever_in_one_load_step_finishes() {
 /// Load-step cutting, made to happen: the column in one step with Newton
 /// allowed 3 iterations fails the whole increment, which is cut until the
 /// pieces converge, and the step reports them; the answer is still the
-/// exact one to the grid's error (as in the test above). With cutting
-/// bounded at half the increment it fails, naming the load factor reached.
+/// exact one to the grid's error (as in the test above), and the failed
+/// tries' time is in the step's. With cutting bounded at half the
+/// increment it fails, naming the load factor reached.
 #[test]
 fn a_failed_increment_is_cut_and_the_step_reports_its_pieces() {
     let case_with = |steps: u32, max_iterations: u32, min_fraction: f64| {
@@ -130,6 +131,12 @@ fn a_failed_increment_is_cut_and_the_step_reports_its_pieces() {
     let step = &report.steps[0];
     assert!(step.substeps > 1 && step.cutbacks >= 1, "{step:?}");
     assert_eq!(step.load_factor, 1.0);
+    // The failed tries' time is in the step's, and its stages add up to it.
+    let t = &step.timings;
+    let stages = t.grid + t.point_loop + t.assembly + t.factorisation + t.solve;
+    let stages = stages + t.update + t.newton + t.failed;
+    assert!(t.failed > 0.0, "{t:?}");
+    assert!((stages - t.total).abs() <= 1e-9 * t.total, "{t:?}");
     assert_eq!(
         step.newton.step_lengths.len(),
         step.newton.iterations,
