@@ -51,15 +51,26 @@ pub fn symmetric_product<T: Copy + Into<f64> + Sync>(
 /// blocks' sums are added in order.
 const DOT_BLOCK: usize = 4096;
 
-/// `a . b`, the same bits whatever the threads: each block of
-/// [`DOT_BLOCK`] entries is summed in order, and the blocks' sums are
-/// added in order (rayon's own `sum` adds in the order its threads
-/// finish).
+/// `a . b`, the same bits whatever the threads ([`ordered_sum`]).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let blocks: Vec<f64> = a
-        .par_chunks(DOT_BLOCK)
-        .zip(b.par_chunks(DOT_BLOCK))
-        .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x * y).sum())
+    ordered_sum(a.len(), |range| {
+        a[range.clone()]
+            .iter()
+            .zip(&b[range])
+            .map(|(x, y)| x * y)
+            .sum()
+    })
+}
+
+/// The sum over `0..len` of `block(range)`, each `range` a block of
+/// [`DOT_BLOCK`] indices summed on its own, the blocks' sums added in
+/// order: the same bits whatever the threads and however rayon splits
+/// the work (its own `sum` and `reduce` add in the order its threads
+/// finish).
+pub(crate) fn ordered_sum(len: usize, block: impl Fn(std::ops::Range<usize>) -> f64 + Sync) -> f64 {
+    let blocks: Vec<f64> = (0..len.div_ceil(DOT_BLOCK))
+        .into_par_iter()
+        .map(|k| block(k * DOT_BLOCK..((k + 1) * DOT_BLOCK).min(len)))
         .collect();
     blocks.iter().sum()
 }
