@@ -182,6 +182,9 @@ pub struct SparseSolver {
     /// one failed to serve).
     double_kept: bool,
     method: SymmetricMethod,
+    /// The method chosen for the pattern, to which each load step returns
+    /// (`method` falls back from multigrid to the kept factor within one).
+    method_choice: SymmetricMethod,
     /// How the last CG solve ended.
     last_cg: Option<krylov::CgOutcome>,
     /// Numeric factorisations this solver made.
@@ -494,6 +497,7 @@ impl SparseSolver {
             scratch_bytes: 0,
             reuses: 0,
             method: settings.symmetric.unwrap_or_else(|| symmetric_method(n)),
+            method_choice: settings.symmetric.unwrap_or_else(|| symmetric_method(n)),
             last_cg: None,
             factorisations: 0,
             kept: None,
@@ -527,6 +531,7 @@ impl SparseSolver {
     /// This solver with its symmetric tangents solved by `method`.
     pub fn with_method(mut self, method: SymmetricMethod) -> Self {
         self.method = method;
+        self.method_choice = method;
         self
     }
 
@@ -535,13 +540,16 @@ impl SparseSolver {
     pub fn reused(mut self) -> Self {
         SolveTally::add(&self.tally.reused, 1);
         self.reuses += 1;
-        // GMRES starts each load step afresh, as a resumed run does (a
-        // checkpoint keeps no factor), so that both give the same bits.
-        if self.kept_symmetric_part {
-            self.kept = None;
-            self.double_kept = false;
-            self.kept_symmetric_part = false;
-        }
+        // Each load step starts its preconditioners afresh, as a resumed
+        // run does (a checkpoint keeps no factor or hierarchy), so that
+        // both give the same bits; only the symbolic analysis (a function
+        // of the pattern alone) is taken over.
+        self.kept = None;
+        self.double_kept = false;
+        self.kept_symmetric_part = false;
+        self.hierarchy = None;
+        self.refresh = false;
+        self.method = self.method_choice;
         self.unsymmetric = self.unsymmetric_choice;
         self.indefinite_solves = 0;
         self

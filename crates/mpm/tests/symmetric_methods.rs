@@ -64,9 +64,9 @@ fn run_column(
 }
 
 /// The column with 64 cells over the height (1,170 DOFs), run with each
-/// method. The points cross cells in most steps (new patterns, fresh
-/// factors) and keep their cells in some (a factor kept from the last
-/// step). Newton takes the same iterations in every step, and the answers
+/// method. The points cross cells in most steps (new patterns) and keep
+/// their cells in some (the last step's analysis taken over; each step
+/// makes its own factor). Newton takes the same iterations in every step, and the answers
 /// agree to 1e-9 of the top displacement (they differ by 3e-11 m): CG
 /// stops at the accuracy Newton's forcing term asks for, and each step
 /// ends, either way, with an out-of-balance force within Newton's
