@@ -153,9 +153,9 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabErr
         "First two load steps of each scene. Split: share of the step's wall time in the grid reset \
          (shape functions, active nodes, sparsity pattern, loads), the point loop (stress and tangent of every \
          point, internal force), stiffness assembly, sparse factorisation (symbolic analysis included once per \
-         step), triangular solves, the point update, and Newton's own work (residuals, norms, the step terms' \
-         forces, the line search). No step of these was cut, so no failed tries. Points/s counts point-steps per \
-         second of wall time. \
+         step), triangular solves, the point update, and Newton's own work (vector updates, convergence checks, \
+         the line search's bookkeeping). No step of these was cut, so no failed tries. Points/s counts \
+         point-steps per second of wall time. \
          Peak memory is the high-water resident set of a process that runs only that row.\n\n",
     );
     report.push_str("| scene | points | active DOFs | s / step | s / iteration | iterations / step | grid | point loop | assembly | factorisation | solve | update | Newton | points/s | peak MiB |\n");

@@ -16,11 +16,13 @@ use rayon::prelude::*;
 /// How a preconditioned CG or GMRES solve ended.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CgOutcome {
-    /// Products with `K` after the first preconditioned solve.
+    /// CG: products with `K` after the first preconditioned solve. GMRES:
+    /// the Arnoldi steps' products (each cycle's true residual takes one
+    /// more).
     pub iterations: usize,
-    /// `|r| / |b|` at the end, `r` CG's recurrence's residual (equal to
-    /// `b - K x` in exact arithmetic; on an ill-conditioned `K` the true
-    /// residual ends above it).
+    /// `|r| / |b|` at the end: for CG, `r` its recurrence's residual
+    /// (equal to `b - K x` in exact arithmetic; on an ill-conditioned `K`
+    /// the true residual ends above it); for GMRES, the true residual.
     pub relative_residual: f64,
     pub converged: bool,
 }
@@ -77,9 +79,8 @@ pub(crate) fn ordered_sum(len: usize, block: impl Fn(std::ops::Range<usize>) -> 
 
 /// Solves `K x = b` by CG from `x0 = M^-1 b`, with `precondition(z)`
 /// replacing `z` by `M^-1 z`, until the residual `|b - K x| <= tolerance
-/// |b|` or `max_iterations` products with `K`. Converged means the true
-/// residual, computed afresh at the end, is within [`TRUE_RESIDUAL_SLACK`]
-/// of the tolerance.
+/// |b|` or `max_iterations` products with `K`. Converged means CG's
+/// recurrence's residual is within the tolerance ([`CgOutcome`]).
 pub fn preconditioned_cg(
     product: impl Fn(&[f64], &mut [f64]),
     mut precondition: impl FnMut(&mut [f64]),
@@ -144,14 +145,17 @@ pub fn preconditioned_cg(
 }
 
 /// Solves `K x = b` for a `K` that need not be symmetric by restarted
-/// GMRES (Saad & Schultz 1986; Saad, Iterative methods for sparse linear
-/// systems, 2003, algorithm 9.5), preconditioned on the right:
-/// `K M^-1 y = b`, `x = M^-1 y`, with `precondition(z)` replacing `z` by
-/// `M^-1 z`. Right preconditioning minimises the true residual `b - K x`
-/// over each cycle's Krylov space, so the tolerance is on the residual
-/// Newton measures. From `x0 = 0`, until `|b - K x| <= tolerance |b|` or
-/// `max_iterations` products with `K`; a cycle holds `restart` basis
-/// vectors. The outcome's residual is the true one, computed at the end
+/// flexible GMRES (Saad, Iterative methods for sparse linear systems,
+/// 2003, algorithm 9.6), preconditioned on the right: `K M^-1 y = b`,
+/// `x = M^-1 y`, with `precondition(z)` replacing `z` by `M^-1 z`. Right
+/// preconditioning minimises the true residual `b - K x` over each
+/// cycle's Krylov space, so the tolerance is on the residual Newton
+/// measures. The preconditioned vectors `z_j = M^-1 v_j` are kept and the
+/// answer made of them (`x += Z y`), so a preconditioner that is not
+/// exactly linear (a factor applied in single precision) costs no
+/// accuracy. From `x0 = 0`, until `|b - K x| <= tolerance |b|` or
+/// `max_iterations` Arnoldi steps; a cycle holds `restart` vectors of
+/// each kind. The outcome's residual is the true one, computed at the end
 /// of each cycle.
 pub fn preconditioned_gmres(
     product: impl Fn(&[f64], &mut [f64]),
@@ -176,21 +180,22 @@ pub fn preconditioned_gmres(
     let m = restart.max(1);
     let mut r = b.to_vec();
     let mut beta = b_norm;
-    let mut z = vec![0.0; n];
     let mut w = vec![0.0; n];
     while outcome.iterations < max_iterations {
         // The cycle's orthonormal basis, its Hessenberg matrix by columns
         // (rotated into upper triangular form as it grows), the rotations
         // and the rotated right-hand side `g`.
         let mut basis: Vec<Vec<f64>> = vec![r.iter().map(|v| v / beta).collect()];
+        let mut preconditioned: Vec<Vec<f64>> = Vec::with_capacity(m);
         let mut h: Vec<Vec<f64>> = Vec::with_capacity(m);
         let mut rotations: Vec<(f64, f64)> = Vec::with_capacity(m);
         let mut g = vec![beta];
         while h.len() < m && outcome.iterations < max_iterations {
             let j = h.len();
-            z.copy_from_slice(&basis[j]);
+            let mut z = basis[j].clone();
             precondition(&mut z);
             product(&z, &mut w);
+            preconditioned.push(z);
             outcome.iterations += 1;
             // Modified Gram-Schmidt against the basis.
             let mut column = Vec::with_capacity(j + 2);
@@ -225,7 +230,7 @@ pub fn preconditioned_gmres(
             }
             basis.push(w.iter().map(|v| v / norm).collect());
         }
-        // y from the triangular system, then x += M^-1 (V y).
+        // y from the triangular system, then x += Z y.
         let k = h.len();
         let mut y = vec![0.0; k];
         for i in (0..k).rev() {
@@ -235,12 +240,9 @@ pub fn preconditioned_gmres(
         if y.iter().any(|v| !v.is_finite()) {
             break;
         }
-        z.iter_mut().for_each(|z| *z = 0.0);
-        for (v, yi) in basis.iter().zip(&y) {
-            z.par_iter_mut().zip(v).for_each(|(z, v)| *z += yi * v);
+        for (z, yi) in preconditioned.iter().zip(&y) {
+            x.par_iter_mut().zip(z).for_each(|(x, z)| *x += yi * z);
         }
-        precondition(&mut z);
-        x.par_iter_mut().zip(&z).for_each(|(x, z)| *x += z);
         product(&x, &mut w);
         r.par_iter_mut()
             .zip(b)

@@ -159,8 +159,8 @@ pub struct SparseSolver {
     order: Option<(Vec<usize>, Vec<usize>)>,
     llt: Option<SymbolicCholesky<usize>>,
     /// The kept factor's supernodes arranged for parallel triangular
-    /// solves (`triangular.rs`), made with `llt` for
-    /// [`SymmetricMethod::KeptFactorCg`].
+    /// solves (`triangular.rs`), made for [`SymmetricMethod::KeptFactorCg`]
+    /// and [`UnsymmetricMethod::SymmetricPartGmres`].
     schedule: Option<SubtreeSchedule>,
     lu: Option<SymbolicLu<usize>>,
     /// Whether Cholesky orders by nested dissection (the run's
@@ -174,22 +174,22 @@ pub struct SparseSolver {
     scratch_bytes: usize,
     /// Later systems (load steps) this solver was reused for.
     reuses: usize,
-    /// The last Cholesky factor (of an earlier tangent of this pattern),
-    /// kept to precondition CG when the method is
-    /// [`SymmetricMethod::KeptFactorCg`].
+    /// The last Cholesky factor of an earlier tangent of this increment
+    /// (or of its symmetric part), kept to precondition CG when the method
+    /// is [`SymmetricMethod::KeptFactorCg`], or GMRES.
     kept: Option<KeptFactor>,
     /// Whether the kept factor is in double precision (a single-precision
     /// one failed to serve).
     double_kept: bool,
     method: SymmetricMethod,
-    /// The method chosen for the pattern, to which each load step returns
+    /// The method chosen for the pattern, to which each increment returns
     /// (`method` falls back from multigrid to the kept factor within one).
     method_choice: SymmetricMethod,
-    /// How the last CG solve ended.
+    /// How the last CG or GMRES solve ended.
     last_cg: Option<krylov::CgOutcome>,
     /// Numeric factorisations this solver made.
     factorisations: usize,
-    /// Whether the next symmetric solve factorises afresh (the last CG
+    /// Whether the next solve factorises afresh (the last CG or GMRES
     /// solve with a stale factor converged slower than [`REFRESH_RATE`]),
     /// or builds a fresh multigrid hierarchy.
     refresh: bool,
@@ -199,11 +199,9 @@ pub struct SparseSolver {
     /// The multigrid hierarchy of an earlier tangent of this pattern.
     hierarchy: Option<Hierarchy>,
     unsymmetric: UnsymmetricMethod,
-    /// The method chosen for the pattern, to which each load step returns
+    /// The method chosen for the pattern, to which each increment returns
     /// (`unsymmetric` falls back to LU within one).
     unsymmetric_choice: UnsymmetricMethod,
-    /// Whether the kept factor is of a symmetric part (GMRES's).
-    kept_symmetric_part: bool,
     /// Solves in a row left to LU because the symmetric part was not
     /// positive definite ([`GMRES_INDEFINITE_LIMIT`]).
     indefinite_solves: usize,
@@ -317,9 +315,9 @@ pub enum UnsymmetricMethod {
     /// or an earlier tangent of the pattern, refreshed when GMRES slows
     /// down as CG's is. The load stiffness of a follower pressure, F-bar's
     /// averaging and non-associated flow leave `K` close to its symmetric
-    /// part. When that part is not positive definite, or GMRES does not
-    /// converge with a fresh factor, LU solves, for the rest of the
-    /// pattern.
+    /// part. When that part is not positive definite, LU solves that
+    /// system ([`GMRES_INDEFINITE_LIMIT`]); when GMRES does not converge
+    /// with a fresh double factor, LU solves the rest of the increment.
     SymmetricPartGmres,
 }
 
@@ -328,7 +326,7 @@ pub enum UnsymmetricMethod {
 /// Unsymmetric solves). Below it every answer is LU's.
 const GMRES_FROM_DOFS: usize = 2_000;
 
-/// GMRES's products with `K` allowed with a fresh factor of the symmetric
+/// GMRES's Arnoldi steps allowed with a fresh factor of the symmetric
 /// part before it is judged not to serve, and with a stale one before a
 /// fresh one is made; the basis vectors a cycle holds.
 const GMRES_MAX_ITERATIONS: usize = 60;
@@ -354,8 +352,10 @@ enum GmresFailure {
     NotConverging,
 }
 
-/// Solves in a row whose symmetric part was not positive definite after
-/// which LU solves the rest of the pattern's tangents.
+/// Systems in a row whose symmetric part was not positive definite, after
+/// which LU solves the rest of the increment's (each increment, a load
+/// step or a piece of a cut one, tries GMRES again:
+/// [`SparseSolver::reused`]).
 const GMRES_INDEFINITE_LIMIT: usize = 3;
 
 /// What the kept-factor path made of a symmetric system.
@@ -469,6 +469,10 @@ pub struct SolverMemory {
     /// smoothers' diagonals, work vectors and dense coarsest factor.
     #[serde(default)]
     pub multigrid: usize,
+    /// GMRES's copies of the tangent (its transpose and symmetric part)
+    /// and the transpose's places in the pattern.
+    #[serde(default)]
+    pub gmres: usize,
 }
 
 impl SparseSolver {
@@ -511,7 +515,6 @@ impl SparseSolver {
             unsymmetric_choice: settings
                 .unsymmetric
                 .unwrap_or_else(|| unsymmetric_method(n)),
-            kept_symmetric_part: false,
             indefinite_solves: 0,
             transpose: None,
             symmetric_part: Vec::new(),
@@ -540,13 +543,13 @@ impl SparseSolver {
     pub fn reused(mut self) -> Self {
         SolveTally::add(&self.tally.reused, 1);
         self.reuses += 1;
-        // Each load step starts its preconditioners afresh, as a resumed
-        // run does (a checkpoint keeps no factor or hierarchy), so that
-        // both give the same bits; only the symbolic analysis (a function
-        // of the pattern alone) is taken over.
+        // Each increment (a load step, or a piece of a cut one) starts its
+        // preconditioners afresh, as a resumed run does (a checkpoint
+        // keeps no factor or hierarchy), so that both give the same bits;
+        // only the symbolic analysis (a function of the pattern alone) is
+        // taken over.
         self.kept = None;
         self.double_kept = false;
-        self.kept_symmetric_part = false;
         self.hierarchy = None;
         self.refresh = false;
         self.method = self.method_choice;
@@ -598,6 +601,12 @@ impl SparseSolver {
             factor_structure: structure,
             scratch: self.scratch_bytes,
             multigrid: self.hierarchy.as_ref().map_or(0, Hierarchy::bytes),
+            gmres: std::mem::size_of_val(self.symmetric_part.as_slice())
+                + std::mem::size_of_val(self.transposed.as_slice())
+                + self
+                    .transpose
+                    .as_ref()
+                    .map_or(0, |t| std::mem::size_of_val(t.as_slice())),
         }
     }
 
@@ -750,33 +759,39 @@ impl SparseSolver {
 
     /// Makes the symbolic Cholesky analysis of the pattern, once: in
     /// nested-dissection order when the solver has the grid (or was given
-    /// an order), with the kept factor's parallel triangular solves when
-    /// `schedule`.
+    /// an order); and the kept factor's parallel triangular solves, once,
+    /// when `schedule`.
     fn analyse_cholesky(&mut self, pattern: &Pattern, schedule: bool) -> Result<(), String> {
-        if self.llt.is_some() {
-            return Ok(());
-        }
-        if self.order.is_none() && self.nested_dissection {
-            self.order = self
-                .nodes
-                .as_deref()
-                .map(|nodes| with_inverse(ordering::nested_dissection(nodes, pattern)));
-        }
-        let (col_ptr, row_idx) = upper_triangle(pattern);
-        let structure =
-            SymbolicSparseColMatRef::new_checked(self.n, self.n, &col_ptr, None, &row_idx);
-        let ordering = match &self.order {
-            Some((order, inverse)) => {
-                SymmetricOrdering::Custom(PermRef::new_checked(order, inverse, self.n))
+        if self.llt.is_none() {
+            if self.order.is_none() && self.nested_dissection {
+                self.order = self
+                    .nodes
+                    .as_deref()
+                    .map(|nodes| with_inverse(ordering::nested_dissection(nodes, pattern)));
             }
-            None => SymmetricOrdering::Amd,
-        };
-        let llt = factorize_symbolic_cholesky(structure, Side::Upper, ordering, Default::default())
-            .map_err(|e| format!("{e:?}"))?;
-        if schedule {
-            self.schedule = SubtreeSchedule::new(&llt, rayon::current_num_threads());
+            let (col_ptr, row_idx) = upper_triangle(pattern);
+            let structure =
+                SymbolicSparseColMatRef::new_checked(self.n, self.n, &col_ptr, None, &row_idx);
+            let ordering = match &self.order {
+                Some((order, inverse)) => {
+                    SymmetricOrdering::Custom(PermRef::new_checked(order, inverse, self.n))
+                }
+                None => SymmetricOrdering::Amd,
+            };
+            let llt =
+                factorize_symbolic_cholesky(structure, Side::Upper, ordering, Default::default())
+                    .map_err(|e| format!("{e:?}"))?;
+            self.llt = Some(llt);
         }
-        self.llt = Some(llt);
+        // Made whenever a kept factor may be applied, whichever solve
+        // analysed the pattern first: the answer's bits do not depend on
+        // the order of the solves.
+        if schedule
+            && self.schedule.is_none()
+            && let Some(llt) = &self.llt
+        {
+            self.schedule = SubtreeSchedule::new(llt, rayon::current_num_threads());
+        }
         Ok(())
     }
 
@@ -820,7 +835,6 @@ impl SparseSolver {
                     .zip(values.par_iter().zip(&self.transposed))
                     .for_each(|(s, (k, t))| *s = 0.5 * (k + t));
                 let factorised = self.factorise_kept(pattern, &symmetric_part, par);
-                self.kept_symmetric_part = factorised;
                 self.symmetric_part = symmetric_part;
                 timing.factorise += t.elapsed().as_secs_f64();
                 if !factorised {
@@ -1055,7 +1069,6 @@ impl SparseSolver {
             }
             self.kept = None;
             self.double_kept = false;
-            self.kept_symmetric_part = false;
         }
         // faer's LU takes `usize` row indices: a copy for the solve.
         let row_idx: Vec<usize> = pattern.row_idx.iter().map(|&r| r as usize).collect();

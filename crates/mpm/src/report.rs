@@ -23,9 +23,9 @@ pub struct StepTimings {
     pub solve: f64,
     /// Moving points and probes, committing state.
     pub update: f64,
-    /// Newton's own work besides the point loop, the assembly and the
-    /// solves: residuals and their norms, the step terms' forces, the line
-    /// search.
+    /// Newton's own work besides the point loop (which makes the
+    /// residuals), the assembly and the solves: its vector updates and
+    /// convergence checks, the line search's bookkeeping, the predictor.
     #[serde(default)]
     pub newton: f64,
     /// Tries of the step that failed and were cut (their work is done
@@ -86,6 +86,7 @@ impl StepMemory {
             + self.solver.factor_structure
             + self.solver.scratch
             + self.solver.multigrid
+            + self.solver.gmres
     }
 }
 

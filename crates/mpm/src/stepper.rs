@@ -681,9 +681,8 @@ impl Simulation {
         let timings = StepTimings {
             grid: grid_seconds,
             update: clock.lap(),
-            newton: (newton_seconds
-                - (parts.point_loop + parts.assembly + parts.factorisation + parts.solve))
-                .max(0.0),
+            newton: newton_seconds
+                - (parts.point_loop + parts.assembly + parts.factorisation + parts.solve),
             total: clock.total(),
             ..converged.timings
         };
