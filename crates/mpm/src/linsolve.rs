@@ -707,20 +707,16 @@ impl SparseSolver {
         let mut timing = Timing::default();
         loop {
             let fresh = self.hierarchy.is_none() || self.refresh;
-            if fresh {
-                let t = std::time::Instant::now();
-                self.refresh = false;
-                self.hierarchy = None;
-                self.hierarchy = Some(Hierarchy::new(op, self.nodes.as_deref()?).ok()?);
-                self.factorisations += 1;
-                self.tally.fresh_factor(None);
-                timing.factorise += t.elapsed().as_secs_f64();
-            }
-            let hierarchy = self.hierarchy.as_mut()?;
+            self.refresh = false;
+            let hierarchy = fitted_hierarchy(
+                &mut self.hierarchy,
+                op,
+                self.nodes.as_deref(),
+                fresh,
+                (&self.tally, &mut self.factorisations),
+                &mut timing,
+            )?;
             let t = std::time::Instant::now();
-            if !fresh {
-                hierarchy.fit_finest(op);
-            }
             let (x, outcome) = krylov::preconditioned_cg(
                 |x, y| krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, values, x, y),
                 |z| hierarchy.apply(op, z),
@@ -795,6 +791,94 @@ impl SparseSolver {
         Ok(())
     }
 
+    /// `K^T`'s values in the pattern's places (`transposed`): in
+    /// compressed columns, `K` in compressed rows, whose column products
+    /// make `K x`. An error when the pattern is not structurally
+    /// symmetric.
+    fn transpose_tangent(&mut self, pattern: &Pattern, values: &[f64]) -> Result<(), GmresFailure> {
+        if self.transpose.is_none() {
+            self.transpose = Some(transpose_places(pattern).ok_or(GmresFailure::NotConverging)?);
+        }
+        let transpose = self.transpose.as_ref().ok_or(GmresFailure::NotConverging)?;
+        self.transposed.resize(values.len(), 0.0);
+        (self.transposed.par_iter_mut())
+            .zip(transpose)
+            .for_each(|(t, &k)| *t = values[k]);
+        Ok(())
+    }
+
+    /// `(K + K^T) / 2` into `symmetric_part`, `transposed` made.
+    fn make_symmetric_part(&mut self, values: &[f64]) {
+        self.symmetric_part.resize(values.len(), 0.0);
+        (self.symmetric_part.par_iter_mut())
+            .zip(values.par_iter().zip(&self.transposed))
+            .for_each(|(s, (k, t))| *s = 0.5 * (k + t));
+    }
+
+    /// Solves `K x = rhs` for a `K` that is not symmetric by GMRES
+    /// preconditioned by a multigrid V-cycle of its symmetric part (the
+    /// method from [`MULTIGRID_FROM_DOFS`] up, where the kept factor's
+    /// memory grows faster than the unknowns), built on an earlier tangent
+    /// of the increment and fitted to this one, rebuilt as CG's is
+    /// ([`MULTIGRID_REFRESH_RATE`]). `None` when no hierarchy serves (no
+    /// grid, a setup that fails, or GMRES that does not converge with a
+    /// fresh one): then the kept factor does.
+    fn gmres_with_multigrid(
+        &mut self,
+        pattern: &Pattern,
+        values: &[f64],
+        rhs: &[f64],
+        accuracy: f64,
+    ) -> Option<(Vec<f64>, Timing)> {
+        let mut timing = Timing::default();
+        let t = std::time::Instant::now();
+        self.transpose_tangent(pattern, values).ok()?;
+        self.make_symmetric_part(values);
+        timing.factorise += t.elapsed().as_secs_f64();
+        loop {
+            let op = multigrid::Operator {
+                ptr: &pattern.col_ptr,
+                col: &pattern.row_idx,
+                val: &self.symmetric_part,
+            };
+            let fresh = self.hierarchy.is_none() || self.refresh;
+            self.refresh = false;
+            let hierarchy = fitted_hierarchy(
+                &mut self.hierarchy,
+                op,
+                self.nodes.as_deref(),
+                fresh,
+                (&self.tally, &mut self.factorisations),
+                &mut timing,
+            )?;
+            let t = std::time::Instant::now();
+            let transposed = &self.transposed;
+            let (x, outcome) = krylov::preconditioned_gmres(
+                |x, y| {
+                    krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, transposed, x, y)
+                },
+                |z| hierarchy.apply(op, z),
+                rhs,
+                accuracy.max(CG_FLOOR),
+                if fresh {
+                    MULTIGRID_MAX_ITERATIONS
+                } else {
+                    MULTIGRID_MAX_ITERATIONS_STALE
+                },
+                GMRES_RESTART,
+            );
+            timing.solve += t.elapsed().as_secs_f64();
+            if self.krylov_finished(outcome, fresh, MULTIGRID_REFRESH_RATE) {
+                return Some((x, timing));
+            }
+            if fresh {
+                self.hierarchy = None;
+                return None;
+            }
+            self.refresh = true;
+        }
+    }
+
     /// Solves `K x = rhs` for a `K` that is not symmetric by GMRES
     /// preconditioned by the kept Cholesky factor of the symmetric part of
     /// this or an earlier tangent of the pattern, to the relative residual
@@ -814,26 +898,14 @@ impl SparseSolver {
         par: Par,
     ) -> Result<(Vec<f64>, Timing), GmresFailure> {
         let mut timing = Timing::default();
-        if self.transpose.is_none() {
-            self.transpose = Some(transpose_places(pattern).ok_or(GmresFailure::NotConverging)?);
-        }
-        let transpose = self.transpose.as_ref().ok_or(GmresFailure::NotConverging)?;
-        // K^T in compressed columns is K in compressed rows: its column
-        // products make `K x`.
-        self.transposed.resize(values.len(), 0.0);
-        (self.transposed.par_iter_mut())
-            .zip(transpose)
-            .for_each(|(t, &k)| *t = values[k]);
+        self.transpose_tangent(pattern, values)?;
         loop {
             let fresh = self.kept.is_none() || self.refresh;
             if fresh {
                 let t = std::time::Instant::now();
                 self.refresh = false;
-                let mut symmetric_part = std::mem::take(&mut self.symmetric_part);
-                symmetric_part.resize(values.len(), 0.0);
-                (symmetric_part.par_iter_mut())
-                    .zip(values.par_iter().zip(&self.transposed))
-                    .for_each(|(s, (k, t))| *s = 0.5 * (k + t));
+                self.make_symmetric_part(values);
+                let symmetric_part = std::mem::take(&mut self.symmetric_part);
                 let factorised = self.factorise_kept(pattern, &symmetric_part, par);
                 self.symmetric_part = symmetric_part;
                 timing.factorise += t.elapsed().as_secs_f64();
@@ -950,11 +1022,17 @@ impl SparseSolver {
     ) -> Result<(Vec<Vec<f64>>, Factorisation, Timing), String> {
         let t0 = std::time::Instant::now();
         let tangent = Tangent::new(pattern, values);
-        if symmetric && self.method == SymmetricMethod::Multigrid {
+        let gmres = !symmetric && self.unsymmetric == UnsymmetricMethod::SymmetricPartGmres;
+        if (symmetric || gmres) && self.method == SymmetricMethod::Multigrid {
             let mut solved = Vec::with_capacity(rhs.len());
             let mut total = Timing::default();
             for b in rhs {
-                match self.cg_with_multigrid(pattern, values, b, accuracy) {
+                let made = if symmetric {
+                    self.cg_with_multigrid(pattern, values, b, accuracy)
+                } else {
+                    self.gmres_with_multigrid(pattern, values, b, accuracy)
+                };
+                match made {
                     Some((x, timing)) => {
                         total.add(timing);
                         solved.push(x);
@@ -963,12 +1041,17 @@ impl SparseSolver {
                 }
             }
             if solved.len() == rhs.len() {
-                return Ok((solved, Factorisation::Multigrid, total));
+                let kind = if symmetric {
+                    Factorisation::Multigrid
+                } else {
+                    Factorisation::Gmres
+                };
+                return Ok((solved, kind, total));
             }
-            // No hierarchy serves this tangent (no grid, aggregation that
-            // stalls, or a tangent that is not positive definite): the
-            // kept factor does, in nested-dissection order, for the rest
-            // of the pattern.
+            // No hierarchy serves this tangent or its symmetric part (no
+            // grid, aggregation that stalls, or a matrix that is not
+            // positive definite): the kept factor does, in
+            // nested-dissection order, for the rest of the increment.
             self.method = SymmetricMethod::KeptFactorCg;
             self.hierarchy = None;
         }
@@ -1020,7 +1103,7 @@ impl SparseSolver {
                 }
             }
         }
-        if !symmetric && self.unsymmetric == UnsymmetricMethod::SymmetricPartGmres {
+        if gmres {
             self.analyse_cholesky(pattern, true)?;
             let par = if self.n >= PARALLEL_FROM_DOFS {
                 Par::rayon(0)
@@ -1094,6 +1177,35 @@ fn with_inverse(order: Vec<usize>) -> (Vec<usize>, Vec<usize>) {
         inverse[dof] = k;
     }
     (order, inverse)
+}
+
+/// The hierarchy that preconditions a solve with `op`: when `fresh`, one
+/// built on `op` (counted, with its time, as a factorisation), else the
+/// one in `slot` fitted to `op` on its finest level (the coarse levels
+/// kept). `None` when there is no grid or the setup fails.
+fn fitted_hierarchy<'h>(
+    slot: &'h mut Option<Hierarchy>,
+    op: multigrid::Operator<'_>,
+    nodes: Option<&[[i64; 2]]>,
+    fresh: bool,
+    (tally, factorisations): (&SolveTally, &mut usize),
+    timing: &mut Timing,
+) -> Option<&'h mut Hierarchy> {
+    if fresh {
+        let t = std::time::Instant::now();
+        *slot = None;
+        *slot = Some(Hierarchy::new(op, nodes?).ok()?);
+        *factorisations += 1;
+        tally.fresh_factor(None);
+        timing.factorise += t.elapsed().as_secs_f64();
+        slot.as_mut()
+    } else {
+        let hierarchy = slot.as_mut()?;
+        let t = std::time::Instant::now();
+        hierarchy.fit_finest(op);
+        timing.solve += t.elapsed().as_secs_f64();
+        Some(hierarchy)
+    }
 }
 
 /// Where each entry's transpose lies in `pattern`: `places[k]` holds
