@@ -315,9 +315,12 @@ pub enum UnsymmetricMethod {
     /// or an earlier tangent of the pattern, refreshed when GMRES slows
     /// down as CG's is. The load stiffness of a follower pressure, F-bar's
     /// averaging and non-associated flow leave `K` close to its symmetric
-    /// part. When that part is not positive definite, LU solves that
-    /// system ([`GMRES_INDEFINITE_LIMIT`]); when GMRES does not converge
-    /// with a fresh double factor, LU solves the rest of the increment.
+    /// part. Where the symmetric method is multigrid (from
+    /// [`MULTIGRID_FROM_DOFS`]), a V-cycle of the symmetric part
+    /// preconditions instead, and the kept factor if no hierarchy serves.
+    /// When that part is not positive definite, LU solves that system
+    /// ([`GMRES_INDEFINITE_LIMIT`]); when GMRES does not converge with a
+    /// fresh double factor, LU solves the rest of the increment.
     SymmetricPartGmres,
 }
 
