@@ -855,20 +855,18 @@ impl SparseSolver {
                 &mut timing,
             )?;
             let t = std::time::Instant::now();
-            let transposed = &self.transposed;
-            let (x, outcome) = krylov::preconditioned_gmres(
-                |x, y| {
-                    krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, transposed, x, y)
-                },
+            let limit = if fresh {
+                MULTIGRID_MAX_ITERATIONS
+            } else {
+                MULTIGRID_MAX_ITERATIONS_STALE
+            };
+            let (x, outcome) = gmres_on(
+                pattern,
+                &self.transposed,
                 |z| hierarchy.apply(op, z),
                 rhs,
-                accuracy.max(CG_FLOOR),
-                if fresh {
-                    MULTIGRID_MAX_ITERATIONS
-                } else {
-                    MULTIGRID_MAX_ITERATIONS_STALE
-                },
-                GMRES_RESTART,
+                accuracy,
+                limit,
             );
             timing.solve += t.elapsed().as_secs_f64();
             if self.krylov_finished(outcome, fresh, MULTIGRID_REFRESH_RATE) {
@@ -927,20 +925,18 @@ impl SparseSolver {
             };
             let t = std::time::Instant::now();
             let mut inverse = KeptSolve::new(symbolic, kept, self.schedule.as_ref(), par);
-            let transposed = &self.transposed;
-            let (x, outcome) = krylov::preconditioned_gmres(
-                |x, y| {
-                    krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, transposed, x, y)
-                },
+            let limit = if fresh {
+                GMRES_MAX_ITERATIONS
+            } else {
+                GMRES_MAX_ITERATIONS_STALE
+            };
+            let (x, outcome) = gmres_on(
+                pattern,
+                &self.transposed,
                 |z| inverse.apply(z),
                 rhs,
-                accuracy.max(CG_FLOOR),
-                if fresh {
-                    GMRES_MAX_ITERATIONS
-                } else {
-                    GMRES_MAX_ITERATIONS_STALE
-                },
-                GMRES_RESTART,
+                accuracy,
+                limit,
             );
             timing.solve += t.elapsed().as_secs_f64();
             if self.krylov_finished(outcome, fresh, REFRESH_RATE) {
@@ -1180,6 +1176,28 @@ fn with_inverse(order: Vec<usize>) -> (Vec<usize>, Vec<usize>) {
         inverse[dof] = k;
     }
     (order, inverse)
+}
+
+/// GMRES on `K x = rhs` preconditioned by `precondition`, to the relative
+/// residual `accuracy` (at least [`CG_FLOOR`]) in at most `limit` Arnoldi
+/// steps, `K x` made from the columns of `K^T` (`transposed`, in the
+/// places of `pattern`).
+fn gmres_on(
+    pattern: &Pattern,
+    transposed: &[f64],
+    precondition: impl FnMut(&mut [f64]),
+    rhs: &[f64],
+    accuracy: f64,
+    limit: usize,
+) -> (Vec<f64>, krylov::CgOutcome) {
+    krylov::preconditioned_gmres(
+        |x, y| krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, transposed, x, y),
+        precondition,
+        rhs,
+        accuracy.max(CG_FLOOR),
+        limit,
+        GMRES_RESTART,
+    )
 }
 
 /// The hierarchy that preconditions a solve with `op`: when `fresh`, one
