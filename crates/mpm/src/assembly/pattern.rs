@@ -211,6 +211,19 @@ impl Pattern {
         self.try_block(a, b).expect("linked nodes are neighbours")
     }
 
+    /// Column node `b`'s blocks, for row nodes asked for in ascending order
+    /// ([`Column::block`]): a walk along `b`'s sorted neighbours, where
+    /// [`Pattern::block`] searches them for each row node anew.
+    #[inline]
+    pub(crate) fn column(&self, b: u32) -> Column<'_> {
+        let neighbours = &self.neighbours[self.first[b as usize]..self.first[b as usize + 1]];
+        Column {
+            neighbours,
+            base: self.col_ptr[2 * b as usize],
+            k: 0,
+        }
+    }
+
     #[inline]
     fn try_block(&self, a: u32, b: u32) -> Option<(usize, usize)> {
         let nb = &self.neighbours[self.first[b as usize]..self.first[b as usize + 1]];
@@ -229,6 +242,35 @@ impl Pattern {
             }
             None => false,
         }
+    }
+}
+
+/// One column node's blocks in a [`Pattern`] ([`Pattern::column`]).
+pub(crate) struct Column<'a> {
+    /// The column node's neighbours, sorted.
+    neighbours: &'a [u32],
+    /// Where its first column starts in the values.
+    base: usize,
+    /// The neighbour the last row node asked for was (the walk's place).
+    k: usize,
+}
+
+impl Column<'_> {
+    /// As [`Pattern::block`] for row node `a`, which must be a neighbour and
+    /// no lower than the row node asked for before.
+    #[inline]
+    pub(crate) fn block(&mut self, a: u32) -> (usize, usize) {
+        self.try_block(a).expect("linked nodes are neighbours")
+    }
+
+    /// [`Column::block`], or `None` when `a` is not a neighbour.
+    #[inline]
+    pub(crate) fn try_block(&mut self, a: u32) -> Option<(usize, usize)> {
+        while self.neighbours.get(self.k).is_some_and(|&b| b < a) {
+            self.k += 1;
+        }
+        (self.neighbours.get(self.k) == Some(&a))
+            .then(|| (self.base + 2 * self.k, 2 * self.neighbours.len()))
     }
 }
 

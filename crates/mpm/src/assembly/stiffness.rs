@@ -98,6 +98,19 @@ fn add_point(
 ) {
     let v0 = points.volume0[p];
     let links = conn.point_links(p);
+    // The links in ascending node order, for each column's walk along its
+    // neighbours (`Pattern::column`): 25 at most for the bases there are.
+    let (mut on_stack, mut on_heap) = ([0u16; 32], Vec::new());
+    let order: &mut [u16] = if links.len() <= on_stack.len() {
+        &mut on_stack[..links.len()]
+    } else {
+        on_heap.resize(links.len(), 0);
+        &mut on_heap
+    };
+    for (i, o) in order.iter_mut().enumerate() {
+        *o = i as u16;
+    }
+    order.sort_unstable_by_key(|&i| links[i as usize].node);
     for lb in links {
         // q[2i+I][j] = V0 sum_J A[(2i+I),(2j+J)] g_b,J
         let mut q = [[0.0; 2]; 4];
@@ -106,11 +119,13 @@ fn add_point(
                 *qrj = v0 * (a[(row, 2 * j)] * lb.grad[0] + a[(row, 2 * j + 1)] * lb.grad[1]);
             }
         }
-        for la in links {
+        let mut column = pattern.column(lb.node);
+        for &ia in order.iter() {
+            let la = &links[ia as usize];
             if symmetric && la.node > lb.node {
-                continue;
+                break;
             }
-            let (base, stride) = pattern.block(la.node, lb.node);
+            let (base, stride) = column.block(la.node);
             for i in 0..2 {
                 for j in 0..2 {
                     add(
