@@ -7,21 +7,75 @@
 //! and the curve through the data points carries the loads. A follower pressure therefore depends on `u`, and so does a
 //! dead traction (through the length it acts on); both enter the Newton
 //! tangent as `-df_ext/du`. The local cubic scheme makes `f` depend on each
-//! `Q_k` only through the six segments around it, so `df/dQ_k` is computed
-//! by central differences on those segments (step 1e-6 h: truncation and
-//! round-off both near 1e-10 relative), then chained with `dQ_k/du_b =
-//! w_b I` (see [`BoundaryLoading::ring`]).
+//! `Q_k` only through the six segments around it. A segment's forces are
+//! differentiated by its control points exactly (the curve's derivative is
+//! linear in them), and its control points by `Q_k` by central differences
+//! of the curve's geometry ([`CONTROL_POINT_STEP`]); then chained with
+//! `dQ_k/du_b = w_b I` (see [`BoundaryLoading::ring`]).
 
 use rayon::prelude::*;
 
 use super::current_ring;
 use super::curve::{DataTangent, MovedPoint, Point, data_tangents, local_segment};
 use super::detection::BoundaryLoop;
-use super::traction::{SegmentQuadrature, Traction};
+use super::traction::{ControlPointDerivative, SegmentQuadrature, Traction};
 use crate::assembly::{Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
 use crate::grid::{Connectivity, Grid, node_key};
 use crate::particles::MaterialPoints;
+
+/// The central differences' step of the control points by the data
+/// points, in cells. The tangents of a straight run bend sharply on the
+/// scale of their smoothing (`curve::smooth_abs_cross`), so the truncation
+/// error grows as the step squared: on the paper's cantilever bent, the
+/// load stiffness misses its differences of the forces by 4e-3 of its
+/// largest entry at 1e-4, 4e-7 at 1e-6, 3e-9 at 1e-7, and 4e-8 at 1e-8,
+/// where round-off takes over.
+const CONTROL_POINT_STEP: f64 = 1e-7;
+
+/// The load stiffness's columns from one data point `Q`: the DOFs that
+/// move it, and the rows its motion changes. Entry `(2a + r, 2b + c)` is
+/// `-d f_(a, r) / d Q_c w_b`, with `w_b` node `b`'s weight in `Q`.
+pub struct DataPointColumns {
+    /// Per component `c` of `Q`'s motion, `(a, d f_a / d Q_c)` per node `a`
+    /// its forces reach, in ascending `a`.
+    by_component: [Vec<(usize, [f64; 2])>; 2],
+    /// `(b, w_b)` per node that moves `Q`.
+    weights: Vec<(usize, f64)>,
+}
+
+impl DataPointColumns {
+    /// The entries `(row DOF, column DOF, value)`, column by column.
+    #[cfg(test)]
+    pub(crate) fn entries(&self) -> Vec<(usize, usize, f64)> {
+        let mut out = Vec::new();
+        for (c, df) in self.by_component.iter().enumerate() {
+            for &(b, w) in &self.weights {
+                for &(a, d) in df {
+                    out.push((2 * a, 2 * b + c, -d[0] * w));
+                    out.push((2 * a + 1, 2 * b + c, -d[1] * w));
+                }
+            }
+        }
+        out
+    }
+
+    /// Adds the entries to `values`, in `pattern`'s layout; entries
+    /// outside the pattern are left out.
+    fn add_to(&self, pattern: &Pattern, values: &mut [f64]) {
+        for (c, df) in self.by_component.iter().enumerate() {
+            for &(b, w) in &self.weights {
+                let mut column = pattern.column(b as u32);
+                for &(a, d) in df {
+                    if let Some((base, stride)) = column.try_block(a as u32) {
+                        values[base + c * stride] -= d[0] * w;
+                        values[base + 1 + c * stride] -= d[1] * w;
+                    }
+                }
+            }
+        }
+    }
+}
 
 /// The segments of one loop that a boundary load acts on.
 #[derive(Debug, Clone, PartialEq)]
@@ -141,20 +195,8 @@ impl<'a> BoundaryLoading<'a> {
     }
 
     /// The nodal forces of stretch `i` on its loaded segment `k`, whose
-    /// current control points are `segment`, passed to `sink`.
-    fn segment_forces(
-        &self,
-        i: usize,
-        segment: &[Point; 4],
-        k: usize,
-        sink: &mut impl FnMut(usize, [f64; 2]),
-    ) {
-        let stretch = &self.stretches[i];
-        let factor = if stretch.held { 1.0 } else { self.load_factor };
-        self.segment_forces_at(i, segment, k, factor, sink);
-    }
-
-    /// [`Self::segment_forces`] at `factor` of the stretch's traction.
+    /// current control points are `segment`, at `factor` of the stretch's
+    /// traction, passed to `sink`.
     fn segment_forces_at(
         &self,
         i: usize,
@@ -172,9 +214,14 @@ impl<'a> BoundaryLoading<'a> {
     /// The loaded segments of stretch `i` whose shape depends on data point
     /// `k` of its `n`-point loop.
     fn affected(&self, i: usize, k: usize, n: usize) -> Vec<usize> {
-        segments_touching(k, n)
-            .filter(|&j| self.quadrature[i][j].is_some())
-            .collect()
+        let mut affected = Vec::with_capacity(6);
+        // A loop of fewer than six points meets a segment twice.
+        for j in segments_touching(k, n) {
+            if self.quadrature[i][j].is_some() && !affected.contains(&j) {
+                affected.push(j);
+            }
+        }
+        affected
     }
 
     /// Adds the derivative of the nodal forces at increment `u` by the
@@ -212,85 +259,112 @@ impl<'a> BoundaryLoading<'a> {
         }
     }
 
-    /// Entries `(row DOF, column DOF, value)` of the load stiffness
-    /// `-df_ext/du` at increment `u` (duplicates are to be summed).
+    /// The load stiffness `-df_ext/du` at increment `u`, data point by
+    /// data point, in the loops' order ([`DataPointColumns`]).
     ///
-    /// The data points are differenced in parallel (24 segment quadratures
-    /// each: a third of the paper's case's assembly), their segments made from
-    /// the tangents of the trial ring ([`MovedPoint`]), and their entries
-    /// come out in their order.
-    pub fn stiffness(&self, u: &[f64]) -> Vec<(usize, usize, f64)> {
+    /// Each loaded segment's forces are differentiated by its control
+    /// points exactly ([`SegmentQuadrature::derivative`], once a segment),
+    /// and the control points by the data points by central differences
+    /// of the curve's geometry alone. The data points are taken in
+    /// parallel, each task on its own copy of the trial ring.
+    pub fn stiffness(&self, u: &[f64]) -> Vec<DataPointColumns> {
         let mut out = Vec::new();
         for (i, s) in self.stretches.iter().enumerate() {
             let l = &self.loops[s.loop_index];
             let n = l.points.len();
             let ring = self.ring(l, u);
             let tangents = data_tangents(&ring);
-            let entries: Vec<Vec<(usize, usize, f64)>> = (0..n)
+            let factor = if s.held { 1.0 } else { self.load_factor };
+            let derivatives: Vec<Vec<ControlPointDerivative>> = (0..n)
+                .into_par_iter()
+                .map(|j| {
+                    let mut d = Vec::new();
+                    if let Some(q) = &self.quadrature[i][j] {
+                        q.derivative(&local_segment(&ring, j), s.traction, factor, &mut d);
+                    }
+                    d
+                })
+                .collect();
+            let columns: Vec<Option<DataPointColumns>> = (0..n)
                 .into_par_iter()
                 .map_init(
                     || ring.clone(),
-                    |ring, k| self.data_point_stiffness(i, ring, &tangents, k),
+                    |ring, k| self.data_point_columns(i, ring, &tangents, &derivatives, k),
                 )
                 .collect();
-            out.extend(entries.into_iter().flatten());
+            out.extend(columns.into_iter().flatten());
         }
         out
     }
 
-    /// The entries of the load stiffness that come from moving data point
-    /// `k` of stretch `i`'s loop (`ring` is its trial ring, given back as
-    /// it came, and `tangents` the ring's [`data_tangents`]).
-    fn data_point_stiffness(
+    /// The load stiffness's entries that come from moving data point `k`
+    /// of stretch `i`'s loop (`ring` is its trial ring, given back as it
+    /// came, `tangents` the ring's [`data_tangents`], and `derivatives`
+    /// its segments' [`SegmentQuadrature::derivative`]); none when no
+    /// loaded segment depends on it.
+    fn data_point_columns(
         &self,
         i: usize,
         ring: &mut [Point],
         tangents: &[DataTangent],
+        derivatives: &[Vec<ControlPointDerivative>],
         k: usize,
-    ) -> Vec<(usize, usize, f64)> {
+    ) -> Option<DataPointColumns> {
         let l = &self.loops[self.stretches[i].loop_index];
-        let eps = 1e-6 * self.grid.h;
-        let mut out = Vec::new();
+        let eps = CONTROL_POINT_STEP * self.grid.h;
         let affected = self.affected(i, k, l.points.len());
         if affected.is_empty() {
-            return out;
+            return None;
         }
-        let weights: Vec<(usize, f64)> = self.weights(l, k).collect();
-        for c in 0..2 {
-            // The contributions summed per node before they are spread
-            // over the columns: a few nodes, many quadrature points.
-            let mut df: Vec<(usize, [f64; 2])> = Vec::with_capacity(16);
+        let by_component = std::array::from_fn(|c| {
+            // How each affected segment's control points move with Q_k,c.
             let at = ring[k][c];
-            for (sign, delta) in [(1.0, eps), (-1.0, -eps)] {
+            let mut moved_segments = [[[[0.0; 2]; 4]; 6]; 2];
+            for (moved, delta) in moved_segments.iter_mut().zip([eps, -eps]) {
                 ring[k][c] = at + delta;
-                let moved = MovedPoint::new(ring, tangents, k);
-                for &j in &affected {
-                    self.segment_forces(i, &moved.segment(j), j, &mut |a, force| {
-                        let d = [sign * force[0] / (2.0 * eps), sign * force[1] / (2.0 * eps)];
-                        match df.iter_mut().find(|e| e.0 == a) {
-                            Some(e) => {
-                                e.1[0] += d[0];
-                                e.1[1] += d[1];
-                            }
-                            None => df.push((a, d)),
-                        }
-                    });
+                let moved_point = MovedPoint::new(ring, tangents, k);
+                for (m, &j) in moved.iter_mut().zip(&affected) {
+                    *m = moved_point.segment(j);
                 }
             }
             // Put back as it was (`at + delta - delta` may differ from `at`
             // in the last bit): each task's copy of the ring stays the
             // trial ring, however rayon splits the data points.
             ring[k][c] = at;
-            df.sort_unstable_by_key(|e| e.0);
-            for (a, d) in df {
-                for &(node, w) in &weights {
-                    let col = 2 * node + c;
-                    out.push((2 * a, col, -d[0] * w));
-                    out.push((2 * a + 1, col, -d[1] * w));
+            // The contributions summed per node: a few segments, each
+            // reaching most of the same nodes.
+            let mut df: Vec<(usize, [f64; 2])> = Vec::with_capacity(32);
+            for (s, &j) in affected.iter().enumerate() {
+                let q = self.quadrature[i][j]
+                    .as_ref()
+                    .expect("an affected segment is loaded");
+                let (plus, minus) = (&moved_segments[0][s], &moved_segments[1][s]);
+                let dp: [[f64; 2]; 4] = std::array::from_fn(|m| {
+                    [0, 1].map(|d| (plus[m][d] - minus[m][d]) / (2.0 * eps))
+                });
+                for (&a, dfa) in q.nodes().iter().zip(&derivatives[j]) {
+                    let mut d = [0.0; 2];
+                    for (dfa_m, dp_m) in dfa.iter().zip(&dp) {
+                        for (dr, row) in d.iter_mut().zip(dfa_m) {
+                            *dr += row[0] * dp_m[0] + row[1] * dp_m[1];
+                        }
+                    }
+                    match df.iter_mut().find(|e| e.0 == a) {
+                        Some(e) => {
+                            e.1[0] += d[0];
+                            e.1[1] += d[1];
+                        }
+                        None => df.push((a, d)),
+                    }
                 }
             }
-        }
-        out
+            df.sort_unstable_by_key(|e| e.0);
+            df
+        });
+        Some(DataPointColumns {
+            by_component,
+            weights: self.weights(l, k).collect(),
+        })
     }
 
     /// Groups of active nodes that the load stiffness may couple: for each
@@ -368,8 +442,8 @@ impl StepTerm for BoundaryLoading<'_> {
     }
 
     fn add_stiffness(&self, u: &[f64], pattern: &Pattern, values: &mut [f64]) {
-        for (row, col, value) in self.stiffness(u) {
-            pattern.add(values, row, col, value);
+        for point in self.stiffness(u) {
+            point.add_to(pattern, values);
         }
     }
 

@@ -39,7 +39,27 @@ impl Traction {
             Traction::Pressure(p) => [-p * d[1], p * d[0]],
         }
     }
+
+    /// The derivative of [`Traction::density`] by `dC/dt`: entry `[r][s]`
+    /// is `d density_r / d C'_s`.
+    fn density_derivative(&self, d: Point) -> [[f64; 2]; 2] {
+        match *self {
+            Traction::Dead(t) => {
+                let speed = (d[0] * d[0] + d[1] * d[1]).sqrt();
+                let unit = [d[0] / speed, d[1] / speed];
+                [
+                    [t[0] * unit[0], t[0] * unit[1]],
+                    [t[1] * unit[0], t[1] * unit[1]],
+                ]
+            }
+            Traction::Pressure(p) => [[0.0, -p], [p, 0.0]],
+        }
+    }
 }
+
+/// The derivative of the nodal forces of one node by a segment's four
+/// control points: entry `[m][r][s]` is `d f_r / d P_(m, s)`.
+pub type ControlPointDerivative = [[[f64; 2]; 2]; 4];
 
 /// The quadrature of one boundary segment in the configuration at the
 /// step's start: Gauss points (split at grid lines) with their weights and
@@ -59,6 +79,10 @@ pub struct SegmentQuadrature {
     points: Vec<(f64, f64)>,
     first: Vec<usize>,
     shares: Vec<(usize, f64)>,
+    /// The active nodes the shares are of, sorted, and each share's
+    /// node's place among them.
+    nodes: Vec<usize>,
+    place: Vec<u32>,
 }
 
 impl SegmentQuadrature {
@@ -82,7 +106,54 @@ impl SegmentQuadrature {
             q.points.push((t, w));
             q.first.push(q.shares.len());
         }
+        q.nodes = q.shares.iter().map(|&(a, _)| a).collect();
+        q.nodes.sort_unstable();
+        q.nodes.dedup();
+        q.place = (q.shares.iter())
+            .map(|(a, _)| q.nodes.binary_search(a).expect("a share's node") as u32)
+            .collect();
         q
+    }
+
+    /// The active nodes the segment's forces reach, sorted: those of
+    /// [`SegmentQuadrature::derivative`]'s entries.
+    pub fn nodes(&self) -> &[usize] {
+        &self.nodes
+    }
+
+    /// The derivative of [`SegmentQuadrature::forces`] by the segment's
+    /// control points at `current`, one entry per node of
+    /// [`SegmentQuadrature::nodes`] (written over `out`): the quadrature's
+    /// own derivative, exact, as `C'` is linear in the control points.
+    pub fn derivative(
+        &self,
+        current: &[Point; 4],
+        traction: Traction,
+        factor: f64,
+        out: &mut Vec<ControlPointDerivative>,
+    ) {
+        out.clear();
+        out.resize(self.nodes.len(), [[[0.0; 2]; 2]; 4]);
+        for (i, &(t, w)) in self.points.iter().enumerate() {
+            let j = traction.density_derivative(bezier_derivative(current, t));
+            // C' = sum_m beta_m P_m (the derivative of the Bernstein basis).
+            let s = 1.0 - t;
+            let b = [3.0 * s * s, 6.0 * s * t, 3.0 * t * t];
+            let beta = [-b[0], b[0] - b[1], b[1] - b[2], b[2]];
+            let shares = self.first[i]..self.first[i + 1];
+            for (&(_, share), &place) in self.shares[shares.clone()].iter().zip(&self.place[shares])
+            {
+                let d = &mut out[place as usize];
+                let weight = factor * w * share;
+                for (dm, beta_m) in d.iter_mut().zip(beta) {
+                    for (row, j_row) in dm.iter_mut().zip(&j) {
+                        for (entry, j_rs) in row.iter_mut().zip(j_row) {
+                            *entry += weight * beta_m * j_rs;
+                        }
+                    }
+                }
+            }
+        }
     }
 
     /// The nodal forces of `traction` (scaled by `factor`) on the segment
