@@ -109,14 +109,24 @@ impl StepTerm for SoftCells {
 /// containing cell for the linear basis).
 pub(crate) fn overlapped_cells(start: &Configuration, basis: Basis) -> Vec<(i64, i64)> {
     let Configuration { grid, points, .. } = *start;
-    let mut keys: Vec<(i64, i64)> = (0..points.len())
+    // Each run of points' cells sorted and deduplicated first: neighbours
+    // reach most of the same cells (16 a point for quadratic B-splines).
+    let mut keys: Vec<(i64, i64)> = (0..points.len().div_ceil(parallel::BOOKKEEPING))
         .into_par_iter()
-        .with_min_len(parallel::BOOKKEEPING)
-        .flat_map_iter(|p| {
-            let (lo, hi) = basis.cell_range(grid, points.position[p], points.support(p));
-            let range = |d: usize| lo[d]..=hi[d];
-            let ys = range(1);
-            range(0).flat_map(move |i| ys.clone().map(move |j| (i, j)))
+        .flat_map_iter(|run| {
+            let first = run * parallel::BOOKKEEPING;
+            let mut keys: Vec<(i64, i64)> = (first
+                ..(first + parallel::BOOKKEEPING).min(points.len()))
+                .flat_map(|p| {
+                    let (lo, hi) = basis.cell_range(grid, points.position[p], points.support(p));
+                    let range = |d: usize| lo[d]..=hi[d];
+                    let ys = range(1);
+                    range(0).flat_map(move |i| ys.clone().map(move |j| (i, j)))
+                })
+                .collect();
+            keys.sort_unstable();
+            keys.dedup();
+            keys
         })
         .collect();
     keys.par_sort_unstable();
