@@ -208,11 +208,9 @@ pub struct SparseSolver {
     /// Where each entry's transpose lies in the pattern (`K_ji` for the
     /// entry `K_ij`), made at the first GMRES solve; `None` before, and
     /// for a pattern that is not structurally symmetric (then LU solves).
-    transpose: Option<Vec<usize>>,
-    /// GMRES's buffers: the tangent's symmetric part, and its transpose
-    /// (whose column products make `K x`).
+    transpose: Option<Vec<u32>>,
+    /// The tangent's symmetric part, GMRES's preconditioners' matrix.
     symmetric_part: Vec<f64>,
-    transposed: Vec<f64>,
 }
 
 /// The smallest relative residual (CG's recurrence's) CG is asked to reach
@@ -521,7 +519,6 @@ impl SparseSolver {
             indefinite_solves: 0,
             transpose: None,
             symmetric_part: Vec::new(),
-            transposed: Vec::new(),
         }
     }
 
@@ -605,7 +602,6 @@ impl SparseSolver {
             scratch: self.scratch_bytes,
             multigrid: self.hierarchy.as_ref().map_or(0, Hierarchy::bytes),
             gmres: std::mem::size_of_val(self.symmetric_part.as_slice())
-                + std::mem::size_of_val(self.transposed.as_slice())
                 + self
                     .transpose
                     .as_ref()
@@ -794,28 +790,27 @@ impl SparseSolver {
         Ok(())
     }
 
-    /// `K^T`'s values in the pattern's places (`transposed`): in
-    /// compressed columns, `K` in compressed rows, whose column products
-    /// make `K x`. An error when the pattern is not structurally
+    /// Finds, once a pattern, where each entry's transpose lies
+    /// (`transpose`), whose places make `K x` from the columns of `K^T`
+    /// without a copy of it. An error when the pattern is not structurally
     /// symmetric.
-    fn transpose_tangent(&mut self, pattern: &Pattern, values: &[f64]) -> Result<(), GmresFailure> {
+    fn transpose_tangent(&mut self, pattern: &Pattern) -> Result<(), GmresFailure> {
         if self.transpose.is_none() {
             self.transpose = Some(transpose_places(pattern).ok_or(GmresFailure::NotConverging)?);
         }
-        let transpose = self.transpose.as_ref().ok_or(GmresFailure::NotConverging)?;
-        self.transposed.resize(values.len(), 0.0);
-        (self.transposed.par_iter_mut())
-            .zip(transpose)
-            .for_each(|(t, &k)| *t = values[k]);
         Ok(())
     }
 
-    /// `(K + K^T) / 2` into `symmetric_part`, `transposed` made.
+    /// `(K + K^T) / 2` into `symmetric_part`, `transpose` found.
     fn make_symmetric_part(&mut self, values: &[f64]) {
+        let transpose = self
+            .transpose
+            .as_ref()
+            .expect("the transpose's places are found first");
         self.symmetric_part.resize(values.len(), 0.0);
         (self.symmetric_part.par_iter_mut())
-            .zip(values.par_iter().zip(&self.transposed))
-            .for_each(|(s, (k, t))| *s = 0.5 * (k + t));
+            .zip(values.par_iter().zip(transpose))
+            .for_each(|(s, (k, &t))| *s = 0.5 * (k + values[t as usize]));
     }
 
     /// Solves `K x = rhs` for a `K` that is not symmetric by GMRES
@@ -835,7 +830,7 @@ impl SparseSolver {
     ) -> Option<(Vec<f64>, Timing)> {
         let mut timing = Timing::default();
         let t = std::time::Instant::now();
-        self.transpose_tangent(pattern, values).ok()?;
+        self.transpose_tangent(pattern).ok()?;
         self.make_symmetric_part(values);
         timing.factorise += t.elapsed().as_secs_f64();
         loop {
@@ -860,9 +855,10 @@ impl SparseSolver {
             } else {
                 MULTIGRID_MAX_ITERATIONS_STALE
             };
+            let transpose = self.transpose.as_deref().expect("found above");
             let (x, outcome) = gmres_on(
                 pattern,
-                &self.transposed,
+                (values, transpose),
                 |z| hierarchy.apply(op, z),
                 rhs,
                 accuracy,
@@ -899,7 +895,7 @@ impl SparseSolver {
         par: Par,
     ) -> Result<(Vec<f64>, Timing), GmresFailure> {
         let mut timing = Timing::default();
-        self.transpose_tangent(pattern, values)?;
+        self.transpose_tangent(pattern)?;
         loop {
             let fresh = self.kept.is_none() || self.refresh;
             if fresh {
@@ -930,9 +926,10 @@ impl SparseSolver {
             } else {
                 GMRES_MAX_ITERATIONS_STALE
             };
+            let transpose = self.transpose.as_deref().expect("found above");
             let (x, outcome) = gmres_on(
                 pattern,
-                &self.transposed,
+                (values, transpose),
                 |z| inverse.apply(z),
                 rhs,
                 accuracy,
@@ -1180,18 +1177,26 @@ fn with_inverse(order: Vec<usize>) -> (Vec<usize>, Vec<usize>) {
 
 /// GMRES on `K x = rhs` preconditioned by `precondition`, to the relative
 /// residual `accuracy` (at least [`CG_FLOOR`]) in at most `limit` Arnoldi
-/// steps, `K x` made from the columns of `K^T` (`transposed`, in the
-/// places of `pattern`).
+/// steps, `K x` made from the columns of `K^T`: `K`'s `values` read at
+/// their transposes' places (`transpose`, in the places of `pattern`).
 fn gmres_on(
     pattern: &Pattern,
-    transposed: &[f64],
+    (values, transpose): (&[f64], &[u32]),
     precondition: impl FnMut(&mut [f64]),
     rhs: &[f64],
     accuracy: f64,
     limit: usize,
 ) -> (Vec<f64>, krylov::CgOutcome) {
     krylov::preconditioned_gmres(
-        |x, y| krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, transposed, x, y),
+        |x, y| {
+            krylov::transposed_product(
+                &pattern.col_ptr,
+                &pattern.row_idx,
+                (values, transpose),
+                x,
+                y,
+            )
+        },
         precondition,
         rhs,
         accuracy.max(CG_FLOOR),
@@ -1233,9 +1238,10 @@ fn fitted_hierarchy<'h>(
 /// `K_ji` for the entry `k` holding `K_ij`. `None` when some `K_ji` has no
 /// place (the pattern is not structurally symmetric). Rows are sorted in
 /// each column.
-fn transpose_places(pattern: &Pattern) -> Option<Vec<usize>> {
+fn transpose_places(pattern: &Pattern) -> Option<Vec<u32>> {
     let n = pattern.col_ptr.len() - 1;
-    let places: Vec<Option<usize>> = (0..n)
+    u32::try_from(pattern.row_idx.len()).ok()?;
+    let places: Vec<u32> = (0..n)
         .into_par_iter()
         .flat_map_iter(|j| {
             let range = pattern.col_ptr[j]..pattern.col_ptr[j + 1];
@@ -1243,13 +1249,16 @@ fn transpose_places(pattern: &Pattern) -> Option<Vec<usize>> {
                 let column = pattern.col_ptr[i as usize]..pattern.col_ptr[i as usize + 1];
                 let rows = &pattern.row_idx[column.clone()];
                 rows.binary_search(&(j as u32))
-                    .ok()
-                    .map(|k| column.start + k)
+                    .map_or(NO_PLACE, |k| (column.start + k) as u32)
             })
         })
         .collect();
-    places.into_iter().collect()
+    (!places.contains(&NO_PLACE)).then_some(places)
 }
+
+/// A transpose's place that is not in the pattern ([`transpose_places`]);
+/// no place is, as a pattern's entries number fewer than `u32::MAX`.
+const NO_PLACE: u32 = u32::MAX;
 
 /// How a kept single-precision factor takes `K`'s entries: in single
 /// precision, without those that are round-off of their own terms. Those
