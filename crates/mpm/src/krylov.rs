@@ -39,12 +39,24 @@ pub fn symmetric_product<T: Copy + Into<f64> + Sync>(
     x: &[f64],
     y: &mut [f64],
 ) {
+    column_dots(col_ptr, row_idx, |k| values[k].into(), x, y);
+}
+
+/// `y_j` = column `j` (entry `k`'s value `value(k)`) dotted with `x`, the
+/// columns shared among threads.
+fn column_dots(
+    col_ptr: &[usize],
+    row_idx: &[u32],
+    value: impl Fn(usize) -> f64 + Sync,
+    x: &[f64],
+    y: &mut [f64],
+) {
     y.par_iter_mut()
         .with_min_len(1024)
         .enumerate()
         .for_each(|(j, yj)| {
             *yj = (col_ptr[j]..col_ptr[j + 1])
-                .map(|k| values[k].into() * x[row_idx[k] as usize])
+                .map(|k| value(k) * x[row_idx[k] as usize])
                 .sum();
         });
 }
@@ -61,14 +73,7 @@ pub fn transposed_product(
     x: &[f64],
     y: &mut [f64],
 ) {
-    y.par_iter_mut()
-        .with_min_len(1024)
-        .enumerate()
-        .for_each(|(j, yj)| {
-            *yj = (col_ptr[j]..col_ptr[j + 1])
-                .map(|k| values[transpose[k] as usize] * x[row_idx[k] as usize])
-                .sum();
-        });
+    column_dots(col_ptr, row_idx, |k| values[transpose[k] as usize], x, y);
 }
 
 /// The length of the blocks a dot product sums on its own before the
