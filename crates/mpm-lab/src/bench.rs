@@ -1,13 +1,17 @@
 //! `mpm bench`: cost against problem size, as a markdown report.
 //!
-//! Two scenes are scaled from about 1e3 to 1e6 material points (2x2 points
-//! per cell, the cell size shrinking): the self-weight column made 10 m wide
-//! (GIMP, 52% compression) and the grid-supported cantilever (linear basis,
-//! large deflection). Each runs its first two load steps, which is enough to
-//! time a step and its Newton iterations. Separately, the 896-point cantilever
-//! runs end to end many times and its median wall time is reported, and the
-//! plastic models' return maps are timed in the point loop against Hencky's
-//! elasticity ([`return_map_cost`]).
+//! Two scenes with symmetric tangents are scaled from about 1e3 to 1e6
+//! material points (2x2 points per cell, the cell size shrinking): the
+//! self-weight column made 10 m wide (GIMP, 52% compression) and the
+//! grid-supported cantilever (linear basis, large deflection); four with
+//! unsymmetric tangents from 1e4: the paper's cantilever on GIMP and on
+//! quadratic B-splines (follower pressure), and the pushed footing with
+//! F-bar and with non-associated Mohr-Coulomb. Each runs its first two
+//! load steps, which is enough to time a step and its Newton iterations.
+//! Separately, the 896-point cantilever runs end to end many times and
+//! its median wall time is reported, and the plastic models' return maps
+//! are timed in the point loop against Hencky's elasticity
+//! ([`return_map_cost`]).
 
 use std::fs;
 use std::path::Path;
@@ -29,7 +33,7 @@ struct Scene {
 /// The scenes: the size, memory and symmetric-solve tables run the first
 /// [`SYMMETRIC_SCENES`], whose tangents are symmetric; the unsymmetric
 /// table the rest.
-const SCENES: [Scene; 3] = [
+const SCENES: [Scene; 6] = [
     Scene {
         name: "column (10 m x 50 m, GIMP, Hencky)",
         build: wide_column,
@@ -42,8 +46,23 @@ const SCENES: [Scene; 3] = [
         name: "paper's cantilever (10 m x 2 m, GIMP, follower pressure)",
         build: paper_cantilever,
     },
+    Scene {
+        name: "paper's cantilever (10 m x 2 m, bspline2, follower pressure)",
+        build: paper_cantilever_bspline2,
+    },
+    Scene {
+        name: "footing push (von Mises, F-bar, GIMP)",
+        build: footing_fbar,
+    },
+    Scene {
+        name: "footing push (Mohr-Coulomb, psi = 0, GIMP)",
+        build: footing_mohr_coulomb,
+    },
 ];
 const SYMMETRIC_SCENES: usize = 2;
+/// The scenes (from [`SYMMETRIC_SCENES`] on) whose tangents change with
+/// plastic flow, measured up to [`PLASTIC_MAX_POINTS`].
+const PLASTIC_SCENES: std::ops::Range<usize> = 4..6;
 
 /// Cells across the short side so that 2x2 points per cell give about
 /// `points` points on a 1 x 5 domain: points = 4 * m * 5m.
@@ -77,6 +96,45 @@ fn paper_cantilever(points: usize) -> Value {
     case["basis"] = json!("gimp");
     case["grid"]["cell_size"] = (4.0 / across as f64).into();
     case["bodies"][0]["points"] = json!({ "count": [5 * across, across] });
+    case
+}
+
+/// [`paper_cantilever`] on quadratic B-splines.
+fn paper_cantilever_bspline2(points: usize) -> Value {
+    let mut case = paper_cantilever(points);
+    case["basis"] = json!("bspline2");
+    case
+}
+
+/// The built-in footing (`mpm example footing`: a rigid strip footing
+/// pushed into weightless undrained clay by the IBM, von Mises with F-bar,
+/// 5 m x 3 m half model, 2x2 points a cell) with about `points` points,
+/// the grid's origin off the material by 0.3 cells.
+fn footing_fbar(points: usize) -> Value {
+    let h = (60.0 / points as f64).sqrt();
+    let mut case = example("footing");
+    case["grid"]["cell_size"] = h.into();
+    case["grid"]["origin"] = json!([-0.3 * h, -0.3 * h]);
+    case
+}
+
+/// [`footing_fbar`] on a Mohr-Coulomb soil with non-associated flow (c =
+/// 10 kPa, phi = 20 degrees, psi = 0, E = 100 MPa, nu = 0.3) and no F-bar.
+fn footing_mohr_coulomb(points: usize) -> Value {
+    let mut case = footing_fbar(points);
+    case["analysis"]
+        .as_object_mut()
+        .expect("an analysis object")
+        .remove("volumetric");
+    case["bodies"][0]["material"] = json!({
+        "model": "mohr_coulomb",
+        "youngs_modulus": 1.0e8,
+        "poisson_ratio": 0.3,
+        "density": 0.0,
+        "cohesion": 1.0e4,
+        "friction_angle": 20.0,
+        "dilation_angle": 0.0
+    });
     case
 }
 
@@ -131,10 +189,14 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabErr
     report.push_str("# Benchmarks\n\n");
     report.push_str(&format!(
         "Written by `mpm bench --max-points {max_points}` ({} threads in rayon's pool; faer's Cholesky on them \
-         from 150k DOFs, sequential below, LU sequential; symmetric tangents by CG with a kept factor from \
-         40k DOFs, factorised every Newton iteration below). \
+         from 150k DOFs, sequential below, LU sequential; symmetric tangents factorised every Newton iteration \
+         below {kept} DOFs, by CG with a kept factor from there and with a multigrid V-cycle from {multigrid}; \
+         unsymmetric ones by LU below {gmres} DOFs and by GMRES from there, as the section on them says). \
          Times are wall-clock seconds on this machine; they vary between runs by 10-20%, so compare ratios.\n\n",
-        rayon::current_num_threads()
+        rayon::current_num_threads(),
+        kept = mpm::linsolve::KEPT_FACTOR_FROM_DOFS,
+        multigrid = mpm::linsolve::MULTIGRID_FROM_DOFS,
+        gmres = mpm::linsolve::GMRES_FROM_DOFS,
     ));
 
     let (median, min, max, points) = end_to_end(repeats)?;
@@ -410,41 +472,101 @@ fn solve_row(scene: &str, label: &str, row: &Row) -> String {
 /// DOFs, and growing faster than the Cholesky factors).
 const UNSYMMETRIC_DIRECT_MAX_POINTS: usize = 100_000;
 
+/// The largest size of the plastic scenes: their symmetric parts are often
+/// not positive definite, and LU then solves (hours at 1e6 points).
+const PLASTIC_MAX_POINTS: usize = 100_000;
+
 /// Tangents that are not symmetric solved by LU every Newton iteration
-/// (direct) against GMRES preconditioned by the kept Cholesky factor of
-/// the symmetric part, from 1e4 points up.
+/// (direct) against GMRES preconditioned by the symmetric part, from 1e4
+/// points up; then the quadratic B-splines' cost against GIMP's.
 fn unsymmetric_methods(max_points: usize) -> Result<String, LabError> {
-    let mut text = String::from(
+    let mut text = format!(
         "\n## Unsymmetric solves: LU against GMRES\n\n\
-         The follower pressure's load stiffness makes the paper's cantilever's tangent unsymmetric. Direct: \
+         The follower pressure's load stiffness makes the paper's cantilever's tangent unsymmetric; F-bar and \
+         plastic flow (non-associated for Mohr-Coulomb with psi = 0) make the pushed footing's. Direct: \
          every Newton iteration's tangent factorised by LU (faer, COLAMD, sequential). GMRES: restarted \
-         GMRES (`crates/mpm/src/krylov.rs`) to the accuracy Newton's forcing term asks for, preconditioned \
-         on the right by the single-precision Cholesky factor (nested dissection, as for symmetric tangents) \
-         of the symmetric part `(K + K^T) / 2` of an earlier tangent of the pattern, refreshed as CG's kept \
-         factor is; a tangent whose symmetric part is not positive definite is solved by LU \
-         (`crates/mpm/src/linsolve.rs`). The default switches from LU to GMRES at 2,000 DOFs. First two \
-         load steps; fresh factorisations (Cholesky's of the symmetric part; LU's are not counted), GMRES \
-         solves and their iterations over both.\n\n\
-         | scene | points | active DOFs | method | s / step | factorisation s / step | solve s / step | Newton iterations | factorisations | GMRES solves | GMRES iterations | peak MiB |\n\
-         |---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+         flexible GMRES (`crates/mpm/src/krylov.rs`) to the accuracy Newton's forcing term asks for, \
+         preconditioned on the right by the single-precision Cholesky factor (nested dissection, as for \
+         symmetric tangents) of the symmetric part `(K + K^T) / 2` of an earlier tangent of the increment, \
+         refreshed as CG's kept factor is, and from {multigrid} DOFs by a multigrid V-cycle of the symmetric \
+         part instead; a tangent whose symmetric part is not positive definite is solved by LU, and after \
+         {limit} such in a row, the rest of the increment (`crates/mpm/src/linsolve.rs`). The default \
+         switches from LU to GMRES at {gmres} DOFs. First two load steps (the footings' first steps are cut \
+         into pieces: their failed tries are in the time); fresh factorisations (Cholesky's of the symmetric \
+         part or multigrid set-ups; LU's are not counted), GMRES solves and their iterations over both. The \
+         exponent is that of the factorisation and solve time per step against the DOFs, from the row of \
+         the same scene and method one size down. The plastic scenes stop at {plastic} points.\n\n\
+         | scene | points | active DOFs | method | s / step | factorisation s / step | solve s / step | Newton iterations | factorisations | GMRES solves | GMRES iterations | peak MiB | exponent |\n\
+         |---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        multigrid = mpm::linsolve::MULTIGRID_FROM_DOFS,
+        limit = mpm::linsolve::GMRES_INDEFINITE_LIMIT,
+        gmres = mpm::linsolve::GMRES_FROM_DOFS,
+        plastic = PLASTIC_MAX_POINTS,
     );
+    // Per scene and method, the last row's (DOFs, solve seconds a step);
+    // and the GMRES rows' seconds a step of the GIMP and bspline2 scenes.
+    let mut previous: std::collections::HashMap<(usize, &str), (f64, f64)> = Default::default();
+    let mut by_basis: Vec<(usize, usize, f64)> = Vec::new();
     for (index, scene) in SCENES.iter().enumerate().skip(SYMMETRIC_SCENES) {
+        let largest = if PLASTIC_SCENES.contains(&index) {
+            max_points.min(PLASTIC_MAX_POINTS)
+        } else {
+            max_points
+        };
         let mut target = 10_000;
-        while target <= max_points {
+        while target <= largest {
             for method in ["direct", "gmres"] {
                 if method == "direct" && target > UNSYMMETRIC_DIRECT_MAX_POINTS {
                     continue;
                 }
                 let row = measure_in_child_with(index, target, &[(UNSYMMETRIC_VARIABLE, method)])?;
                 let label = if method == "direct" { "LU" } else { "GMRES" };
+                let steps = row.steps as f64;
+                let solving = (row.timings.factorisation + row.timings.solve) / steps;
+                let exponent = previous
+                    .insert((index, method), (row.dofs as f64, solving))
+                    .map_or(String::new(), |(dofs, seconds)| {
+                        format!(
+                            "{:.2}",
+                            (solving / seconds).ln() / (row.dofs as f64 / dofs).ln()
+                        )
+                    });
                 let line = solve_row(scene.name, label, &row);
+                let line = format!("{} {exponent} |\n", line.trim_end());
                 eprint!("{line}");
                 text.push_str(&line);
+                if method == "gmres" && (index == 2 || index == 3) {
+                    by_basis.push((index, row.points, row.timings.total / steps));
+                }
             }
             target *= 10;
         }
     }
+    text.push_str(&basis_cost(&by_basis));
     Ok(text)
+}
+
+/// The quadratic B-splines' seconds a step against GIMP's on the paper's
+/// cantilever at the same sizes (the GMRES rows of the table above:
+/// `(scene, points, s / step)`).
+fn basis_cost(rows: &[(usize, usize, f64)]) -> String {
+    let mut text = String::from(
+        "\n### Quadratic B-splines against GIMP\n\n\
+         The paper's cantilever on both bases at the same points (2x2 a cell), default solvers, first two \
+         load steps (the rows above). A quadratic B-spline reaches 4x4 nodes a point where GIMP reaches 3x3 \
+         (16 against 9 links, 256 against 81 pairs in the stiffness), and its tangent has 7x7 nodes a \
+         column against 5x5.\n\n\
+         | points | GIMP s / step | bspline2 s / step | ratio |\n|---:|---:|---:|---:|\n",
+    );
+    for &(_, points, gimp) in rows.iter().filter(|r| r.0 == 2) {
+        if let Some(&(_, _, bspline2)) = rows.iter().find(|r| r.0 == 3 && r.1 == points) {
+            text.push_str(&format!(
+                "| {points} | {gimp:.3} | {bspline2:.3} | {:.2} |\n",
+                bspline2 / gimp
+            ));
+        }
+    }
+    text
 }
 
 /// Load steps that reused the last step's symbolic analysis (the pattern

@@ -281,7 +281,7 @@ pub enum SymmetricMethod {
 /// the GIMP column's step from 48k DOFs, ties on the bilinear cantilever,
 /// and lowers the peak memory of both. Below it every answer is the direct
 /// solve's.
-const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
+pub const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
 
 /// From this many unknowns up, symmetric tangents are solved by
 /// [`SymmetricMethod::Multigrid`], whose memory grows linearly where the
@@ -290,7 +290,7 @@ const KEPT_FACTOR_FROM_DOFS: usize = 40_000;
 /// points under 1 GiB. It was faster than the kept factor from about
 /// 0.14M DOFs, slower at 0.05M: CG's iterations grow slowly with size
 /// where the factorisation grows as DOFs^1.3.
-const MULTIGRID_FROM_DOFS: usize = 150_000;
+pub const MULTIGRID_FROM_DOFS: usize = 150_000;
 
 /// The method a solver of `n` unknowns uses by default.
 pub fn symmetric_method(n: usize) -> SymmetricMethod {
@@ -325,7 +325,7 @@ pub enum UnsymmetricMethod {
 /// From this many unknowns up, tangents that are not symmetric are solved
 /// by [`UnsymmetricMethod::SymmetricPartGmres`] (BENCHMARKS.md,
 /// Unsymmetric solves). Below it every answer is LU's.
-const GMRES_FROM_DOFS: usize = 2_000;
+pub const GMRES_FROM_DOFS: usize = 2_000;
 
 /// GMRES's Arnoldi steps allowed with a fresh factor of the symmetric
 /// part before it is judged not to serve, and with a stale one before a
@@ -357,7 +357,7 @@ enum GmresFailure {
 /// which LU solves the rest of the increment's (each increment, a load
 /// step or a piece of a cut one, tries GMRES again:
 /// [`SparseSolver::reused`]).
-const GMRES_INDEFINITE_LIMIT: usize = 3;
+pub const GMRES_INDEFINITE_LIMIT: usize = 3;
 
 /// What the kept-factor path made of a symmetric system.
 enum Kept {
