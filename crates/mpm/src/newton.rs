@@ -479,14 +479,21 @@ pub fn solve_arc_length<M: Monitor + ?Sized>(
 /// linearly when `s` changed sign, else to the minimum of the parabola
 /// through `|r(0)|^2`, its slope and `|r(alpha)|^2`, within [`CUT_BOUNDS`].
 ///
-/// Except that an admissible full step is taken anyway when its
-/// out-of-balance force is at most [`NewtonSettings::free_step_growth`]
-/// times the larger of the lowest the step has reached and the step's
-/// force scale at its start (a yardstick that does not grow with a
-/// diverging trial's internal force, as the relative residual's does): a
-/// non-monotone search (Grippo, Lampariello & Lucidi 1986, SIAM J. Numer.
-/// Anal. 23). [`FREE_STEPS`] such steps are allowed between two new lowest
-/// residuals.
+/// Except that an increment's first full step, if admissible, is taken
+/// anyway when its out-of-balance force is at most
+/// [`NewtonSettings::free_step_growth`] times the larger of the first
+/// out-of-balance force and the step's force scale at its start (a
+/// yardstick that does not grow with a diverging trial's internal force,
+/// as the relative residual's does): a non-monotone search (Grippo,
+/// Lampariello & Lucidi 1986, SIAM J. Numer. Anal. 23).
+///
+/// Later full steps are searched like any other. Were they free too, on
+/// the pushed footing with F-bar (`mpm example footing` at 9,933 points) a
+/// full step at the fourth iteration would take the residual from 9e-3 to
+/// 1.0 (the internal force grown with the unbalance), and every direction
+/// after it would invert points until the iteration limit: 7 cut
+/// increments, 208 failed iterations and 34.8 s for the run, against 1, 30
+/// and 10.9 s (docs/scale.md, "Plastic iterations").
 ///
 /// Near incompressibility the first full step of a load step rotates the
 /// body by a linearised rotation, whose spurious volume change costs the
@@ -514,9 +521,6 @@ const ARMIJO: f64 = 1e-4;
 const CUT_BOUNDS: (f64, f64) = (0.1, 0.5);
 /// The shortest step length tried; it is taken whatever it gives.
 const SHORTEST_STEP: f64 = 1.0 / 1024.0;
-/// Full steps that may raise the residual between two new lowest ones
-/// ([`Search`]).
-const FREE_STEPS: u32 = 2;
 
 impl<'a> Search<'a> {
     fn new(r: &[f64], du: &'a [f64], norm0: f64, divergence_limit: f64) -> Self {
@@ -619,9 +623,8 @@ pub fn solve_from<M: Monitor + ?Sized>(
         },
         (at_zero, None) => at_zero.map_err(|p| inadmissible(0, p, None))?,
     };
-    // For the free full steps: the lowest out-of-balance force of the step
-    // and the force scale at its start.
-    let (mut lowest, mut free_steps, scale_start) = (f64::INFINITY, FREE_STEPS, scale);
+    // For the free first step: the force scale at the step's start.
+    let scale_start = scale;
     for iteration in 0.. {
         let (norm, residual) = record(&mut info, settings, monitor, (step, iteration), &r, scale)?;
         // A prediction is corrected at least once: it carries the last
@@ -629,9 +632,6 @@ pub fn solve_from<M: Monitor + ?Sized>(
         if residual <= settings.tolerance && (iteration > 0 || !from_prediction) {
             info.iterations = iteration;
             return Ok((u, info));
-        }
-        if norm < lowest {
-            (lowest, free_steps) = (norm, FREE_STEPS);
         }
         out_of_iterations_or_cancelled(&info, settings, monitor, (step, iteration, residual))?;
         let (du, kind) = eq
@@ -656,11 +656,10 @@ pub fn solve_from<M: Monitor + ?Sized>(
                     };
                     if cut.is_some()
                         && alpha == 1.0
-                        && free_steps > 0
-                        && n <= settings.free_step_growth * lowest.max(scale_start)
+                        && iteration == 0
+                        && n <= settings.free_step_growth * norm.max(scale_start)
                         && n / scale_trial <= settings.divergence_limit
                     {
-                        free_steps -= 1;
                         cut = None;
                     }
                     match cut {
