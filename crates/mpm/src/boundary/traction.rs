@@ -44,6 +44,9 @@ impl Traction {
     /// is `d density_r / d C'_s`.
     fn density_derivative(&self, d: Point) -> [[f64; 2]; 2] {
         match *self {
+            // A curve at rest at a point (no length there) has no direction
+            // to differentiate the length element by.
+            Traction::Dead(_) if d == [0.0, 0.0] => [[0.0; 2]; 2],
             Traction::Dead(t) => {
                 let speed = (d[0] * d[0] + d[1] * d[1]).sqrt();
                 let unit = [d[0] / speed, d[1] / speed];
