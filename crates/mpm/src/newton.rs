@@ -493,7 +493,8 @@ pub fn solve_arc_length<M: Monitor + ?Sized>(
 /// 1.0 (the internal force grown with the unbalance), and every direction
 /// after it would invert points until the iteration limit: 7 cut
 /// increments, 208 failed iterations and 34.8 s for the run, against 1, 30
-/// and 10.9 s (docs/scale.md, "Plastic iterations").
+/// and 11.5 s (docs/scale.md, "Plastic iterations"; `newton::tests::
+/// only_the_first_full_step_is_free` on one equation).
 ///
 /// Near incompressibility the first full step of a load step rotates the
 /// body by a linearised rotation, whose spurious volume change costs the
@@ -996,6 +997,7 @@ mod tests {
     /// Optimization", sec. 6.3); the line search cuts the first steps and
     /// then converges quadratically to 0 with full steps.
     struct Arctangent {
+        x0: f64,
         x: f64,
     }
 
@@ -1004,7 +1006,7 @@ mod tests {
             1
         }
         fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InadmissiblePoint> {
-            self.x = 3.0 + u[0];
+            self.x = self.x0 + u[0];
             Ok((vec![-self.x.atan()], 1.0))
         }
         fn correction(
@@ -1022,7 +1024,13 @@ mod tests {
             line_search: false,
             ..Default::default()
         };
-        let e = solve(&mut Arctangent { x: 3.0 }, &plain, 1, &mut NoObserver).unwrap_err();
+        let e = solve(
+            &mut Arctangent { x0: 3.0, x: 3.0 },
+            &plain,
+            1,
+            &mut NoObserver,
+        )
+        .unwrap_err();
         assert!(
             matches!(
                 e,
@@ -1031,7 +1039,13 @@ mod tests {
             "{e}"
         );
         let settings = NewtonSettings::default();
-        let (u, info) = solve(&mut Arctangent { x: 3.0 }, &settings, 1, &mut NoObserver).unwrap();
+        let (u, info) = solve(
+            &mut Arctangent { x0: 3.0, x: 3.0 },
+            &settings,
+            1,
+            &mut NoObserver,
+        )
+        .unwrap();
         assert!((3.0 + u[0]).abs() < 1e-9, "{info:?}");
         let cut = info.step_lengths.iter().filter(|&&a| a < 1.0).count();
         assert!(cut >= 1, "{info:?}");
@@ -1081,6 +1095,20 @@ mod tests {
         let (u, info) = solve(&mut eq, &NewtonSettings::default(), 1, &mut NoObserver).unwrap();
         assert!((0.1 + u[0] - 2.0).abs() < 1e-6, "{info:?}");
         assert!(info.step_lengths[0] < 1.0, "{info:?}");
+    }
+
+    /// [`Arctangent`] from x = 1.5: Newton overshoots further each
+    /// iteration, |atan| 0.98, then 1.04 at x = -1.69, then 1.16 at x =
+    /// 2.32 (by hand, `x - atan(x) (1 + x^2)`). The first full step is
+    /// free; the second, which raises the residual again, is searched
+    /// (taken free, Newton would go on diverging).
+    #[test]
+    fn only_the_first_full_step_is_free() {
+        let mut eq = Arctangent { x0: 1.5, x: 1.5 };
+        let (u, info) = solve(&mut eq, &NewtonSettings::default(), 1, &mut NoObserver).unwrap();
+        assert!((1.5 + u[0]).abs() < 1e-8, "{info:?}");
+        assert_eq!(info.step_lengths[0], 1.0, "{info:?}");
+        assert!(info.step_lengths[1] < 1.0, "{info:?}");
     }
 
     /// A trial state with an inverted point shortens the step instead of
