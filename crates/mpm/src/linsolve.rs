@@ -703,7 +703,30 @@ impl SparseSolver {
             col: &pattern.row_idx,
             val: values,
         };
-        let mut timing = Timing::default();
+        self.with_multigrid(op, Timing::default(), |hierarchy, limit| {
+            krylov::preconditioned_cg(
+                |x, y| krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, values, x, y),
+                |z| hierarchy.apply(op, z),
+                rhs,
+                accuracy.max(CG_FLOOR),
+                limit,
+            )
+        })
+    }
+
+    /// A Krylov solve (`krylov(hierarchy, iteration limit)`) preconditioned
+    /// by a multigrid V-cycle of `op`: the kept hierarchy fitted to `op`,
+    /// or one built afresh when there is none, when the last solve with a
+    /// stale one converged slower than [`MULTIGRID_REFRESH_RATE`], or when
+    /// it fails with a stale one. `None` when the solver has no grid, or a
+    /// fresh hierarchy cannot be built or does not serve. Times add to
+    /// `timing`.
+    fn with_multigrid(
+        &mut self,
+        op: multigrid::Operator<'_>,
+        mut timing: Timing,
+        mut krylov: impl FnMut(&mut Hierarchy, usize) -> (Vec<f64>, krylov::CgOutcome),
+    ) -> Option<(Vec<f64>, Timing)> {
         loop {
             let fresh = self.hierarchy.is_none() || self.refresh;
             self.refresh = false;
@@ -716,17 +739,12 @@ impl SparseSolver {
                 &mut timing,
             )?;
             let t = std::time::Instant::now();
-            let (x, outcome) = krylov::preconditioned_cg(
-                |x, y| krylov::symmetric_product(&pattern.col_ptr, &pattern.row_idx, values, x, y),
-                |z| hierarchy.apply(op, z),
-                rhs,
-                accuracy.max(CG_FLOOR),
-                if fresh {
-                    MULTIGRID_MAX_ITERATIONS
-                } else {
-                    MULTIGRID_MAX_ITERATIONS_STALE
-                },
-            );
+            let limit = if fresh {
+                MULTIGRID_MAX_ITERATIONS
+            } else {
+                MULTIGRID_MAX_ITERATIONS_STALE
+            };
+            let (x, outcome) = krylov(hierarchy, limit);
             timing.solve += t.elapsed().as_secs_f64();
             if self.krylov_finished(outcome, fresh, MULTIGRID_REFRESH_RATE) {
                 return Some((x, timing));
@@ -833,47 +851,28 @@ impl SparseSolver {
         self.transpose_tangent(pattern).ok()?;
         self.make_symmetric_part(values);
         timing.factorise += t.elapsed().as_secs_f64();
-        loop {
-            let op = multigrid::Operator {
-                ptr: &pattern.col_ptr,
-                col: &pattern.row_idx,
-                val: &self.symmetric_part,
-            };
-            let fresh = self.hierarchy.is_none() || self.refresh;
-            self.refresh = false;
-            let hierarchy = fitted_hierarchy(
-                &mut self.hierarchy,
-                op,
-                self.nodes.as_deref(),
-                fresh,
-                (&self.tally, &mut self.factorisations),
-                &mut timing,
-            )?;
-            let t = std::time::Instant::now();
-            let limit = if fresh {
-                MULTIGRID_MAX_ITERATIONS
-            } else {
-                MULTIGRID_MAX_ITERATIONS_STALE
-            };
-            let transpose = self.transpose.as_deref().expect("found above");
-            let (x, outcome) = gmres_on(
+        // Out of the solver while it is borrowed whole, and back after.
+        let (symmetric_part, transpose) = (
+            std::mem::take(&mut self.symmetric_part),
+            self.transpose.take().expect("found above"),
+        );
+        let op = multigrid::Operator {
+            ptr: &pattern.col_ptr,
+            col: &pattern.row_idx,
+            val: &symmetric_part,
+        };
+        let solved = self.with_multigrid(op, timing, |hierarchy, limit| {
+            gmres_on(
                 pattern,
-                (values, transpose),
+                (values, &transpose),
                 |z| hierarchy.apply(op, z),
                 rhs,
                 accuracy,
                 limit,
-            );
-            timing.solve += t.elapsed().as_secs_f64();
-            if self.krylov_finished(outcome, fresh, MULTIGRID_REFRESH_RATE) {
-                return Some((x, timing));
-            }
-            if fresh {
-                self.hierarchy = None;
-                return None;
-            }
-            self.refresh = true;
-        }
+            )
+        });
+        (self.symmetric_part, self.transpose) = (symmetric_part, Some(transpose));
+        solved
     }
 
     /// Solves `K x = rhs` for a `K` that is not symmetric by GMRES
