@@ -662,7 +662,7 @@ mod tests {
                     .num_threads(threads)
                     .build()
                     .unwrap()
-                    .install(|| loading.stiffness(&u))
+                    .install(|| loading.stiffness(u))
                     .iter()
                     .flat_map(|point| point.entries())
                     .collect::<Vec<_>>()
