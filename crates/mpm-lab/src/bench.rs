@@ -177,8 +177,10 @@ pub struct Row {
 }
 
 /// Sections of BENCHMARKS.md that `mpm bench` keeps: `mpm bench-queue`'s,
-/// and the measurements too long for it (see the closing notes in docs/).
-const KEPT_SECTIONS: [&str; 3] = [
+/// and the measurements made by hand or too long for it (see the closing
+/// notes in docs/).
+const KEPT_SECTIONS: [&str; 4] = [
+    "## Bending of points one a cell",
     "## Job queue",
     "## Ten million points",
     "## Before and after",
