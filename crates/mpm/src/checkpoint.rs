@@ -22,7 +22,7 @@ use crate::report::Settled;
 /// The encoding's version: a checkpoint of another one is refused (5:
 /// the points' history holds `b - I` and `b_zz - 1` where 4 held `b`; 6:
 /// the points' stress slopes).
-pub(crate) const FORMAT: u32 = 6;
+pub(crate) const FORMAT: u32 = 7;
 
 /// The state of a run after `steps_done` load steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -40,6 +40,9 @@ pub struct Checkpoint {
     /// The stress slopes of the points that have them (those seeded one a
     /// cell or fewer), by point.
     pub(crate) stress_slopes: Vec<(u32, [f64; 6])>,
+    /// With F-bar, the mean pressure each point carries to the next step
+    /// (`MaterialPoints::fbar_pressure`); empty otherwise.
+    pub(crate) fbar_pressure: Vec<f64>,
     pub(crate) probes: Vec<[f64; 2]>,
     pub(crate) anchors_moved: Vec<[f64; 2]>,
     pub(crate) loops: Vec<LoopState>,

@@ -123,6 +123,9 @@ pub struct AnalysedPattern {
 /// cost, and its analysed pattern.
 pub struct ConvergedStep {
     pub states: Vec<PointState>,
+    /// With F-bar, the mean pressure each point worked with
+    /// ([`FbarCells::carried`]), which the next step carries.
+    pub fbar_pressure: Option<Vec<f64>>,
     pub carried: Vec<Box<dyn Any>>,
     pub timings: StepTimings,
     pub memory: StepMemory,
@@ -261,9 +264,20 @@ impl<'a> StepEquilibrium<'a> {
                     cauchy: r.cauchy,
                 }
             })
-            .collect();
+            .collect::<Vec<PointState>>();
+        let fbar_pressure =
+            self.fbar
+                .as_ref()
+                .zip(self.fbar_trial.as_ref())
+                .map(|(fbar, trial)| {
+                    fbar.carried(trial, |p| {
+                        let plane = states[p].cauchy.plane;
+                        0.5 * (plane[0] + plane[1])
+                    })
+                });
         ConvergedStep {
             states,
+            fbar_pressure,
             carried: self
                 .terms
                 .into_iter()

@@ -60,6 +60,7 @@ impl Simulation {
                 .filter(|(_, s)| s.iter().any(|&x| x != 0.0))
                 .map(|(k, &s)| (k as u32, s))
                 .collect(),
+            fbar_pressure: p.fbar_pressure.clone(),
             probes: self.probes.position.clone(),
             anchors_moved: self.anchors.iter().map(|a| a.moved()).collect(),
             loops: self.loops.iter().map(LoopState::of).collect(),
@@ -100,7 +101,9 @@ impl Simulation {
             c.yielding.len(),
             c.stress.len(),
         ];
-        if lengths.iter().any(|&l| l != n) || c.stress_slopes.iter().any(|&(p, _)| p as usize >= n)
+        if lengths.iter().any(|&l| l != n)
+            || c.stress_slopes.iter().any(|&(p, _)| p as usize >= n)
+            || !(c.fbar_pressure.is_empty() || c.fbar_pressure.len() == n)
         {
             return Err(CheckpointError::OtherCase("the material point counts"));
         }
@@ -141,6 +144,7 @@ impl Simulation {
         for &(k, s) in &c.stress_slopes {
             p.stress_slopes[k as usize] = s;
         }
+        p.fbar_pressure.clone_from(&c.fbar_pressure);
         p.stress = c
             .stress
             .iter()
@@ -288,6 +292,9 @@ mod tests {
 
         let mut resumed = Simulation::new(&case).unwrap();
         resumed.restore(&checkpoint).unwrap();
+        // F-bar's pressures carried across the grid's reset are state.
+        assert_eq!(checkpoint.fbar_pressure.len(), resumed.points.len());
+        assert_eq!(resumed.points.fbar_pressure, checkpoint.fbar_pressure);
         let rest = resumed.run(&mut crate::NoObserver).unwrap();
         assert_eq!(rest.steps.len(), whole.steps.len() - 4);
         for (a, b) in rest.steps.iter().zip(&whole.steps[4..]) {

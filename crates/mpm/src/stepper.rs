@@ -655,6 +655,7 @@ impl Simulation {
         } else {
             update::commit_in_place(&mut self.points, &states);
         }
+        self.points.fbar_pressure = converged.fbar_pressure.unwrap_or_default();
         if let Some(p) = self.points.first_non_finite() {
             return Err(non_finite(&format!("state of material point {p}")));
         }
@@ -814,7 +815,8 @@ impl Simulation {
                 );
                 (load_factor, rate)
             }),
-            fbar: (self.volumetric == Volumetric::Fbar).then(|| FbarCells::new(&start)),
+            fbar: (self.volumetric == Volumetric::Fbar)
+                .then(|| FbarCells::new(&start).carrying(&start, &self.points.fbar_pressure)),
             cell_mean: (self.volumetric == Volumetric::CellMean)
                 .then(|| CellMean::new(&start, self.settings.hourglass)),
             terms,

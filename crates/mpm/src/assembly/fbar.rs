@@ -34,7 +34,9 @@
 //! Pi   = sum_q w_q sigma_m,q,      w_q = V_q / sum V
 //! ```
 //!
-//! where `dev` takes off `sigma_m` and `P~ = alpha P^ - alpha (P^ : dF) / 2
+//! (with `Pi + c_p` for `Pi` once the points carry their pressures across
+//! the grid's reset, [`FbarCells::carrying`]) where `dev` takes off
+//! `sigma_m` and `P~ = alpha P^ - alpha (P^ : dF) / 2
 //! dF^-T`. The tangent is the force's derivative: a local part by the
 //! point's own `d(dF)` (through `P^`'s tangent `A^`, `alpha` and `dF^-T`),
 //! and two couplings with every point of the cell, by `dJ_bar` (in `P~`,
@@ -82,6 +84,9 @@ pub struct FbarCells {
     cell_of: Vec<u32>,
     /// Active nodes of each cell's points (sorted, deduplicated).
     nodes: Vec<Vec<u32>>,
+    /// Per point, the pressure it carries beside its cell's mean (`c_p`,
+    /// see [`FbarCells::carrying`]); zero until it is given.
+    offset: Vec<f64>,
 }
 
 /// What the trial state's responses and the coupling terms of the tangent
@@ -148,7 +153,65 @@ impl FbarCells {
             weight,
             cell_of,
             nodes,
+            offset: vec![0.0; n],
         }
+    }
+
+    /// The cells with each point's pressure carried across the grid's
+    /// reset: `carried[p]` is the mean pressure point `p` worked with at
+    /// the end of the last step ([`FbarCells::carried`]; empty before the
+    /// first, when every point takes its cell's mean). A point that
+    /// changes cell, or whose cellmates do, would otherwise take its new
+    /// cell's mean at once, and that jump in its pressure is force out of
+    /// balance at the step's start whatever the step's size (measured:
+    /// docs/guide.md, Material models). So each point keeps the constant
+    /// `c_p = carried_p - Pi_start` beside its cell's mean `Pi` for the
+    /// step, a pressure on its own volume change (a term of the step's
+    /// potential, linear in `dJ_p`: the tangent stays symmetric), and the
+    /// pressure's increment is the cell's. `Pi_start` is the mean at `u =
+    /// 0` as the trial makes it ([`FbarPart`]'s `sigma_m` on `J_start`).
+    pub fn carrying(mut self, start: &Configuration, carried: &[f64]) -> Self {
+        let mp = start.points;
+        if carried.len() != mp.len() {
+            return self;
+        }
+        let zero = vec![0.0; start.conn.n_dofs()];
+        let averages = vec![0.0; self.cells()];
+        let sigma_m: Vec<f64> = (0..mp.len())
+            .into_par_iter()
+            .with_min_len(parallel::BOOKKEEPING)
+            .map(|p| {
+                point_response(&self, (&averages, None), start.conn, mp, &zero, p)
+                    .map_or(f64::NAN, |(_, part)| part.sigma_m)
+            })
+            .collect();
+        let means = self.averages(&sigma_m);
+        for p in 0..mp.len() {
+            let alone = self.members(self.cell_of[p] as usize).len() == 1;
+            let offset = carried[p] - self.of(&means, p);
+            self.offset[p] = if alone || !offset.is_finite() {
+                0.0
+            } else {
+                offset
+            };
+        }
+        self
+    }
+
+    /// The mean pressure each point works with at `trial` (its cell's
+    /// `Pi` and its `c_p`; a point alone in its cell, its own, from its
+    /// converged `cauchy` stress), for [`FbarCells::carrying`] in the next
+    /// step.
+    pub fn carried(&self, trial: &FbarTrial, cauchy: impl Fn(usize) -> f64) -> Vec<f64> {
+        (0..self.cell_of.len())
+            .map(|p| {
+                if self.members(self.cell_of[p] as usize).len() == 1 {
+                    cauchy(p)
+                } else {
+                    self.of(&trial.means, p) + self.offset[p]
+                }
+            })
+            .collect()
     }
 
     /// The node groups the coupling term joins (for the stiffness pattern).
@@ -196,8 +259,10 @@ impl FbarCells {
     /// Turns the model's response `P^`, `A^` to `dF_bar = alpha dF` into
     /// the point's local stress `P~ = dJ_bar dev(sigma) dF^-T` and its local
     /// tangent, and returns the point's part in its cell's terms (see the
-    /// module docs). With the cell's `mean` (`Pi`) known, the stress and
-    /// the tangent are completed with `Pi J dF^-T` and its derivative.
+    /// module docs). With the point's `mean` pressure known (its cell's
+    /// `Pi` and the `c_p` it carries), the stress and the tangent are
+    /// completed with `(Pi + c_p) J dF^-T` and its derivative at fixed
+    /// `Pi`.
     pub fn adjust(
         &self,
         p: usize,
@@ -354,11 +419,12 @@ impl FbarTrial {
         }
     }
 
-    /// Point `p`'s stress: its local `P~` completed by its cell's pressure
-    /// term `Pi J dF^-T` (none for the small-strain model, whose own
-    /// volume change pairs with its whole stress).
+    /// Point `p`'s stress: its local `P~` completed by its pressure term
+    /// `(Pi + c_p) J dF^-T`, its cell's mean and the pressure it carries
+    /// ([`FbarCells::carrying`]) (none for the small-strain model, whose
+    /// own volume change pairs with its whole stress).
     pub fn stress(&self, fbar: &FbarCells, p: usize, local: &Matrix2<f64>) -> Matrix2<f64> {
-        local + self.parts[p].pressure * fbar.of(&self.means, p)
+        local + self.parts[p].pressure * (fbar.of(&self.means, p) + fbar.offset[p])
     }
 
     /// Bytes held on the heap.
@@ -488,7 +554,7 @@ pub fn point_response(
     let grad_bar = Matrix2::identity() * ((b - a) / (dj * (alpha + 1.0))) + g * alpha;
     let response = material.respond(&mp.history[p], &grad_bar, j_start);
     let mut response = admissible::check_response(p, j_start * dj_bar, response)?;
-    let mean = means.map(|m| fbar.of(m, p));
+    let mean = means.map(|m| fbar.of(m, p) + fbar.offset[p]);
     let part = fbar.adjust(p, &mut response, (&df, j_start), (dj, dj_bar), mean);
     Ok((response, part))
 }

@@ -39,6 +39,10 @@ pub struct MaterialPoints {
     /// of an elastic body seeded one a cell or fewer holds of its bending
     /// (`assembly::lone_points`); zero for the others.
     pub stress_slopes: Vec<[f64; 6]>,
+    /// With F-bar, the mean pressure each point worked with in the last
+    /// step, which the next carries across the grid's reset
+    /// (`assembly::FbarCells::carrying`); empty before the first.
+    pub fbar_pressure: Vec<f64>,
     /// One material per body of the case.
     pub materials: Vec<Material>,
 }
@@ -71,6 +75,7 @@ impl MaterialPoints {
             + size_of_val(self.yielding.as_slice())
             + size_of_val(self.stress.as_slice())
             + size_of_val(self.stress_slopes.as_slice())
+            + size_of_val(self.fbar_pressure.as_slice())
     }
 
     /// Adds a body's points, seeded in its reference state, with their
