@@ -21,7 +21,7 @@ use crate::assembly::cell_mean::{CellMean, CellTrial};
 use crate::assembly::fbar::{self, FbarCells, FbarTrial};
 use crate::assembly::{self, NodeAdjacency, Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
-use crate::grid::{Connectivity, increment, node_coordinates};
+use crate::grid::{Basis, Connectivity, increment, node_coordinates};
 use crate::linsolve::{Factorisation, SolveTally, SolverSettings, SparseSolver};
 use crate::material::{CauchyStress, History, Material, Response};
 use crate::newton::{Equilibrium, PathEquilibrium};
@@ -175,6 +175,7 @@ impl<'a> StepEquilibrium<'a> {
                         .iter()
                         .map(|&key| node_coordinates(key))
                         .collect(),
+                    matches!(start.basis, Basis::BSpline2 | Basis::BSpline3),
                 )
             }
         };
@@ -898,6 +899,60 @@ mod tests {
             assert!(miss < 1e-6, "{}: {miss:e}", material["model"]);
             assert!(asymmetry < 1e-10, "{}: {asymmetry:e}", material["model"]);
         }
+    }
+
+    /// A quadratic B-spline tangent's multigrid smooths with the wider
+    /// stencils' degree (`multigrid::WIDE_DEGREE`, chosen by the basis):
+    /// CG to 1e-10 on a held block (80 x 40 cells, 2 x 2 points each, the
+    /// grid off the body by 0.3 cells) takes fewer iterations than with
+    /// GIMP's degree. Measured: 26 against 65.
+    #[test]
+    fn a_b_spline_tangent_is_smoothed_with_the_wider_degree() {
+        let mut case = fixtures::block([8.0, 4.0], [160, 80], 0.1, [-0.03, -0.03]);
+        case["basis"] = "bspline2".into();
+        case["supports"] =
+            serde_json::json!([ { "on": { "y": 0.0 }, "fix": "xy", "method": "ibm" } ]);
+        case["loads"] = serde_json::json!({ "gravity": [0.0, -9.81] });
+        case["bodies"][0]["material"]["density"] = 2000.0.into();
+        let sim = fixtures::simulation(&case);
+        let conn = sim.reset_grid();
+        let mut eq = sim.assemble(&conn, 1.0, false, None);
+        let n = conn.n_dofs();
+        let (r, _) = eq.out_of_balance(&vec![0.0; n]).unwrap();
+        eq.assemble_tangent();
+        let nodes: Vec<[i64; 2]> = conn
+            .nodes
+            .iter()
+            .map(|&k| crate::grid::node_coordinates(k))
+            .collect();
+        let op = crate::multigrid::Operator {
+            ptr: &eq.pattern.col_ptr,
+            col: &eq.pattern.row_idx,
+            val: &eq.k,
+        };
+        let iterations = |wide: bool| {
+            let mut hierarchy = crate::multigrid::Hierarchy::new(op, &nodes, wide).unwrap();
+            let (_, outcome) = crate::krylov::preconditioned_cg(
+                |x, y| {
+                    crate::krylov::symmetric_product(
+                        &eq.pattern.col_ptr,
+                        &eq.pattern.row_idx,
+                        &eq.k,
+                        x,
+                        y,
+                    )
+                },
+                |z| hierarchy.apply(op, z),
+                &r,
+                1e-10,
+                500,
+            );
+            assert!(outcome.converged, "{outcome:?}");
+            outcome.iterations
+        };
+        let (narrow, wide) = (iterations(false), iterations(true));
+        eprintln!("CG iterations: {narrow} with GIMP's degree, {wide} with the wider");
+        assert!(4 * wide < 3 * narrow, "{wide} against {narrow}");
     }
 
     /// Constraining the held DOFs leaves what the definition says: their

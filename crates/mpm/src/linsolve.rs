@@ -196,6 +196,9 @@ pub struct SparseSolver {
     /// The grid coordinates of the nodes whose DOFs are `2k` and `2k + 1`,
     /// for [`SymmetricMethod::Multigrid`]'s aggregates.
     nodes: Option<Vec<[i64; 2]>>,
+    /// Whether the basis is a B-spline's, whose multigrid smooths more
+    /// ([`Hierarchy::new`]).
+    wide_stencil: bool,
     /// The multigrid hierarchy of an earlier tangent of this pattern.
     hierarchy: Option<Hierarchy>,
     unsymmetric: UnsymmetricMethod,
@@ -509,6 +512,7 @@ impl SparseSolver {
             double_kept: false,
             refresh: false,
             nodes: None,
+            wide_stencil: false,
             hierarchy: None,
             unsymmetric: settings
                 .unsymmetric
@@ -525,9 +529,11 @@ impl SparseSolver {
     /// This solver, told the grid coordinates of the nodes whose DOFs are
     /// `2k` and `2k + 1`: the multigrid's aggregates are blocks of them,
     /// and Cholesky's nested-dissection order, when the solver was given
-    /// none, is made from them when first needed.
-    pub fn with_grid(mut self, nodes: Vec<[i64; 2]>) -> Self {
+    /// none, is made from them when first needed. `wide_stencil` for the
+    /// B-splines, whose multigrid smooths more.
+    pub fn with_grid(mut self, nodes: Vec<[i64; 2]>, wide_stencil: bool) -> Self {
         self.nodes = Some(nodes);
+        self.wide_stencil = wide_stencil;
         self
     }
 
@@ -733,7 +739,7 @@ impl SparseSolver {
             let hierarchy = fitted_hierarchy(
                 &mut self.hierarchy,
                 op,
-                self.nodes.as_deref(),
+                (self.nodes.as_deref(), self.wide_stencil),
                 fresh,
                 (&self.tally, &mut self.factorisations),
                 &mut timing,
@@ -1211,7 +1217,7 @@ fn gmres_on(
 fn fitted_hierarchy<'h>(
     slot: &'h mut Option<Hierarchy>,
     op: multigrid::Operator<'_>,
-    nodes: Option<&[[i64; 2]]>,
+    (nodes, wide_stencil): (Option<&[[i64; 2]]>, bool),
     fresh: bool,
     (tally, factorisations): (&SolveTally, &mut usize),
     timing: &mut Timing,
@@ -1219,7 +1225,7 @@ fn fitted_hierarchy<'h>(
     if fresh {
         let t = std::time::Instant::now();
         *slot = None;
-        *slot = Some(Hierarchy::new(op, nodes?).ok()?);
+        *slot = Some(Hierarchy::new(op, nodes?, wide_stencil).ok()?);
         *factorisations += 1;
         tally.fresh_factor(None);
         timing.factorise += t.elapsed().as_secs_f64();

@@ -26,7 +26,8 @@
 //! - **Smoothing** by a Chebyshev polynomial in `D^-1 A` (Adams, Brezina,
 //!   Hu & Tuminaro 2003, "Parallel multigrid smoothing: polynomial versus
 //!   Gauss-Seidel"), of degree 1 (damped Jacobi with the Chebyshev
-//!   interval's weight; [`DEGREE`] says why): only products with `A`, so
+//!   interval's weight; [`DEGREE`] says why; [`WIDE_DEGREE`] for the
+//!   B-splines' wider stencils): only products with `A`, so
 //!   it runs on every thread, and the same polynomial before and after
 //!   the coarse correction makes the V-cycle a symmetric positive definite
 //!   operator, as CG needs.
@@ -51,13 +52,23 @@ const GALERKIN_BAND: usize = 16_384;
 /// size this machine can hold.
 const MAX_LEVELS: usize = 12;
 /// Degree of the Chebyshev smoother, before and after the coarse
-/// correction. Each degree is a product with the level's operator, and
+/// correction, for a basis whose nodes couple at most two apart (GIMP,
+/// linear). Each degree is a product with the level's operator, and
 /// the finest level's products are most of a V-cycle's cost. Measured on
 /// the GIMP column at 3e5 points (first two steps, alternating runs):
 /// degree 1 took 1.06-1.22 s a step in CG against 1.74-1.97 s for degree
 /// 2, with the same CG iterations (85; with an eigenvalue margin of 1.1,
 /// since raised); on the plate of the tests, 20 iterations against 17.
+/// The paper's cantilever at 1e6 points (GMRES, `mpm bench-row 2`): 9.4 s
+/// a step at degree 1, 11.5 s at degree 2 (107 iterations against 114).
 const DEGREE: usize = 1;
+/// The degree for the B-splines (quadratic and cubic), whose smoother
+/// shape functions reach farther (a point's 4 x 4 and 5 x 5 nodes, 3 x 3
+/// while its domain lies within one cell). The paper's cantilever on
+/// quadratic B-splines at 1e6 points (`mpm bench-row 3`): 46.7, 36.9 and
+/// 34.7 s a step at degrees 1, 2 and 3 (GMRES iterations 305, 170, 126;
+/// this session's host, one run each).
+const WIDE_DEGREE: usize = 3;
 /// The smoother damps `D^-1 A`'s spectrum from its largest eigenvalue down
 /// to this fraction of it (the rest is the coarse levels' work); 1/30 as
 /// in Adams et al. (2003).
@@ -295,6 +306,8 @@ struct Work {
 /// V-cycle with the current tangent on the finest level.
 pub struct Hierarchy {
     levels: Vec<Level>,
+    /// The smoother's degree ([`DEGREE`], [`WIDE_DEGREE`]).
+    degree: usize,
     coarsest: Llt<f64>,
     coarsest_n: usize,
     work: Vec<Work>,
@@ -312,12 +325,14 @@ pub enum SetupError {
 
 impl Hierarchy {
     /// The hierarchy of `a`, whose DOFs `2k` and `2k + 1` are the two
-    /// displacements of the node at grid coordinates `nodes[k]`.
-    pub(crate) fn new(a: Operator<'_>, nodes: &[[i64; 2]]) -> Result<Self, SetupError> {
+    /// displacements of the node at grid coordinates `nodes[k]`; `wide`
+    /// for the B-splines' stencils ([`WIDE_DEGREE`]).
+    pub(crate) fn new(a: Operator<'_>, nodes: &[[i64; 2]], wide: bool) -> Result<Self, SetupError> {
         assert_eq!(a.n(), 2 * nodes.len());
         let mut coords = nodes.to_vec();
         let mut dof_start: Vec<usize> = (0..=nodes.len()).map(|k| 2 * k).collect();
         let mut modes = rigid_body_modes(a, nodes);
+        let degree = if wide { WIDE_DEGREE } else { DEGREE };
         let mut levels: Vec<Level> = Vec::new();
         let mut owned: Option<Rows<f64>> = None;
         loop {
@@ -386,6 +401,7 @@ impl Hierarchy {
             .collect();
         Ok(Self {
             levels,
+            degree,
             coarsest,
             coarsest_n: n,
             work,
@@ -436,7 +452,14 @@ impl Hierarchy {
     /// Replaces `z` by one V-cycle's approximation of `A^-1 z`, with `a`
     /// (of the pattern the hierarchy was built on) the finest operator.
     pub(crate) fn apply(&mut self, a: Operator<'_>, z: &mut [f64]) {
-        v_cycle(&self.levels, &self.coarsest, a, &mut self.work, z);
+        v_cycle(
+            &self.levels,
+            self.degree,
+            &self.coarsest,
+            a,
+            &mut self.work,
+            z,
+        );
     }
 }
 
@@ -444,6 +467,7 @@ impl Hierarchy {
 /// side on entry and the approximate solution on exit.
 fn v_cycle(
     levels: &[Level],
+    degree: usize,
     coarsest: &Llt<f64>,
     a: Operator<'_>,
     work: &mut [Work],
@@ -459,22 +483,29 @@ fn v_cycle(
     let op = level.a.as_ref().map_or(a, Rows::view);
     w.r.copy_from_slice(x);
     x.fill(0.0);
-    chebyshev(op, level, x, w, true);
+    chebyshev(op, level, degree, x, w, true);
     restrict(&level.p, &w.r, &mut w.partial, &mut w.x_coarse);
-    v_cycle(coarser, coarsest, a, coarser_work, &mut w.x_coarse);
+    v_cycle(coarser, degree, coarsest, a, coarser_work, &mut w.x_coarse);
     // The coarse correction e = P x_c, and r = b - A x kept with it.
     prolong(&level.p, &w.x_coarse, &mut w.d);
     x.par_iter_mut().zip(&w.d).for_each(|(x, d)| *x += d);
     op.product(&w.d, &mut w.t);
     w.r.par_iter_mut().zip(&w.t).for_each(|(r, t)| *r -= t);
-    chebyshev(op, level, x, w, false);
+    chebyshev(op, level, degree, x, w, false);
 }
 
-/// [`DEGREE`] steps of Chebyshev iteration on `A x = b` preconditioned by
+/// `degree` steps of Chebyshev iteration on `A x = b` preconditioned by
 /// `D^-1`, from `x` with `w.r = b - A x`, over `[top * SMOOTHED_FRACTION,
 /// top]` (Saad, "Iterative methods for sparse linear systems", 2nd ed.,
 /// algorithm 12.1). `w.r` is kept equal to `b - A x` if `keep_residual`.
-fn chebyshev(op: Operator<'_>, level: &Level, x: &mut [f64], w: &mut Work, keep_residual: bool) {
+fn chebyshev(
+    op: Operator<'_>,
+    level: &Level,
+    degree: usize,
+    x: &mut [f64],
+    w: &mut Work,
+    keep_residual: bool,
+) {
     let (hi, lo) = (level.top, level.top * SMOOTHED_FRACTION);
     let (theta, delta) = ((hi + lo) / 2.0, (hi - lo) / 2.0);
     let sigma = theta / delta;
@@ -484,9 +515,9 @@ fn chebyshev(op: Operator<'_>, level: &Level, x: &mut [f64], w: &mut Work, keep_
         .zip(&w.r)
         .zip(inv_diag)
         .for_each(|((d, r), m)| *d = m * r / theta);
-    for k in 0..DEGREE {
+    for k in 0..degree {
         x.par_iter_mut().zip(&w.d).for_each(|(x, d)| *x += d);
-        let last = k + 1 == DEGREE;
+        let last = k + 1 == degree;
         if last && !keep_residual {
             break;
         }
@@ -960,7 +991,7 @@ mod tests {
                 .unwrap();
             let solve = || {
                 pool.install(|| {
-                    let mut hierarchy = Hierarchy::new(op, &plate.nodes).unwrap();
+                    let mut hierarchy = Hierarchy::new(op, &plate.nodes, false).unwrap();
                     krylov::preconditioned_cg(
                         |x, y| op.product(x, y),
                         |z| hierarchy.apply(op, z),
@@ -1000,7 +1031,7 @@ mod tests {
         for m in [40, 80, 240] {
             let plate = Plate::new(m);
             let op = plate.operator();
-            let mut hierarchy = Hierarchy::new(op, &plate.nodes).unwrap();
+            let mut hierarchy = Hierarchy::new(op, &plate.nodes, false).unwrap();
             let (x, outcome) = krylov::preconditioned_cg(
                 |x, y| op.product(x, y),
                 |z| hierarchy.apply(op, z),
@@ -1036,7 +1067,7 @@ mod tests {
     fn the_v_cycle_is_symmetric() {
         let plate = Plate::new(80);
         let op = plate.operator();
-        let mut hierarchy = Hierarchy::new(op, &plate.nodes).unwrap();
+        let mut hierarchy = Hierarchy::new(op, &plate.nodes, false).unwrap();
         assert_eq!(hierarchy.level_sizes().len(), 3);
         let n = plate.b.len();
         let x: Vec<f64> = (0..n).map(|i| ((i * 37) % 101) as f64 - 50.0).collect();
@@ -1162,7 +1193,7 @@ mod tests {
             col: &plate.col,
             val: &stiffer,
         };
-        let mut hierarchy = Hierarchy::new(plate.operator(), &plate.nodes).unwrap();
+        let mut hierarchy = Hierarchy::new(plate.operator(), &plate.nodes, false).unwrap();
         let solve = |hierarchy: &mut Hierarchy| {
             krylov::preconditioned_cg(
                 |x, y| later.product(x, y),
