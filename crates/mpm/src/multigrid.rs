@@ -63,8 +63,9 @@ const MAX_LEVELS: usize = 12;
 /// a step at degree 1, 11.5 s at degree 2 (107 iterations against 114).
 const DEGREE: usize = 1;
 /// The degree for the B-splines (quadratic and cubic), whose smoother
-/// shape functions reach farther (a point's 4 x 4 and 5 x 5 nodes, 3 x 3
-/// while its domain lies within one cell). The paper's cantilever on
+/// shape functions reach farther (a quadratic B-spline point's 4 x 4
+/// nodes, 3 x 3 while its domain lies within one cell; more on cubic
+/// ones). The paper's cantilever on
 /// quadratic B-splines at 1e6 points (`mpm bench-row 3`): 46.7, 36.9 and
 /// 34.7 s a step at degrees 1, 2 and 3 (GMRES iterations 305, 170, 126;
 /// this session's host, one run each).
