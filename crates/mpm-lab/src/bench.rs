@@ -494,7 +494,8 @@ fn unsymmetric_methods(max_points: usize) -> Result<String, LabError> {
          preconditioned on the right by the single-precision Cholesky factor (nested dissection, as for \
          symmetric tangents) of the symmetric part `(K + K^T) / 2` of an earlier tangent of the increment, \
          refreshed as CG's kept factor is, and from {multigrid} DOFs by a multigrid V-cycle of the symmetric \
-         part instead; a tangent whose symmetric part is not positive definite is solved by LU, and after \
+         part instead (for elastic bodies on GIMP or the linear basis from {elastic} DOFs: the paper's \
+         cantilever on GIMP); a tangent whose symmetric part is not positive definite is solved by LU, and after \
          {limit} such in a row, the rest of the increment (`crates/mpm/src/linsolve.rs`). The default \
          switches from LU to GMRES at {gmres} DOFs. First two load steps (the footings' first steps are cut \
          into pieces: their failed tries are in the time); fresh factorisations (Cholesky's of the symmetric \
@@ -504,6 +505,7 @@ fn unsymmetric_methods(max_points: usize) -> Result<String, LabError> {
          | scene | points | active DOFs | method | s / step | factorisation s / step | solve s / step | Newton iterations | factorisations | GMRES solves | GMRES iterations | peak MiB | exponent |\n\
          |---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         multigrid = mpm::linsolve::MULTIGRID_FROM_DOFS,
+        elastic = mpm::linsolve::ELASTIC_GMRES_MULTIGRID_FROM_DOFS,
         limit = mpm::linsolve::GMRES_INDEFINITE_LIMIT,
         gmres = mpm::linsolve::GMRES_FROM_DOFS,
         plastic = PLASTIC_MAX_POINTS,

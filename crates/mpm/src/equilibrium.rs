@@ -170,13 +170,19 @@ impl<'a> StepEquilibrium<'a> {
                 // order (of a symmetric tangent, or of the symmetric part
                 // that preconditions GMRES) and the multigrid's aggregates
                 // are made from them. LU orders its own columns.
-                SparseSolver::new(conn.n_dofs(), None, settings, tally.clone()).with_grid(
-                    conn.nodes
-                        .iter()
-                        .map(|&key| node_coordinates(key))
-                        .collect(),
-                    matches!(start.basis, Basis::BSpline2 | Basis::BSpline3),
-                )
+                let solver = SparseSolver::new(conn.n_dofs(), None, settings, tally.clone())
+                    .with_grid(
+                        conn.nodes
+                            .iter()
+                            .map(|&key| node_coordinates(key))
+                            .collect(),
+                        matches!(start.basis, Basis::BSpline2 | Basis::BSpline3),
+                    );
+                if start.points.materials.iter().all(Material::is_elastic) {
+                    solver.with_elastic_tangents()
+                } else {
+                    solver
+                }
             }
         };
         Self {
