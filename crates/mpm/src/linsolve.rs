@@ -185,9 +185,10 @@ pub struct SparseSolver {
     /// The method chosen for the pattern, to which each increment returns
     /// (`method` falls back from multigrid to the kept factor within one).
     method_choice: SymmetricMethod,
-    /// How GMRES's symmetric part is preconditioned: `method`'s choice,
-    /// or multigrid for elastic bodies ([`SparseSolver::with_elastic_tangents`]);
-    /// with its choice as `method`'s.
+    /// How GMRES's symmetric part is preconditioned: as `method`, or by
+    /// multigrid for elastic bodies ([`SparseSolver::with_elastic_tangents`]);
+    /// each increment returns to `gmres_method_choice`, as `method` does to
+    /// `method_choice`.
     gmres_method: SymmetricMethod,
     gmres_method_choice: SymmetricMethod,
     /// Whether the method was given by the settings rather than chosen.
