@@ -514,6 +514,7 @@ impl SparseSolver {
         SolveTally::add(&tally.analysed, 1);
         let nested_dissection = settings.ordering == FillOrdering::NestedDissection;
         let order = order.filter(|_| nested_dissection).map(with_inverse);
+        let method = settings.symmetric.unwrap_or_else(|| symmetric_method(n));
         Self {
             n,
             order,
@@ -525,10 +526,10 @@ impl SparseSolver {
             factor_bytes: 0,
             scratch_bytes: 0,
             reuses: 0,
-            method: settings.symmetric.unwrap_or_else(|| symmetric_method(n)),
-            method_choice: settings.symmetric.unwrap_or_else(|| symmetric_method(n)),
-            gmres_method: settings.symmetric.unwrap_or_else(|| symmetric_method(n)),
-            gmres_method_choice: settings.symmetric.unwrap_or_else(|| symmetric_method(n)),
+            method,
+            method_choice: method,
+            gmres_method: method,
+            gmres_method_choice: method,
             forced: settings.symmetric.is_some(),
             last_cg: None,
             factorisations: 0,
