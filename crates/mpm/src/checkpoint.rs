@@ -21,8 +21,9 @@ use crate::report::Settled;
 
 /// The encoding's version: a checkpoint of another one is refused (5:
 /// the points' history holds `b - I` and `b_zz - 1` where 4 held `b`; 6:
-/// the points' stress slopes).
-pub(crate) const FORMAT: u32 = 7;
+/// the points' stress slopes; 7: F-bar's carried pressures; 8: the cell
+/// mean's carried stresses).
+pub(crate) const FORMAT: u32 = 8;
 
 /// The state of a run after `steps_done` load steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -43,6 +44,10 @@ pub struct Checkpoint {
     /// With F-bar, the mean pressure each point carries to the next step
     /// (`MaterialPoints::fbar_pressure`); empty otherwise.
     pub(crate) fbar_pressure: Vec<f64>,
+    /// With the cell-mean strain, the stress each point carries to the next
+    /// step (`MaterialPoints::cell_mean_stress`), column-major; empty
+    /// otherwise.
+    pub(crate) cell_mean_stress: Vec<[f64; 4]>,
     pub(crate) probes: Vec<[f64; 2]>,
     pub(crate) anchors_moved: Vec<[f64; 2]>,
     pub(crate) loops: Vec<LoopState>,

@@ -126,6 +126,9 @@ pub struct ConvergedStep {
     /// With F-bar, the mean pressure each point worked with
     /// ([`FbarCells::carried`]), which the next step carries.
     pub fbar_pressure: Option<Vec<f64>>,
+    /// With the cell-mean strain, the stress each point worked with
+    /// ([`CellMean::carried`]), which the next step carries.
+    pub cell_mean_stress: Option<Vec<Matrix2<f64>>>,
     pub carried: Vec<Box<dyn Any>>,
     pub timings: StepTimings,
     pub memory: StepMemory,
@@ -282,9 +285,13 @@ impl<'a> StepEquilibrium<'a> {
                         0.5 * (plane[0] + plane[1])
                     })
                 });
+        let cell_mean_stress = (self.cell_mean.as_ref())
+            .zip(self.cell_trial.as_ref())
+            .map(|(cells, trial)| cells.carried(trial, self.points));
         ConvergedStep {
             states,
             fbar_pressure,
+            cell_mean_stress,
             carried: self
                 .terms
                 .into_iter()
@@ -815,8 +822,8 @@ mod tests {
     /// with dilation (Mohr-Coulomb, phi = psi = 30 degrees, every point on
     /// a plane or an edge of its surface), `K v` against central
     /// differences of the force along a direction `v` over the free DOFs.
-    /// The points carry pressures from an earlier step
-    /// ([`FbarCells::carrying`]). Measured misses: 3e-11 (Hencky) and
+    /// The points carry pressures and stresses from an earlier step
+    /// ([`FbarCells::carrying`], [`CellMean::carrying`]). Measured misses: 3e-11 (Hencky) and
     /// 4e-10 (Mohr-Coulomb) of `|K v|`, and the tangent symmetric to 3e-16
     /// of its largest entry. With the coupling by the other points'
     /// pressure left out the Mohr-Coulomb block misses by 8e-2; with the
@@ -835,10 +842,16 @@ mod tests {
             case["bodies"][0]["material"] = material.clone();
             case["supports"] = serde_json::json!([ { "on": { "x": 0.1 }, "fix": "xy" } ]);
             let mut sim = fixtures::simulation(&case);
-            // Pressures carried from a step before, unlike each other
-            // (F-bar's `c_p`; the cell mean takes none).
+            // Pressures and stresses carried from a step before, unlike
+            // each other (F-bar's `c_p`, the cell mean's `O_q`).
             sim.points.fbar_pressure = (0..sim.points.len())
                 .map(|p| 20.0 * ((p * 37) % 11) as f64 - 100.0)
+                .collect();
+            sim.points.cell_mean_stress = (0..sim.points.len())
+                .map(|p| {
+                    let s = 20.0 * ((p * 37) % 11) as f64 - 100.0;
+                    nalgebra::Matrix2::new(s, 0.3 * s, 0.3 * s, -0.5 * s)
+                })
                 .collect();
             let conn = sim.reset_grid();
             let mut eq = sim.assemble(&conn, 1.0, false, None);

@@ -2,6 +2,8 @@
 //! simulation built from the same case (what a checkpoint holds, and its
 //! encoding: `checkpoint.rs`).
 
+use nalgebra::Matrix2;
+
 use crate::checkpoint::{
     ArcControlState, Checkpoint, CheckpointError, FORMAT, HistoryState, IncrementState, LoopState,
     StepSizeState,
@@ -61,6 +63,9 @@ impl Simulation {
                 .map(|(k, &s)| (k as u32, s))
                 .collect(),
             fbar_pressure: p.fbar_pressure.clone(),
+            cell_mean_stress: (p.cell_mean_stress.iter())
+                .map(|s| s.as_slice().try_into().expect("2x2"))
+                .collect(),
             probes: self.probes.position.clone(),
             anchors_moved: self.anchors.iter().map(|a| a.moved()).collect(),
             loops: self.loops.iter().map(LoopState::of).collect(),
@@ -104,6 +109,7 @@ impl Simulation {
         if lengths.iter().any(|&l| l != n)
             || c.stress_slopes.iter().any(|&(p, _)| p as usize >= n)
             || !(c.fbar_pressure.is_empty() || c.fbar_pressure.len() == n)
+            || !(c.cell_mean_stress.is_empty() || c.cell_mean_stress.len() == n)
         {
             return Err(CheckpointError::OtherCase("the material point counts"));
         }
@@ -145,6 +151,9 @@ impl Simulation {
             p.stress_slopes[k as usize] = s;
         }
         p.fbar_pressure.clone_from(&c.fbar_pressure);
+        p.cell_mean_stress = (c.cell_mean_stress.iter())
+            .map(|s| Matrix2::from_column_slice(s))
+            .collect();
         p.stress = c
             .stress
             .iter()
@@ -273,7 +282,20 @@ mod tests {
     /// resumed step: the step-size control is part of the state.
     #[test]
     fn a_resumed_run_ends_where_the_straight_run_ends() {
-        let case = footing();
+        resumes_where_the_straight_run_ends(footing());
+    }
+
+    /// The same with the cell-mean strain, whose carried stresses are
+    /// state too.
+    #[test]
+    fn a_resumed_cell_mean_run_ends_where_the_straight_run_ends() {
+        let mut json: serde_json::Value =
+            serde_json::from_str(crate::case::builtin::get("footing").unwrap()).unwrap();
+        json["analysis"]["volumetric"] = "cell_mean".into();
+        resumes_where_the_straight_run_ends(Case::from_json(&json.to_string()).unwrap());
+    }
+
+    fn resumes_where_the_straight_run_ends(case: Case) {
         let mut straight = Simulation::new(&case).unwrap();
         let whole: RunReport = straight.run(&mut crate::NoObserver).unwrap();
 
@@ -292,9 +314,18 @@ mod tests {
 
         let mut resumed = Simulation::new(&case).unwrap();
         resumed.restore(&checkpoint).unwrap();
-        // F-bar's pressures carried across the grid's reset are state.
-        assert_eq!(checkpoint.fbar_pressure.len(), resumed.points.len());
+        // What the averaged stresses carry across the grid's reset (F-bar's
+        // pressures, the cell mean's stresses) is state.
+        let n = resumed.points.len();
+        assert_eq!(
+            checkpoint.fbar_pressure.len() + checkpoint.cell_mean_stress.len(),
+            n
+        );
         assert_eq!(resumed.points.fbar_pressure, checkpoint.fbar_pressure);
+        assert_eq!(
+            resumed.points.cell_mean_stress,
+            first.points.cell_mean_stress
+        );
         let rest = resumed.run(&mut crate::NoObserver).unwrap();
         assert_eq!(rest.steps.len(), whole.steps.len() - 4);
         for (a, b) in rest.steps.iter().zip(&whole.steps[4..]) {

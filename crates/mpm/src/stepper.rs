@@ -656,6 +656,7 @@ impl Simulation {
             update::commit_in_place(&mut self.points, &states);
         }
         self.points.fbar_pressure = converged.fbar_pressure.unwrap_or_default();
+        self.points.cell_mean_stress = converged.cell_mean_stress.unwrap_or_default();
         if let Some(p) = self.points.first_non_finite() {
             return Err(non_finite(&format!("state of material point {p}")));
         }
@@ -817,8 +818,10 @@ impl Simulation {
             }),
             fbar: (self.volumetric == Volumetric::Fbar)
                 .then(|| FbarCells::new(&start).carrying(&start, &self.points.fbar_pressure)),
-            cell_mean: (self.volumetric == Volumetric::CellMean)
-                .then(|| CellMean::new(&start, self.settings.hourglass)),
+            cell_mean: (self.volumetric == Volumetric::CellMean).then(|| {
+                CellMean::new(&start, self.settings.hourglass)
+                    .carrying(&start, &self.points.cell_mean_stress)
+            }),
             terms,
         };
         let pattern = terms.pattern(conn);

@@ -21,7 +21,9 @@
 //! S_q = w_q / V0_q [T_c + beta V0_c (g_q - g_bar)],   T_c = sum_p V0_p P_p(g_bar),
 //! ```
 //!
-//! (the departures sum to zero), and the tangent is, per cell,
+//! (the departures sum to zero; `+ O_q` once the points carry their
+//! stresses across the grid's reset, [`CellMean::carrying`]), and the
+//! tangent is, per cell,
 //! `G_bar^T (sum_p V0_p A_p - beta V0_c) G_bar` with `G_bar` the cell's
 //! mean gradient operator, plus `beta V0_c w_q` on each point's own
 //! gradient. It is symmetric where the models' are.
@@ -50,6 +52,9 @@ pub struct CellMean {
     cells: FbarCells,
     /// Per cell, `beta V0_c`.
     stiffness: Vec<f64>,
+    /// Per point, the stress it carries beside its cell's mean (`O_q`, see
+    /// [`CellMean::carrying`]); zero until it is given.
+    offset: Vec<Matrix2<f64>>,
 }
 
 /// A trial state's cell terms.
@@ -88,7 +93,66 @@ impl CellMean {
                 fraction * 2.0 * mu * v0
             })
             .collect();
-        Self { cells, stiffness }
+        let offset = vec![Matrix2::zeros(); points.len()];
+        Self {
+            cells,
+            stiffness,
+            offset,
+        }
+    }
+
+    /// The cells with each point's stress carried across the grid's reset:
+    /// `carried[q]` is the stress point `q` worked with at the end of the
+    /// last step ([`CellMean::carried`]; empty before the first, when
+    /// every point takes its cell's mean). A point that changes cell, or
+    /// whose cellmates do, would otherwise take its new cell's mean at
+    /// once, and that jump is force out of balance at the step's start
+    /// whatever the step's size: on a rough footing on heavy sand (h =
+    /// B/8) the load fell by a fifth in the step where the points under
+    /// the footing crossed a grid line, and rose again after it. So each
+    /// point keeps the constant `O_q = carried_q - S_q(0)` beside its
+    /// cell's mean for the step, a stress on its own gradient (a term of
+    /// the step's potential linear in `g_q`: the tangent is unchanged),
+    /// and the stress's increment is the cell's, as F-bar's pressure
+    /// ([`FbarCells::carrying`]). A point alone in its cell is a standard
+    /// point and carries nothing.
+    pub fn carrying(mut self, start: &Configuration, carried: &[Matrix2<f64>]) -> Self {
+        let mp = start.points;
+        if carried.len() != mp.len() {
+            return self;
+        }
+        let zero = vec![0.0; start.conn.n_dofs()];
+        let Ok(trial) = self.trial(start.conn, mp, &zero) else {
+            return self;
+        };
+        for q in 0..mp.len() {
+            let alone = self.cells.members(self.cells.place(q).0).len() == 1;
+            let offset = carried[q] - self.mean_stress(&trial, mp, q);
+            if !alone && offset.iter().all(|x| x.is_finite()) {
+                self.offset[q] = offset;
+            }
+        }
+        self
+    }
+
+    /// The stress each point works with at `trial` (its cell's mean and its
+    /// `O_q`, without the hourglass term, which holds a step's departures
+    /// only), pushed to the step's end by its cell's mean `dF`, for
+    /// [`CellMean::carrying`] in the next step: where no point changes
+    /// cell, the next step's offsets are those of this one, as moved.
+    pub fn carried(&self, trial: &CellTrial, mp: &MaterialPoints) -> Vec<Matrix2<f64>> {
+        (0..mp.len())
+            .map(|q| {
+                let df_bar = Matrix2::identity() + trial.means[self.cells.place(q).0];
+                (self.mean_stress(trial, mp, q) + self.offset[q]) * df_bar.transpose()
+            })
+            .collect()
+    }
+
+    /// Point `q`'s share of its cell's stress, `w_q / V0_q T_c`.
+    fn mean_stress(&self, trial: &CellTrial, mp: &MaterialPoints, q: usize) -> Matrix2<f64> {
+        let (c, w) = self.cells.place(q);
+        trial.stress[c] * (w / mp.volume0[q])
     }
 
     /// The node groups the cell terms join (for the stiffness pattern).
@@ -169,11 +233,12 @@ impl CellMean {
     }
 
     /// Point `q`'s stress `S_q`, paired with its own gradient (see the
-    /// module docs).
+    /// module docs), with the offset it carries.
     pub fn stress(&self, trial: &CellTrial, mp: &MaterialPoints, q: usize) -> Matrix2<f64> {
         let (c, w) = self.cells.place(q);
         (trial.stress[c] + (trial.grads[q] - trial.means[c]) * self.stiffness[c])
             * (w / mp.volume0[q])
+            + self.offset[q]
     }
 
     /// The local part of point `q`'s tangent (on its own gradient),

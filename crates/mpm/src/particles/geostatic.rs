@@ -24,8 +24,12 @@ pub fn poisson_k0(material: &Material) -> f64 {
 
 /// Puts every point in its overburden stress under gravity `g` (m/s^2,
 /// downward positive), with `k0` (or each material's [`poisson_k0`]): its
-/// history and its reported stress. The points do not move.
+/// history and its reported stress. The points do not move; what they
+/// carried from an earlier stage's averaged stresses (F-bar's pressures,
+/// the cell mean's stresses) is of the stresses replaced, and goes.
 pub fn set_overburden_stresses(mp: &mut MaterialPoints, g: f64, k0: Option<f64>) {
+    mp.fbar_pressure.clear();
+    mp.cell_mean_stress.clear();
     let mut columns: HashMap<i64, Vec<usize>> = HashMap::new();
     for (p, x) in mp.position.iter().enumerate() {
         columns

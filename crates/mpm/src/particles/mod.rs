@@ -43,6 +43,11 @@ pub struct MaterialPoints {
     /// step, which the next carries across the grid's reset
     /// (`assembly::FbarCells::carrying`); empty before the first.
     pub fbar_pressure: Vec<f64>,
+    /// With the cell-mean strain, the stress each point worked with in the
+    /// last step (Kirchhoff's, per unit reference volume), which the next
+    /// carries across the grid's reset (`assembly::CellMean::carrying`);
+    /// empty before the first.
+    pub cell_mean_stress: Vec<Matrix2<f64>>,
     /// One material per body of the case.
     pub materials: Vec<Material>,
 }
@@ -76,6 +81,7 @@ impl MaterialPoints {
             + size_of_val(self.stress.as_slice())
             + size_of_val(self.stress_slopes.as_slice())
             + size_of_val(self.fbar_pressure.as_slice())
+            + size_of_val(self.cell_mean_stress.as_slice())
     }
 
     /// Adds a body's points, seeded in its reference state, with their
