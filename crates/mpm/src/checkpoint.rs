@@ -44,9 +44,8 @@ pub struct Checkpoint {
     /// With F-bar, the mean pressure each point carries to the next step
     /// (`MaterialPoints::fbar_pressure`); empty otherwise.
     pub(crate) fbar_pressure: Vec<f64>,
-    /// With the cell-mean strain, the stress each point carries to the next
-    /// step (`MaterialPoints::cell_mean_stress`), column-major; empty
-    /// otherwise.
+    /// With the cell-mean strain, what each point carries to the next step
+    /// (`MaterialPoints::cell_mean_stress`), column-major; empty otherwise.
     pub(crate) cell_mean_stress: Vec<[f64; 4]>,
     pub(crate) probes: Vec<[f64; 2]>,
     pub(crate) anchors_moved: Vec<[f64; 2]>,

@@ -126,8 +126,9 @@ pub struct ConvergedStep {
     /// With F-bar, the mean pressure each point worked with
     /// ([`FbarCells::carried`]), which the next step carries.
     pub fbar_pressure: Option<Vec<f64>>,
-    /// With the cell-mean strain, the stress each point worked with
-    /// ([`CellMean::carried`]), which the next step carries.
+    /// With the cell-mean strain, how far the stress each point worked
+    /// with stood from its own ([`CellMean::carried`]), which the next step
+    /// carries.
     pub cell_mean_stress: Option<Vec<Matrix2<f64>>>,
     pub carried: Vec<Box<dyn Any>>,
     pub timings: StepTimings,

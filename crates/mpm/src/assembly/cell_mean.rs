@@ -102,20 +102,24 @@ impl CellMean {
     }
 
     /// The cells with each point's stress carried across the grid's reset:
-    /// `carried[q]` is the stress point `q` worked with at the end of the
-    /// last step ([`CellMean::carried`]; empty before the first, when
-    /// every point takes its cell's mean). A point that changes cell, or
-    /// whose cellmates do, would otherwise take its new cell's mean at
-    /// once, and that jump is force out of balance at the step's start
-    /// whatever the step's size: on a rough footing on heavy sand (h =
-    /// B/8) the load fell by a fifth in the step where the points under
-    /// the footing crossed a grid line, and rose again after it. So each
-    /// point keeps the constant `O_q = carried_q - S_q(0)` beside its
-    /// cell's mean for the step, a stress on its own gradient (a term of
-    /// the step's potential linear in `g_q`: the tangent is unchanged),
-    /// and the stress's increment is the cell's, as F-bar's pressure
-    /// ([`FbarCells::carrying`]). A point alone in its cell is a standard
-    /// point and carries nothing.
+    /// `carried[q]` is how far the stress point `q` worked with at the end
+    /// of the last step stood from its own model's ([`CellMean::carried`];
+    /// empty before the first, when every point takes its cell's mean). A
+    /// point that changes cell, or whose cellmates do, would otherwise
+    /// take its new cell's mean at once, and that jump is force out of
+    /// balance at the step's start whatever the step's size: on a rough
+    /// footing on heavy sand (h = B/8) the load fell by a fifth in the
+    /// step where the points under the footing crossed a grid line, and
+    /// rose again after it. So each point keeps for the step the constant
+    /// `O_q = carried_q + P_q(0) - S_q(0)` beside its cell's mean, a stress
+    /// on its own gradient (a term of the step's potential linear in
+    /// `g_q`: the tangent is unchanged), and the stress's increment is the
+    /// cell's, as F-bar's pressure ([`FbarCells::carrying`]). At `u = 0`
+    /// the point works with `carried_q + P_q(0)`: where its model answers
+    /// as it ended (`P_q(0)` its last stress), the stress it ended with;
+    /// where the model changed (a strength-reduction trial weakens it),
+    /// that less what its own stress lost. A point alone in its cell is a
+    /// standard point and carries nothing.
     pub fn carrying(mut self, start: &Configuration, carried: &[Matrix2<f64>]) -> Self {
         let mp = start.points;
         if carried.len() != mp.len() {
@@ -127,7 +131,10 @@ impl CellMean {
         };
         for q in 0..mp.len() {
             let alone = self.cells.members(self.cells.place(q).0).len() == 1;
-            let offset = carried[q] - self.mean_stress(&trial, mp, q);
+            let Ok(own) = self.response(&trial, mp, q, false) else {
+                continue;
+            };
+            let offset = carried[q] + own.p - self.mean_stress(&trial, mp, q);
             if !alone && offset.iter().all(|x| x.is_finite()) {
                 self.offset[q] = offset;
             }
@@ -135,16 +142,19 @@ impl CellMean {
         self
     }
 
-    /// The stress each point works with at `trial` (its cell's mean and its
-    /// `O_q`, without the hourglass term, which holds a step's departures
-    /// only), pushed to the step's end by its cell's mean `dF`, for
+    /// How far the stress each point works with at `trial` (its cell's
+    /// mean and its `O_q`, without the hourglass term, which holds a step's
+    /// departures only) stands from its own model's stress `P_q(g_bar)`,
+    /// pushed to the step's end by its cell's mean `dF`, for
     /// [`CellMean::carrying`] in the next step: where no point changes
     /// cell, the next step's offsets are those of this one, as moved.
     pub fn carried(&self, trial: &CellTrial, mp: &MaterialPoints) -> Vec<Matrix2<f64>> {
         (0..mp.len())
             .map(|q| {
                 let df_bar = Matrix2::identity() + trial.means[self.cells.place(q).0];
-                (self.mean_stress(trial, mp, q) + self.offset[q]) * df_bar.transpose()
+                let worked = self.mean_stress(trial, mp, q) + self.offset[q];
+                let own = self.response(trial, mp, q, false).map_or(worked, |r| r.p);
+                (worked - own) * df_bar.transpose()
             })
             .collect()
     }

@@ -43,10 +43,10 @@ pub struct MaterialPoints {
     /// step, which the next carries across the grid's reset
     /// (`assembly::FbarCells::carrying`); empty before the first.
     pub fbar_pressure: Vec<f64>,
-    /// With the cell-mean strain, the stress each point worked with in the
-    /// last step (Kirchhoff's, per unit reference volume), which the next
-    /// carries across the grid's reset (`assembly::CellMean::carrying`);
-    /// empty before the first.
+    /// With the cell-mean strain, how far the stress each point worked with
+    /// in the last step stood from its own model's (Kirchhoff's, per unit
+    /// reference volume), which the next carries across the grid's reset
+    /// (`assembly::CellMean::carrying`); empty before the first.
     pub cell_mean_stress: Vec<Matrix2<f64>>,
     /// One material per body of the case.
     pub materials: Vec<Material>,
