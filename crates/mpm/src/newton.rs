@@ -26,7 +26,8 @@ pub use crate::particles::admissible::{Inadmissible, InadmissiblePoint};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolveError {
     #[error(
-        "Newton did not converge in load step {step}: relative residual {residual:.3e} after {iteration} iterations (the limit)"
+        "Newton did not converge in load step {step}: relative residual {residual:.3e} after {iteration} iterations (the limit){}",
+        round_off_hint(*.residual, *.stalled, *.tolerance)
     )]
     NotConverged {
         step: usize,
@@ -35,6 +36,8 @@ pub enum SolveError {
         /// The residual fell by less than tenfold over the last two
         /// iterations: Newton had stopped making progress.
         stalled: bool,
+        /// The tolerance it was to reach.
+        tolerance: f64,
     },
     #[error(
         "Newton diverged in load step {step} at iteration {iteration}: relative residual {residual:.3e}"
@@ -119,6 +122,33 @@ pub enum SolveError {
         iteration: usize,
         residual: f64,
     },
+}
+
+/// How close to its tolerance a Newton solve that stalled counts as at
+/// the residual's round-off floor rather than failing for the increment's
+/// size: no smaller increment lowers that floor (at nu = 0.4999 it is
+/// 1.2e-9 against the default 1e-9; a rough footing on heavy sand at
+/// 61,440 points, 8.9e-9).
+pub const ROUND_OFF_MARGIN: f64 = 100.0;
+
+/// Whether a solve that stalled at `residual` did so at its round-off
+/// floor, within [`ROUND_OFF_MARGIN`] of `tolerance`.
+pub fn at_round_off_floor(residual: f64, stalled: bool, tolerance: f64) -> bool {
+    stalled && residual < ROUND_OFF_MARGIN * tolerance
+}
+
+/// What the failure's message adds when Newton stalled at its round-off
+/// floor: the tolerance that would take it.
+fn round_off_hint(residual: f64, stalled: bool, tolerance: f64) -> String {
+    if at_round_off_floor(residual, stalled, tolerance) {
+        format!(
+            "; it stalled near the tolerance {tolerance:.0e}, at the residual's round-off floor, \
+             which no smaller increment lowers: analysis.newton.tolerance {:.0e} would take it",
+            10f64.powf(residual.log10().floor() + 1.0)
+        )
+    } else {
+        String::new()
+    }
 }
 
 /// What kind of failure a [`SolveError`] is, by its cause: the kinds the
@@ -729,6 +759,7 @@ fn out_of_iterations_or_cancelled<M: Monitor + ?Sized>(
             iteration,
             residual,
             stalled: earlier.is_some_and(|r| residual > 0.1 * r),
+            tolerance: settings.tolerance,
         });
     }
     if monitor.should_cancel() {

@@ -54,10 +54,6 @@ const EASY_ITERATIONS: usize = 6;
 /// where the run failed.
 const MAX_ARC_GROWTH: f64 = 16.0;
 
-/// How close to its tolerance a Newton solve that stalled counts as at
-/// the round-off floor rather than failing for the increment's size.
-const ROUND_OFF_MARGIN: f64 = 100.0;
-
 /// Where the step-size control stands between load steps. A step starts at
 /// the size of the last one's last sub-increment (a fraction of a step's
 /// increment), so a plastic flow that needs halves does not fail a whole
@@ -552,14 +548,13 @@ impl Simulation {
 
     /// Whether a smaller increment may succeed where this try failed: not
     /// when cutting is off, and not when Newton stalled (no tenfold fall
-    /// over its last two iterations) within [`ROUND_OFF_MARGIN`] of its
-    /// tolerance. There it has reached the residual's round-off floor (as at nu = 0.4999, where it stalls
-    /// at 1.2e-9 against the default 1e-9), which no load increment lowers:
+    /// over its last two iterations) at the residual's round-off floor
+    /// ([`newton::at_round_off_floor`]), which no load increment lowers:
     /// cutting would only repeat the stall some 40 times.
     fn worth_cutting(&self, e: &SolveError) -> bool {
-        let stalled = matches!(e, SolveError::NotConverged { residual, stalled: true, .. }
-            if *residual < ROUND_OFF_MARGIN * self.settings.tolerance);
-        e.may_pass_when_cut() && self.substepping.min_fraction < 1.0 && !stalled
+        let floor = matches!(*e, SolveError::NotConverged { residual, stalled, tolerance, .. }
+            if newton::at_round_off_floor(residual, stalled, tolerance));
+        e.may_pass_when_cut() && self.substepping.min_fraction < 1.0 && !floor
     }
 
     /// Solves for equilibrium at `load_factor` from the last converged state

@@ -167,8 +167,14 @@ fn a_stall_at_round_off_is_not_cut() {
     let case = mpm::Case::from_json(&case.to_string()).unwrap();
     let mut sim = mpm::Simulation::new(&case).unwrap();
     match sim.run(&mut mpm::NoObserver) {
-        Err(mpm::SolveError::NotConverged { residual, .. }) => {
-            assert!(residual < 1e-7, "{residual}")
+        Err(e @ mpm::SolveError::NotConverged { residual, .. }) => {
+            assert!(residual < 1e-7, "{residual}");
+            // The message says which tolerance would take it.
+            let message = e.to_string();
+            assert!(
+                message.contains("round-off floor") && message.contains("tolerance 1e-8"),
+                "{message}"
+            );
         }
         other => panic!("expected a stall near the tolerance, got {other:?}"),
     }
