@@ -93,9 +93,9 @@ enum Command {
         /// four bases on the paper's case: convergence, grid origins, load
         /// steps, error against cost) or `footing` (the strip footing on
         /// undrained and frictional soil: collapse loads at three cell
-        /// sizes, and a settlement of 0.5 B) or `bearing` (N_c of a rough
-        /// footing on frictional soil, the points' own strains against
-        /// their cells' mean) or `slope` (Griffiths and Lane's slope: its
+        /// sizes, and a settlement of 0.5 B) or `bearing` (N_c and N_gamma
+        /// of a rough footing on frictional soil, the points' own strains
+        /// against their cells' mean) or `slope` (Griffiths and Lane's slope: its
         /// factor of safety by strength reduction) or `robustness` (1,000
         /// random valid cases, how many finish, by class).
         name: String,

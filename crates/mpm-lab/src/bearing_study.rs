@@ -14,6 +14,16 @@
 //! binds each point's volume change to its shear, four constraints a
 //! cell), and the cell mean binds one a cell (docs/guide.md, Material
 //! models).
+//!
+//! Then the self-weight factor `N_gamma`: the same rough footing on heavy
+//! cohesionless sand (phi = psi = 30 degrees, c = 0, gamma = 20 kN/m3,
+//! E = 100 MPa, nu = 0.3) after a geostatic stage (K0 = 0.5, one step),
+//! pushed 0.01 B in 8 steps, `2 q / (gamma B)` against Martin's (2005)
+//! exact 14.75 for a rough strip (the method of characteristics, his
+//! program ABC; Martin, "Exact bearing capacity calculations using the
+//! method of characteristics", IACMAG 11, Turin, table of `N_gamma`).
+//! With `gamma B / 2 = c` of the first part, 10 kPa, the curve's `q / c`
+//! is `2 q / (gamma B)`.
 
 use std::fmt::Write as _;
 use std::fs;
@@ -23,7 +33,7 @@ use serde_json::json;
 
 use crate::LabError;
 use crate::footing_study::{
-    Curve, Loading, Soil, footing_case, orders, prandtl_reissner, run_curve,
+    Curve, Loading, Soil, at_settlement, footing_case, orders, prandtl_reissner, run_curve,
 };
 
 /// Cell sizes (m): B/4, B/8, B/16.
@@ -35,6 +45,15 @@ const SETTLEMENT: f64 = 0.02;
 const STEPS: usize = 20;
 /// The strain each point's model answers to.
 const FORMULATIONS: [&str; 2] = ["standard", "cell_mean"];
+
+/// Martin's (2005) exact `N_gamma` of a rough strip footing, phi = 30
+/// degrees.
+const MARTIN_N_GAMMA: f64 = 14.75;
+/// The sand's push (m, 0.01 B), its steps, and where the table reads the
+/// curve besides its end (where it levels off: 0.005 B).
+const SAND_SETTLEMENT: f64 = 0.01;
+const SAND_STEPS: usize = 8;
+const SAND_READ_AT: f64 = 0.005;
 
 /// One run: friction angle, formulation, cell, and its curve.
 struct Run {
@@ -77,15 +96,100 @@ pub fn bearing(out: &Path, quick: bool) -> Result<(), LabError> {
             }
         }
     }
-    fs::write(out.join("bearing.md"), markdown(&runs, quick))?;
+    let mut sand = Vec::new();
+    for formulation in FORMULATIONS {
+        for &h in cells {
+            let loading = Loading::Pushed {
+                settlement: SAND_SETTLEMENT,
+                rough: true,
+            };
+            let curve = run_curve(&sand_case(h, formulation), loading)?;
+            let q = curve.points.last().map_or(0.0, |p| p.1);
+            eprintln!(
+                "N_gamma {formulation} h {h}: {q:.2}, {} iterations, {:.0} s",
+                curve.newton_iterations, curve.seconds
+            );
+            sand.push(Run {
+                phi: 30.0,
+                formulation,
+                h,
+                curve,
+            });
+        }
+    }
+    let mut md = markdown(&runs, quick);
+    sand_markdown(&mut md, &sand);
+    fs::write(out.join("bearing.md"), md)?;
     Ok(())
+}
+
+/// The `N_gamma` case at cell `h` (see the module's doc).
+fn sand_case(h: f64, formulation: &str) -> serde_json::Value {
+    let loading = Loading::Pushed {
+        settlement: SAND_SETTLEMENT,
+        rough: true,
+    };
+    let mut case = footing_case(h, Soil::MohrCoulomb(30.0), loading, SAND_STEPS);
+    case["analysis"] = json!({ "volumetric": formulation });
+    case["bodies"][0]["material"]["cohesion"] = json!(0.0);
+    case["bodies"][0]["material"]["density"] = json!(2000.0);
+    let supports = case["supports"].clone();
+    let mut held = supports.clone();
+    held[0]["displacement"] = json!([0.0, 0.0]);
+    case["stages"] = json!([
+        { "name": "geostatic", "load_steps": 1, "geostatic": { "k0": 0.5 },
+          "loads": { "gravity": [0.0, -10.0] }, "supports": held },
+        { "name": "footing", "load_steps": SAND_STEPS, "supports": supports }
+    ]);
+    case.as_object_mut()
+        .expect("a case object")
+        .remove("supports");
+    case
+}
+
+fn sand_markdown(md: &mut String, sand: &[Run]) {
+    let _ = writeln!(
+        md,
+        "## Self-weight: N_gamma on heavy sand, phi = psi = 30 degrees: Martin's {MARTIN_N_GAMMA}\n\n\
+         `2 q / (gamma B)` at {SAND_READ_AT} B, where the curves level off, and at \
+         {SAND_SETTLEMENT} B (the module's doc gives the case). The settlement is the \
+         footing centre's.\n\n\
+         | formulation | h (m) | points | at {SAND_READ_AT} B | error | at {SAND_SETTLEMENT} B | error | Newton iterations | cut increments | seconds |\n\
+         |---|---|---|---|---|---|---|---|---|---|"
+    );
+    for formulation in FORMULATIONS {
+        let mut errors = Vec::new();
+        for r in sand.iter().filter(|r| r.formulation == formulation) {
+            let c = &r.curve;
+            let early = at_settlement(c, SAND_READ_AT).unwrap_or(f64::NAN);
+            let end = c.points.last().map_or(0.0, |p| p.1);
+            let error = |q: f64| q / MARTIN_N_GAMMA - 1.0;
+            errors.push(error(early));
+            let _ = writeln!(
+                md,
+                "| {formulation} | {} | {} | {early:.2} | {:+.1}% | {end:.2} | {:+.1}% | {} | {} | {:.0} |",
+                r.h,
+                c.n_points,
+                100.0 * error(early),
+                100.0 * error(end),
+                c.newton_iterations,
+                c.cutbacks,
+                c.seconds
+            );
+        }
+        let _ = writeln!(
+            md,
+            "| {formulation}: observed orders at {SAND_READ_AT} B | | | | {} | | | | | |",
+            orders(&errors)
+        );
+    }
 }
 
 fn markdown(runs: &[Run], quick: bool) -> String {
     let mut md = String::new();
     let _ = writeln!(
         md,
-        "# Bearing capacity factor N_c: a rough rigid footing on frictional soil\n\n\
+        "# Bearing capacity factors N_c and N_gamma: a rough rigid footing on frictional soil\n\n\
          Generated by `mpm study bearing{}` (`crates/mpm-lab/src/bearing_study.rs`, \
          whose doc gives the case). `q / c` at 0.02 B (or where the run stopped), \
          against Prandtl-Reissner's `N_c`; the observed orders are between \

@@ -692,7 +692,7 @@ fn peak(c: &Curve) -> (f64, f64) {
 
 /// `c`'s q / c at `settlement`, linearly between its steps; `None`
 /// outside it.
-fn at_settlement(c: &Curve, settlement: f64) -> Option<f64> {
+pub(crate) fn at_settlement(c: &Curve, settlement: f64) -> Option<f64> {
     c.points.windows(2).find_map(|w| {
         let ((x0, q0), (x1, q1)) = (w[0], w[1]);
         (x0 <= settlement && settlement <= x1 && x1 > x0)

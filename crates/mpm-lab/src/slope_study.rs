@@ -16,7 +16,8 @@
 //! cell from H/10 to H/40 without the ghost penalty; with the default
 //! penalty; associated flow (psi = phi); the grid moved; smaller
 //! increments of the factor, and the increments again with Newton's
-//! limit at 100 iterations; and Drucker-Prager, the smooth cone.
+//! limit at 100 iterations; Drucker-Prager, the smooth cone; and the
+//! cell-mean strain.
 
 use std::fmt::Write as _;
 use std::fs;
@@ -51,6 +52,9 @@ struct Row {
     model: &'static str,
     /// Newton's iteration limit, if not the default.
     max_iterations: Option<u32>,
+    /// The cell-mean strain with this hourglass stiffness, if not the
+    /// points' own strains.
+    cell_mean: Option<f64>,
 }
 
 impl Row {
@@ -74,6 +78,9 @@ impl Row {
         if let Some(n) = self.max_iterations {
             label += &format!(", {n} Newton iterations");
         }
+        if let Some(h) = self.cell_mean {
+            label += &format!(", cell mean (hourglass {h:e})");
+        }
         label
     }
 }
@@ -88,6 +95,7 @@ fn slope_case(row: &Row) -> Value {
         increment,
         model,
         max_iterations,
+        cell_mean,
     } = *row;
     let h = HEIGHT / cells;
     let length = 2.0 * HEIGHT + CREST;
@@ -97,6 +105,10 @@ fn slope_case(row: &Row) -> Value {
     }
     if let Some(n) = max_iterations {
         analysis["newton"] = json!({ "max_iterations": n });
+    }
+    if let Some(hourglass) = cell_mean {
+        analysis["volumetric"] = json!("cell_mean");
+        analysis["stabilisation"]["hourglass"] = json!(hourglass);
     }
     json!({
         "version": 1,
@@ -183,6 +195,7 @@ pub fn slope(out: &Path, quick: bool) -> Result<(), LabError> {
         increment: 0.1,
         model: "mohr_coulomb",
         max_iterations: None,
+        cell_mean: None,
     };
     let at = |cells: f64| Row { cells, ..base };
     let refinement: &[f64] = if quick {
@@ -224,6 +237,12 @@ pub fn slope(out: &Path, quick: bool) -> Result<(), LabError> {
     rows.extend(smooth.iter().map(|&cells| Row {
         model: "drucker_prager",
         ..at(cells)
+    }));
+    // The cell-mean strain, at its default hourglass stiffness and at the
+    // one the strength reduction's check asks for (docs/guide.md).
+    rows.extend([1e-2, 1e-3].map(|hourglass| Row {
+        cell_mean: Some(hourglass),
+        ..at(variants)
     }));
     let mut found = Vec::new();
     for row in rows {
