@@ -129,16 +129,23 @@ impl CellMean {
         let Ok(trial) = self.trial(start.conn, mp, &zero) else {
             return self;
         };
-        for q in 0..mp.len() {
-            let alone = self.cells.members(self.cells.place(q).0).len() == 1;
-            let Ok(own) = self.response(&trial, mp, q, false) else {
-                continue;
-            };
-            let offset = carried[q] + own.p - self.mean_stress(&trial, mp, q);
-            if !alone && offset.iter().all(|x| x.is_finite()) {
-                self.offset[q] = offset;
-            }
-        }
+        let offset = (0..mp.len())
+            .into_par_iter()
+            .with_min_len(parallel::POINT_RESPONSES)
+            .map(|q| {
+                if self.cells.members(self.cells.place(q).0).len() == 1 {
+                    return Matrix2::zeros();
+                }
+                let offset = self
+                    .response(&trial, mp, q, false)
+                    .map(|own| carried[q] + own.p - self.mean_stress(&trial, mp, q));
+                match offset {
+                    Ok(o) if o.iter().all(|x| x.is_finite()) => o,
+                    _ => Matrix2::zeros(),
+                }
+            })
+            .collect();
+        self.offset = offset;
         self
     }
 
@@ -150,6 +157,8 @@ impl CellMean {
     /// cell, the next step's offsets are those of this one, as moved.
     pub fn carried(&self, trial: &CellTrial, mp: &MaterialPoints) -> Vec<Matrix2<f64>> {
         (0..mp.len())
+            .into_par_iter()
+            .with_min_len(parallel::POINT_RESPONSES)
             .map(|q| {
                 let df_bar = Matrix2::identity() + trial.means[self.cells.place(q).0];
                 let worked = self.mean_stress(trial, mp, q) + self.offset[q];

@@ -202,8 +202,9 @@ fn sand_curve(psi: f64, volumetric: &str) -> (Vec<f64>, usize) {
     (curve, iterations)
 }
 
-/// With the cell-mean strain each point carries the stress it worked with
-/// across the grid's reset (`CellMean::carrying`), so the load under the
+/// With the cell-mean strain each point keeps working with the stress it
+/// ended the last step with across the grid's reset (`CellMean::carrying`,
+/// which carries how far that stood from its own), so the load under the
 /// footing on sand (psi = phi) rises smoothly through the steps in which
 /// the points under it change cell (from the sixth: 6, 16, 22 and 25 of
 /// them). Before, each point took its new cell's mean at once, and the
