@@ -54,6 +54,10 @@ const MARTIN_N_GAMMA: f64 = 14.75;
 const SAND_SETTLEMENT: f64 = 0.01;
 const SAND_STEPS: usize = 8;
 const SAND_READ_AT: f64 = 0.005;
+const SAND_LOADING: Loading = Loading::Pushed {
+    settlement: SAND_SETTLEMENT,
+    rough: true,
+};
 
 /// One run: friction angle, formulation, cell, and its curve.
 struct Run {
@@ -99,11 +103,7 @@ pub fn bearing(out: &Path, quick: bool) -> Result<(), LabError> {
     let mut sand = Vec::new();
     for formulation in FORMULATIONS {
         for &h in cells {
-            let loading = Loading::Pushed {
-                settlement: SAND_SETTLEMENT,
-                rough: true,
-            };
-            let curve = run_curve(&sand_case(h, formulation), loading)?;
+            let curve = run_curve(&sand_case(h, formulation), SAND_LOADING)?;
             let q = curve.points.last().map_or(0.0, |p| p.1);
             eprintln!(
                 "N_gamma {formulation} h {h}: {q:.2}, {} iterations, {:.0} s",
@@ -125,11 +125,7 @@ pub fn bearing(out: &Path, quick: bool) -> Result<(), LabError> {
 
 /// The `N_gamma` case at cell `h` (see the module's doc).
 fn sand_case(h: f64, formulation: &str) -> serde_json::Value {
-    let loading = Loading::Pushed {
-        settlement: SAND_SETTLEMENT,
-        rough: true,
-    };
-    let mut case = footing_case(h, Soil::MohrCoulomb(30.0), loading, SAND_STEPS);
+    let mut case = footing_case(h, Soil::MohrCoulomb(30.0), SAND_LOADING, SAND_STEPS);
     case["analysis"] = json!({ "volumetric": formulation });
     case["bodies"][0]["material"]["cohesion"] = json!(0.0);
     case["bodies"][0]["material"]["density"] = json!(2000.0);
@@ -151,10 +147,10 @@ fn sand_markdown(md: &mut String, sand: &[Run]) {
     let _ = writeln!(
         md,
         "## Self-weight: N_gamma on heavy sand, phi = psi = 30 degrees: Martin's {MARTIN_N_GAMMA}\n\n\
-         `2 q / (gamma B)` at {SAND_READ_AT} B, where the curves level off, and at \
-         {SAND_SETTLEMENT} B (the module's doc gives the case). The settlement is the \
-         footing centre's.\n\n\
-         | formulation | h (m) | points | at {SAND_READ_AT} B | error | at {SAND_SETTLEMENT} B | error | Newton iterations | cut increments | seconds |\n\
+         `2 q / (gamma B)` where the footing's centre has settled {SAND_READ_AT} B (the \
+         curves level off from there), and at the end of the push, {SAND_SETTLEMENT} B \
+         (the module's doc gives the case).\n\n\
+         | formulation | h (m) | points | at {SAND_READ_AT} B | error | at the end | error | Newton iterations | cut increments | seconds |\n\
          |---|---|---|---|---|---|---|---|---|---|"
     );
     for formulation in FORMULATIONS {
