@@ -22,6 +22,11 @@
 //!   rough floor, under a pressure on the top and gravity (less than
 //!   Earth's where the lower body could not stand its weight).
 //!
+//! Each case's volume treatment (`analysis.volumetric`) is drawn too:
+//! the points' own strains half the time, F-bar or the cell-mean strain a
+//! quarter each, from a stream of its own, so that the rest of each case
+//! is what it was before the treatment was drawn.
+//!
 //! A drawn case is valid by construction (the case's own checks accept
 //! it) and physically loaded below collapse: each is expected to finish.
 //! Loads are drawn as fractions of the body's stiffness or strength.
@@ -123,6 +128,8 @@ pub struct Drawn {
     /// `small` or `large`: whether the load is drawn to strain the body
     /// by more than a percent or turn it by more than a few degrees.
     pub magnitude: &'static str,
+    /// `standard`, `fbar` or `cell_mean` (`analysis.volumetric`).
+    pub volumetric: &'static str,
     pub case: Value,
 }
 
@@ -130,7 +137,7 @@ impl Drawn {
     /// A one-line description: the classes and the seed to draw it again.
     pub fn label(&self) -> String {
         format!(
-            "seed {} case {}: {} {} {} {} ({} support, {} points a cell, {} steps, {})",
+            "seed {} case {}: {} {} {} {} ({} support, {} points a cell, {} steps, {}, {})",
             self.seed,
             self.index,
             self.scene.name(),
@@ -140,7 +147,8 @@ impl Drawn {
             self.support,
             self.per_cell,
             self.load_steps,
-            self.magnitude
+            self.magnitude,
+            self.volumetric
         )
     }
 }
@@ -158,6 +166,9 @@ struct MaterialDraw {
 }
 
 const BASES: [&str; 4] = ["gimp", "bspline2", "bspline3", "linear"];
+
+/// The volume treatments, the points' own strains twice.
+const VOLUMETRIC: [&str; 4] = ["standard", "standard", "fbar", "cell_mean"];
 
 /// Case `index` of batch `seed`.
 pub fn draw(seed: u64, index: usize) -> Drawn {
@@ -188,6 +199,9 @@ pub fn draw(seed: u64, index: usize) -> Drawn {
     drawn.case["title"] = json!(format!("random case {index} of seed {seed}"));
     drawn.case["basis"] = json!(basis);
     drawn.case["analysis"]["load_steps"] = json!(load_steps);
+    let volumetric = Rng::new(seed ^ (index as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x5EED)
+        .pick(&VOLUMETRIC);
+    drawn.case["analysis"]["volumetric"] = json!(volumetric);
     if let Some(bodies) = drawn.case["bodies"].as_array_mut() {
         for body in bodies {
             body["points"] = json!({ "per_cell": per_cell });
@@ -200,6 +214,7 @@ pub fn draw(seed: u64, index: usize) -> Drawn {
         basis,
         per_cell,
         load_steps,
+        volumetric,
         ..drawn
     }
 }
@@ -225,6 +240,7 @@ fn scene_draw(
         per_cell: 0,
         load_steps: 0,
         magnitude,
+        volumetric: "standard",
         case,
     }
 }
