@@ -123,8 +123,8 @@ pub struct AnalysedPattern {
 /// cost, and its analysed pattern.
 pub struct ConvergedStep {
     pub states: Vec<PointState>,
-    /// With F-bar, the mean pressure each point worked with
-    /// ([`FbarCells::carried`]), which the next step carries.
+    /// With F-bar, how far the mean pressure each point worked with stood
+    /// from its own ([`FbarCells::carried`]), which the next step carries.
     pub fbar_pressure: Option<Vec<f64>>,
     /// With the cell-mean strain, how far the stress each point worked
     /// with stood from its own ([`CellMean::carried`]), which the next step
@@ -276,16 +276,9 @@ impl<'a> StepEquilibrium<'a> {
                 }
             })
             .collect::<Vec<PointState>>();
-        let fbar_pressure =
-            self.fbar
-                .as_ref()
-                .zip(self.fbar_trial.as_ref())
-                .map(|(fbar, trial)| {
-                    fbar.carried(trial, |p| {
-                        let plane = states[p].cauchy.plane;
-                        0.5 * (plane[0] + plane[1])
-                    })
-                });
+        let fbar_pressure = (self.fbar.as_ref())
+            .zip(self.fbar_trial.as_ref())
+            .map(|(fbar, trial)| fbar.carried(trial));
         let cell_mean_stress = (self.cell_mean.as_ref())
             .zip(self.cell_trial.as_ref())
             .map(|(cells, trial)| cells.carried(trial, self.points));

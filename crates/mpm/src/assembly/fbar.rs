@@ -158,18 +158,25 @@ impl FbarCells {
     }
 
     /// The cells with each point's pressure carried across the grid's
-    /// reset: `carried[p]` is the mean pressure point `p` worked with at
-    /// the end of the last step ([`FbarCells::carried`]; empty before the
-    /// first, when every point takes its cell's mean). A point that
-    /// changes cell, or whose cellmates do, would otherwise take its new
-    /// cell's mean at once, and that jump in its pressure is force out of
-    /// balance at the step's start whatever the step's size (measured:
-    /// docs/guide.md, Material models). So each point keeps the constant
-    /// `c_p = carried_p - Pi_start` beside its cell's mean `Pi` for the
-    /// step, a pressure on its own volume change (a term of the step's
-    /// potential, linear in `dJ_p`: the tangent stays symmetric), and the
-    /// pressure's increment is the cell's. `Pi_start` is the mean at `u =
-    /// 0` as the trial makes it ([`FbarPart`]'s `sigma_m` on `J_start`).
+    /// reset: `carried[p]` is how far the mean pressure point `p` worked
+    /// with at the end of the last step stood from its own model's
+    /// ([`FbarCells::carried`]; empty before the first, when every point
+    /// takes its cell's mean). A point that changes cell, or whose
+    /// cellmates do, would otherwise take its new cell's mean at once, and
+    /// that jump in its pressure is force out of balance at the step's
+    /// start whatever the step's size (measured: docs/guide.md, Material
+    /// models). So each point keeps the constant `c_p = carried_p +
+    /// sigma_m,p - Pi_start` beside its cell's mean `Pi` for the step, a
+    /// pressure on its own volume change (a term of the step's potential,
+    /// linear in `dJ_p`: the tangent stays symmetric), and the pressure's
+    /// increment is the cell's. `sigma_m,p` and `Pi_start` are its own and
+    /// its cell's at `u = 0` as the trial makes them ([`FbarPart`]'s
+    /// `sigma_m` on `J_start`). The point starts with `carried_p +
+    /// sigma_m,p`: where its model answers as it ended, the pressure it
+    /// ended with (the departure was taken on its own volume,
+    /// [`FbarPart`]'s `own_sigma_m`); where the model was weakened (a
+    /// strength-reduction trial), that less what its own pressure lost,
+    /// as the cell mean's stresses ([`super::cell_mean::CellMean::carrying`]).
     pub fn carrying(mut self, start: &Configuration, carried: &[f64]) -> Self {
         let mp = start.points;
         if carried.len() != mp.len() {
@@ -188,7 +195,7 @@ impl FbarCells {
         let means = self.averages(&sigma_m);
         for p in 0..mp.len() {
             let alone = self.members(self.cell_of[p] as usize).len() == 1;
-            let offset = carried[p] - self.of(&means, p);
+            let offset = carried[p] + sigma_m[p] - self.of(&means, p);
             self.offset[p] = if alone || !offset.is_finite() {
                 0.0
             } else {
@@ -198,19 +205,14 @@ impl FbarCells {
         self
     }
 
-    /// The mean pressure each point works with at `trial` (its cell's
-    /// `Pi` and its `c_p`; a point alone in its cell, its own, from its
-    /// converged `cauchy` stress), for [`FbarCells::carrying`] in the next
-    /// step.
-    pub fn carried(&self, trial: &FbarTrial, cauchy: impl Fn(usize) -> f64) -> Vec<f64> {
+    /// How far the mean pressure each point works with at `trial` (its
+    /// cell's `Pi` and its `c_p`) stands from its own model's, on its own
+    /// volume, for [`FbarCells::carrying`] in the next step (zero for a
+    /// point alone in its cell, and for the small-strain model, whose
+    /// B-bar carries no pressure term).
+    pub fn carried(&self, trial: &FbarTrial) -> Vec<f64> {
         (0..self.cell_of.len())
-            .map(|p| {
-                if self.members(self.cell_of[p] as usize).len() == 1 {
-                    cauchy(p)
-                } else {
-                    self.of(&trial.means, p) + self.offset[p]
-                }
-            })
+            .map(|p| self.of(&trial.means, p) + self.offset[p] - trial.parts[p].own_sigma_m)
             .collect()
     }
 
@@ -306,6 +308,7 @@ impl FbarCells {
         let scale = 2.0 * jb * j_start;
         FbarPart {
             sigma_m: a * t / scale,
+            own_sigma_m: a * t / (2.0 * dj * j_start),
             mean_rate: at_bar / scale - a * t / (scale * jb),
             mean_own: at_own * (self.weight[p] / scale),
             by_bar: p_bar,
@@ -443,6 +446,10 @@ impl FbarTrial {
 pub struct FbarPart {
     /// Its in-plane mean Cauchy stress `sigma_m`.
     sigma_m: f64,
+    /// The same Kirchhoff stress on the point's own volume, `J_start dJ`
+    /// rather than `J_start dJ_bar`: what its model answers with at the
+    /// next step's start, on the volume the step leaves it.
+    own_sigma_m: f64,
     /// `d sigma_m / d dJ_bar`.
     mean_rate: f64,
     /// `w_p d sigma_m / d(dF)`.
