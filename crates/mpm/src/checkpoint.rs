@@ -22,7 +22,8 @@ use crate::report::Settled;
 /// The encoding's version: a checkpoint of another one is refused (5:
 /// the points' history holds `b - I` and `b_zz - 1` where 4 held `b`; 6:
 /// the points' stress slopes; 7: F-bar's carried pressures; 8: the cell
-/// mean's carried stresses).
+/// mean's carried stresses, and F-bar's carried as departures from the
+/// points' own).
 pub(crate) const FORMAT: u32 = 8;
 
 /// The state of a run after `steps_done` load steps.
@@ -41,8 +42,8 @@ pub struct Checkpoint {
     /// The stress slopes of the points that have them (those seeded one a
     /// cell or fewer), by point.
     pub(crate) stress_slopes: Vec<(u32, [f64; 6])>,
-    /// With F-bar, the mean pressure each point carries to the next step
-    /// (`MaterialPoints::fbar_pressure`); empty otherwise.
+    /// With F-bar, what each point carries of its mean pressure to the
+    /// next step (`MaterialPoints::fbar_pressure`); empty otherwise.
     pub(crate) fbar_pressure: Vec<f64>,
     /// With the cell-mean strain, what each point carries to the next step
     /// (`MaterialPoints::cell_mean_stress`), column-major; empty otherwise.

@@ -39,9 +39,10 @@ pub struct MaterialPoints {
     /// of an elastic body seeded one a cell or fewer holds of its bending
     /// (`assembly::lone_points`); zero for the others.
     pub stress_slopes: Vec<[f64; 6]>,
-    /// With F-bar, the mean pressure each point worked with in the last
-    /// step, which the next carries across the grid's reset
-    /// (`assembly::FbarCells::carrying`); empty before the first.
+    /// With F-bar, how far the mean pressure each point worked with in the
+    /// last step stood from its own model's, which the next carries across
+    /// the grid's reset (`assembly::FbarCells::carrying`); empty before the
+    /// first.
     pub fbar_pressure: Vec<f64>,
     /// With the cell-mean strain, how far the stress each point worked with
     /// in the last step stood from its own model's (Kirchhoff's, per unit
