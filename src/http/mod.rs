@@ -268,6 +268,10 @@ mod tests {
                 "footing",
                 include_str!("../../python/src/mpm_client/examples/footing.json"),
             ),
+            (
+                "slope",
+                include_str!("../../python/src/mpm_client/examples/slope.json"),
+            ),
         ];
         assert_eq!(bundled.map(|(name, _)| name), mpm::case::builtin::NAMES);
         for (name, text) in bundled {

@@ -23,8 +23,8 @@ use crate::report::Settled;
 /// the points' history holds `b - I` and `b_zz - 1` where 4 held `b`; 6:
 /// the points' stress slopes; 7: F-bar's carried pressures; 8: the cell
 /// mean's carried stresses, and F-bar's carried as departures from the
-/// points' own).
-pub(crate) const FORMAT: u32 = 8;
+/// points' own; 9: the strength reduction's displacement scale and movement).
+pub(crate) const FORMAT: u32 = 9;
 
 /// The state of a run after `steps_done` load steps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -59,9 +59,11 @@ pub struct Checkpoint {
     /// change of load factor)`.
     pub(crate) last_increment: Option<IncrementState>,
     /// The strength reduction, once its stage has begun: the largest
-    /// factor that held, and the smallest that failed with the factor it
-    /// was tried from.
-    pub(crate) reduction: Option<(f64, Option<[f64; 2]>)>,
+    /// factor that held, the smallest that failed with the factor it was
+    /// tried from, and `[scale, moved]`: the points' displacement at the
+    /// stage's start that trials' movement is measured against, and how
+    /// far the trials that held moved them.
+    pub(crate) reduction: Option<(f64, Option<[f64; 2]>, [f64; 2])>,
     /// What the last step reported of its state (reactions, tractions).
     pub(crate) settled: Option<Settled>,
 }

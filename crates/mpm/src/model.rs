@@ -323,6 +323,7 @@ fn stages(case: &Case, seeded: &Seeded) -> Result<(Vec<Stage>, Vec<IbmSupport>),
                 .map(|r| StrengthReduction {
                     increment: r.increment,
                     tolerance: r.tolerance,
+                    flow_limit: r.flow_limit,
                 }),
         });
         before = end;

@@ -116,6 +116,21 @@ pub enum SolveError {
         iteration: usize,
         residual: f64,
     },
+    /// A strength-reduction trial that converged only by flowing
+    /// ([`crate::strength_reduction`]): its points moved, per unit of the
+    /// factor's rise, more than `limit` times their displacement at the
+    /// stage's start (root mean squares over the volume), the points
+    /// having moved up to `cells` cells since the stage began.
+    #[error(
+        "the body flowed in load step {step}: its points moved {moved:.3e} m (root mean square over the volume), {ratio:.2} times their displacement at the stage's start per unit of the factor's rise, past the flow limit {limit}, having moved up to {cells:.3} of a cell since the stage began"
+    )]
+    Flowed {
+        step: usize,
+        moved: f64,
+        ratio: f64,
+        limit: f64,
+        cells: f64,
+    },
     #[error("cancelled in load step {step} at iteration {iteration}")]
     Cancelled {
         step: usize,
@@ -202,6 +217,9 @@ impl SolveError {
             SolveError::LeftGrid { .. } => FailureKind::LeftGrid,
             SolveError::NonFinite { .. } => FailureKind::NonFinite,
             SolveError::Cancelled { .. } => FailureKind::Cancelled,
+            // A strength-reduction stage counts it as a failed trial; it
+            // never ends a run.
+            SolveError::Flowed { .. } => FailureKind::NotConverged,
             // cause() never returns it.
             SolveError::SubstepsExhausted { .. } => FailureKind::NotConverged,
         }
@@ -255,6 +273,7 @@ impl SolveError {
                 | SolveError::Inadmissible { .. }
                 | SolveError::LinearSolve { .. }
                 | SolveError::ArcMissed { .. }
+                | SolveError::Flowed { .. }
         )
     }
 
@@ -302,9 +321,9 @@ impl SolveError {
                 residual,
                 ..
             } => (step, Some(iteration), residual),
-            SolveError::LeftGrid { step, .. } | SolveError::NonFinite { step, .. } => {
-                (step, None, None)
-            }
+            SolveError::LeftGrid { step, .. }
+            | SolveError::NonFinite { step, .. }
+            | SolveError::Flowed { step, .. } => (step, None, None),
             SolveError::SubstepsExhausted { ref cause, .. } => return cause.location(),
         };
         (step, iteration, residual.filter(|r| r.is_finite()))

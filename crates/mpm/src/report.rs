@@ -183,6 +183,12 @@ pub struct StrengthStep {
     /// Why the step's last failed trial failed, if one did.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub failure: Option<String>,
+    /// How far the trial that held in this step moved the points, per
+    /// unit of the factor's rise, as a multiple of their displacement at
+    /// the stage's start (root mean squares over the volume): what the
+    /// stage's `flow_limit` bounds. Left out where nothing measured it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flow: Option<f64>,
 }
 
 /// The traction an implicit-boundary support exerts on the body at one of

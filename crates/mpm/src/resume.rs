@@ -83,7 +83,7 @@ impl Simulation {
             last_increment: self.last_increment.as_ref().map(LastIncrement::state),
             reduction: self.reduction.as_ref().map(|r| {
                 let failed = r.failed.map(|f| [f.factor, f.tried_from]);
-                (r.held, failed)
+                (r.held, failed, [r.scale, r.moved])
             }),
             settled: self.settled.clone(),
         }
@@ -188,11 +188,15 @@ impl Simulation {
         self.last_increment = c.last_increment.clone().map(LastIncrement::from);
         // The materials are the case's in a fresh simulation; the
         // reduction's own are those at the factor that last held.
-        self.reduction = c.reduction.map(|(held, failed)| ReductionState {
-            base: self.points.materials.clone(),
-            held,
-            failed: failed.map(|[factor, tried_from]| Failed { factor, tried_from }),
-        });
+        self.reduction = c
+            .reduction
+            .map(|(held, failed, [scale, moved])| ReductionState {
+                base: self.points.materials.clone(),
+                held,
+                failed: failed.map(|[factor, tried_from]| Failed { factor, tried_from }),
+                scale,
+                moved,
+            });
         if let Some(r) = &self.reduction {
             self.points.materials = r.materials_at(r.held);
         }
@@ -590,7 +594,7 @@ mod tests {
                 "loads": { "boundary": [{ "on": { "y": 1.0 }, "pressure": flow / 1.23 }] },
                 "supports": [{ "on": { "x": 0.0 }, "fix": "x" }, { "on": { "y": 0.0 }, "fix": "y" }]
             },
-            { "load_steps": 20, "strength_reduction": { "increment": 0.1, "tolerance": 0.01 } }
+            { "load_steps": 20, "strength_reduction": { "increment": 0.1, "tolerance": 0.01, "flow_limit": 10.0 } }
         ]);
         let case = Case::from_json(&v.to_string()).unwrap();
         let mut straight = Simulation::new(&case).unwrap();
@@ -607,6 +611,14 @@ mod tests {
             last.factor <= 1.23 && last.failed.unwrap() > 1.23,
             "{last:?}"
         );
+        // The flow limit measured every trial (the block's points, all
+        // yielding at once, move too little on the grid for it to cut
+        // one), and the resumed runs carry what they moved.
+        let flows = whole
+            .steps
+            .iter()
+            .filter_map(|s| s.strength_reduction.as_ref());
+        assert!(flows.filter(|r| r.flow.is_some()).count() >= 3);
         let after_failure = (whole.steps.iter())
             .position(|s| s.cutbacks > 0 && s.newton.iterations > 0)
             .expect("a trial that held after one that failed");

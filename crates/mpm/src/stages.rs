@@ -48,6 +48,10 @@ pub struct Stage {
 pub struct StrengthReduction {
     pub increment: f64,
     pub tolerance: f64,
+    /// How far a trial may move the points, per unit of the factor's rise,
+    /// as a multiple of their displacement at the stage's start, before it
+    /// counts as failed (0: no limit).
+    pub flow_limit: f64,
 }
 
 /// The stage that holds load step `step` (counted from 1 over the run),

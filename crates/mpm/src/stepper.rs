@@ -40,7 +40,7 @@ use crate::report::{RunReport, Settled, StepReport, StepTimings, StrengthStep};
 use crate::settings::NewtonSettings;
 pub use crate::settings::Substepping;
 use crate::stages::{self, Stage, StrengthReduction};
-use crate::strength_reduction::{Next, ReductionState};
+use crate::strength_reduction::{self, Flow, FlowLimit, Next, ReductionState};
 use crate::supports::HeldDofs;
 use crate::update;
 
@@ -159,11 +159,14 @@ impl LastIncrement {
 }
 
 /// How an increment's load factor is set: given (from, to), or found
-/// with the displacements on an arc of `length` from `load_factor`.
+/// with the displacements on an arc of `length` from `load_factor`; or a
+/// strength-reduction trial, at the full load, whose movement `flow`
+/// bounds.
 #[derive(Debug, Clone, Copy)]
 enum Increment {
     To(f64, f64),
     Arc { length: f64, load_factor: f64 },
+    Trial { flow: Option<FlowLimit> },
 }
 
 /// A case made ready to run: points, grid, loads and supports
@@ -329,7 +332,7 @@ impl Simulation {
             let to = Increment::To(from, load_factor);
             let started = Instant::now();
             match self.increment(step, extent_checked_after, to, observer) {
-                Ok((sub, increment)) => {
+                Ok((sub, increment, _)) => {
                     converged = Some((increment, reach - done));
                     easy_in_a_row = if sub.newton.iterations <= easy_limit {
                         easy_in_a_row + 1
@@ -412,7 +415,7 @@ impl Simulation {
             };
             let started = Instant::now();
             match self.increment(step, step - 1, on, observer) {
-                Ok((mut report, increment)) => {
+                Ok((mut report, increment, _)) => {
                     arc.load_factor = report.load_factor;
                     arc.last = Some(increment);
                     arc.easy_in_a_row = if report.newton.iterations <= easy_limit {
@@ -473,16 +476,20 @@ impl Simulation {
         let mut timings = StepTimings::default();
         let mut failure: Option<String> = None;
         if self.reduction.is_none() {
-            self.reduction = Some(ReductionState::new(self.points.materials.clone()));
+            let points = &self.points;
+            let scale = strength_reduction::volume_rms(&points.volume0, |p| points.displacement(p));
+            self.reduction = Some(ReductionState::new(points.materials.clone(), scale));
         }
         loop {
             let reduction = self.reduction.as_ref().expect("set above");
-            let verdict = |reduction: &ReductionState, failure: Option<String>| StrengthStep {
-                factor: reduction.held,
-                failed: reduction.failed.map(|f| f.factor),
-                found: reduction.next(spec) == Next::Found,
-                failure,
-            };
+            let verdict =
+                |reduction: &ReductionState, failure: Option<String>, flow| StrengthStep {
+                    factor: reduction.held,
+                    failed: reduction.failed.map(|f| f.factor),
+                    found: reduction.next(spec) == Next::Found,
+                    failure,
+                    flow,
+                };
             let factor = match reduction.next(spec) {
                 Next::Trial(f) => f,
                 Next::Found => {
@@ -503,19 +510,24 @@ impl Simulation {
                         reactions: settled.reactions,
                         applied_load: settled.applied_load,
                         support_tractions: settled.support_tractions,
-                        strength_reduction: Some(verdict(reduction, failure)),
+                        strength_reduction: Some(verdict(reduction, failure, None)),
                         memory: Default::default(),
                     });
                 }
             };
             self.points.materials = reduction.materials_at(factor);
+            let trial = Increment::Trial {
+                flow: reduction.flow_limit(spec, factor, self.grid.h),
+            };
             let started = Instant::now();
-            let tried = self.increment(step, step - 1, Increment::To(1.0, 1.0), observer);
+            let tried = self.increment(step, step - 1, trial, observer);
             let reduction = self.reduction.as_mut().expect("set above");
             match tried {
-                Ok((mut report, _)) => {
+                Ok((mut report, _, flow)) => {
                     reduction.record(factor, true);
-                    report.strength_reduction = Some(verdict(reduction, failure));
+                    reduction.moved += flow.map_or(0.0, |f| f.largest);
+                    let ratio = flow.map(|f| f.ratio);
+                    report.strength_reduction = Some(verdict(reduction, failure, ratio));
                     report.cutbacks = cutbacks;
                     report.failed_iterations = failed_iterations;
                     report.timings += &timings;
@@ -561,14 +573,15 @@ impl Simulation {
     /// and commits it, as in the module docs.
     /// `extent_checked_after` is the step a material point that left the
     /// grid's extent is reported after.
-    /// Returns its report and its increment.
+    /// Returns its report, its increment, and what a strength-reduction
+    /// trial with a flow limit moved.
     fn increment(
         &mut self,
         step: usize,
         extent_checked_after: usize,
         control: Increment,
         observer: &mut dyn Observer,
-    ) -> Result<(StepReport, LastIncrement), SolveError> {
+    ) -> Result<(StepReport, LastIncrement, Option<Flow>), SolveError> {
         let mut clock = Stopwatch::start();
         self.check_inside_extent(extent_checked_after)?;
 
@@ -577,12 +590,14 @@ impl Simulation {
         let (from, start_factor, path) = match control {
             Increment::To(from, to) => (from, to, false),
             Increment::Arc { load_factor, .. } => (load_factor, load_factor, true),
+            Increment::Trial { .. } => (1.0, 1.0, false),
         };
         let mut eq = self.assemble(&conn, start_factor, path, previous);
         let grid_seconds = clock.lap();
 
         let (u, load_factor, newton) = match control {
-            Increment::To(from, to) => {
+            Increment::To(..) | Increment::Trial { .. } => {
+                let to = start_factor;
                 let last = self.last_increment.as_ref();
                 let predicted = last.filter(|_| self.settings.predictor).and_then(|last| {
                     let scale = (to - from) / last.dlambda;
@@ -611,6 +626,31 @@ impl Simulation {
             }
         };
         let newton_seconds = clock.lap();
+        let flow = match control {
+            Increment::Trial { flow: Some(limit) } => {
+                let moved_by = |p| increment(conn.point_links(p), &u).0;
+                let moved = strength_reduction::volume_rms(&self.points.volume0, moved_by);
+                let largest = (0..self.points.len())
+                    .map(|p| {
+                        let d = moved_by(p);
+                        d[0].hypot(d[1])
+                    })
+                    .fold(0.0, f64::max);
+                match limit.measure(moved, largest) {
+                    Ok(flow) => Some(flow),
+                    Err(flow) => {
+                        return Err(SolveError::Flowed {
+                            step,
+                            moved,
+                            ratio: flow.ratio,
+                            limit: limit.limit,
+                            cells: limit.moved(largest) / self.grid.h,
+                        });
+                    }
+                }
+            }
+            _ => None,
+        };
 
         let reactions = eq.reactions(&u, self.stages[self.stage].n_supports);
         let applied_load = eq.applied_load();
@@ -715,10 +755,10 @@ impl Simulation {
             u,
             dlambda: load_factor - from,
         };
-        if let Increment::To(..) = control {
+        if let Increment::To(..) | Increment::Trial { .. } = control {
             self.last_increment = Some(increment.clone());
         }
-        Ok((report, increment))
+        Ok((report, increment, flow))
     }
 
     /// Points whose cell is not the one they started the run in.

@@ -9,6 +9,28 @@
 //! that fails from far below may have failed for the size of its jump, so
 //! when the bracket has closed on such a failure it is tried again from
 //! where the bisection stands, and if it holds the increments go on.
+//!
+//! A trial also fails when it holds only by flowing. A body below its
+//! factor of safety moves little as its strength falls; at the factor its
+//! displacement grows without bound. A discrete updated-Lagrangian body
+//! past that point may still find an equilibrium, far from where it
+//! stood: the mechanism's points cross a good part of a cell, and what
+//! the discretisation adds (locking, stabilisation, the moved geometry)
+//! holds them again, so that the factor such a trial "holds" at follows
+//! the path the increments took (Griffiths and Lane's slope at h = H/20
+//! held to 1.60 rising by 0.05 and failed at 1.40 rising by 0.03). So a
+//! trial that held counts as failed when both
+//! - its points moved, per unit of the factor's rise, more than
+//!   `flow_limit` times their displacement at the stage's start (root
+//!   mean squares over the volume): the displacement-factor curve turned
+//!   up (below the factor of safety the body moves about its stage-start
+//!   displacement or less per unit of factor);
+//! - and the points have moved on the grid since the stage began: the
+//!   largest movements of the trials that held and of this one add up to
+//!   more than [`FLOW_CELL_FRACTION`] of a cell, far enough for the
+//!   discretisation to hold them again. A body whose points moved less,
+//!   however steep its curve (a block whose points all yield at once, a
+//!   footing an increment below collapse), fails only when Newton does.
 
 use crate::material::Material;
 use crate::stages::StrengthReduction;
@@ -24,6 +46,81 @@ pub(crate) struct ReductionState {
     /// The smallest factor that failed, and the factor that held when it
     /// was tried.
     pub(crate) failed: Option<Failed>,
+    /// The points' displacement at the stage's start, root mean square
+    /// over their volume (m): what a trial's movement is measured against.
+    pub(crate) scale: f64,
+    /// The largest movements of the trials that held, summed (m): a bound
+    /// on how far any point has moved since the stage began.
+    pub(crate) moved: f64,
+}
+
+/// How far, as a fraction of the cell, the points must have moved since
+/// a strength-reduction stage began before a trial may count as flowing
+/// (the module's docs). Griffiths and Lane's slope at h = H/20 had moved
+/// its crest 0.4-2% of a cell when its curve turned up, and the trials
+/// that held past that moved points 7-50% of a cell each; the built-in
+/// footing's clay and a uniform block reach their collapse having moved
+/// under 0.1%.
+pub(crate) const FLOW_CELL_FRACTION: f64 = 0.01;
+
+/// How far a trial may move the points before it counts as failed
+/// (the module's docs): their displacement in the trial (root mean square
+/// over the volume) at most `limit` times `per_factor`, the stage's
+/// [`ReductionState::scale`] times the factor's rise from the last that
+/// held, unless `moved`, the trials that held, and the trial's largest
+/// movement add up to at most [`FLOW_CELL_FRACTION`] of the cell `h`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct FlowLimit {
+    pub(crate) per_factor: f64,
+    pub(crate) limit: f64,
+    pub(crate) moved: f64,
+    pub(crate) h: f64,
+}
+
+/// What a trial that held moved: its displacement (rms over the volume)
+/// over its [`FlowLimit`]'s measure, and its largest (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Flow {
+    pub(crate) ratio: f64,
+    pub(crate) largest: f64,
+}
+
+impl FlowLimit {
+    /// How far the points may have moved since the stage began, with a
+    /// trial that moved one `largest` (m).
+    pub(crate) fn moved(&self, largest: f64) -> f64 {
+        self.moved + largest
+    }
+
+    /// What a trial that moved the points `moved` (rms), one of them
+    /// `largest`, flowed by; `Err` when past the limit.
+    pub(crate) fn measure(&self, moved: f64, largest: f64) -> Result<Flow, Flow> {
+        let flow = Flow {
+            ratio: moved / self.per_factor,
+            largest,
+        };
+        if flow.ratio > self.limit && self.moved(largest) > FLOW_CELL_FRACTION * self.h {
+            Err(flow)
+        } else {
+            Ok(flow)
+        }
+    }
+}
+
+/// The root mean square of `displacement` over the points, weighted by
+/// their reference `volume` (a weightless body has no mass to weigh by).
+pub(crate) fn volume_rms(volume: &[f64], displacement: impl Fn(usize) -> [f64; 2]) -> f64 {
+    let (mut sum, mut total) = (0.0, 0.0);
+    for (p, m) in volume.iter().enumerate() {
+        let d = displacement(p);
+        sum += m * (d[0] * d[0] + d[1] * d[1]);
+        total += m;
+    }
+    if total > 0.0 {
+        (sum / total).sqrt()
+    } else {
+        0.0
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,12 +139,35 @@ pub(crate) enum Next {
 }
 
 impl ReductionState {
-    pub(crate) fn new(base: Vec<Material>) -> Self {
+    /// The stage's start: the case's `base` materials, and the points'
+    /// displacement `scale` ([`ReductionState::scale`]).
+    pub(crate) fn new(base: Vec<Material>, scale: f64) -> Self {
         Self {
             base,
             held: 1.0,
             failed: None,
+            scale,
+            moved: 0.0,
         }
+    }
+
+    /// The limit on a trial at `factor`'s movement on a grid of cell `h`:
+    /// none when the stage's `flow_limit` is 0 or the points had not moved
+    /// at the stage's start (a geostatic stage before it reports no
+    /// displacement), so that nothing measures it.
+    pub(crate) fn flow_limit(
+        &self,
+        spec: &StrengthReduction,
+        factor: f64,
+        h: f64,
+    ) -> Option<FlowLimit> {
+        let per_factor = self.scale * (factor - self.held);
+        (spec.flow_limit > 0.0 && per_factor > 0.0).then_some(FlowLimit {
+            per_factor,
+            limit: spec.flow_limit,
+            moved: self.moved,
+            h,
+        })
     }
 
     pub(crate) fn next(&self, spec: &StrengthReduction) -> Next {
@@ -100,8 +220,9 @@ mod tests {
         let spec = StrengthReduction {
             increment: 0.1,
             tolerance: 0.01,
+            flow_limit: 10.0,
         };
-        let mut state = ReductionState::new(Vec::new());
+        let mut state = ReductionState::new(Vec::new(), 1.0);
         let mut tried = Vec::new();
         while let Next::Trial(f) = state.next(&spec) {
             assert!(tried.len() < 40, "{tried:?}");
@@ -112,6 +233,46 @@ mod tests {
             state.record(f, holds);
         }
         (tried, state.held)
+    }
+
+    #[test]
+    fn a_trial_is_measured_against_the_stage_start_per_unit_of_the_rise() {
+        let spec = StrengthReduction {
+            increment: 0.1,
+            tolerance: 0.01,
+            flow_limit: 10.0,
+        };
+        // Two points of volumes 1 and 3, moved 2 m and 0 m: the root mean
+        // square over the volume is sqrt(4 / 4) = 1 m.
+        let scale = volume_rms(&[1.0, 3.0], |p| if p == 0 { [0.0, 2.0] } else { [0.0; 2] });
+        assert_eq!(scale, 1.0);
+        let mut state = ReductionState::new(Vec::new(), scale);
+        state.record(1.3, true);
+        // A rise of 0.05 that moves the points 0.4 m (rms): 8 times the
+        // stage's start per unit of factor, within the limit however far
+        // a point moved.
+        let limit = state.flow_limit(&spec, 1.35, 0.5).expect("measured");
+        let flow = limit.measure(0.4, 1.0).expect("within the limit");
+        assert!((flow.ratio - 8.0).abs() < 1e-12);
+        assert_eq!(limit.limit, 10.0);
+        // Past the limit, it flowed if a point moved more than 1% of the
+        // 0.5 m cell, less what the trials that held have moved.
+        assert!(limit.measure(1.5, 0.0051).is_err());
+        assert!(limit.measure(1.5, 0.0049).is_ok());
+        state.moved = 0.003;
+        let limit = state.flow_limit(&spec, 1.35, 0.5).expect("measured");
+        assert!(limit.measure(1.5, 0.0021).is_err());
+        assert!(limit.measure(1.5, 0.0019).is_ok());
+        // Nothing measures it when the limit is off or nothing had moved.
+        let off = StrengthReduction {
+            flow_limit: 0.0,
+            ..spec
+        };
+        assert_eq!(state.flow_limit(&off, 1.35, 0.5), None);
+        let still = ReductionState::new(Vec::new(), 0.0);
+        assert_eq!(still.flow_limit(&spec, 1.1, 0.5), None);
+        // No points: nothing to measure.
+        assert_eq!(volume_rms(&[], |_| [1.0, 1.0]), 0.0);
     }
 
     #[test]

@@ -1,12 +1,13 @@
 //! Built-in cases, shipped in `crates/mpm/cases/` and compiled in.
 
 /// Names accepted by [`get`].
-pub const NAMES: [&str; 5] = [
+pub const NAMES: [&str; 6] = [
     "column",
     "cantilever-grid",
     "cantilever",
     "plate-with-hole",
     "footing",
+    "slope",
 ];
 
 /// The JSON text of a built-in case.
@@ -18,6 +19,7 @@ pub fn get(name: &str) -> Option<&'static str> {
         // Made by scripts/plate_with_hole_mesh.py and scripts/gmsh_to_case.py.
         "plate-with-hole" => Some(include_str!("../../cases/plate-with-hole.json")),
         "footing" => Some(include_str!("../../cases/footing.json")),
+        "slope" => Some(include_str!("../../cases/slope.json")),
         _ => None,
     }
 }

@@ -799,6 +799,15 @@ pub struct StrengthReductionSpec {
     /// when the bisection stops.
     #[serde(default = "default_reduction_tolerance")]
     pub tolerance: f64,
+    /// A trial that holds only by flowing counts as failed: one whose
+    /// points move (root mean square over their volume), per unit of the
+    /// factor's rise, more than this many times their displacement at the
+    /// stage's start, once they have moved 1% of a cell since it began
+    /// (10 suits a slope; docs/guide.md, Strength reduction). 0 (the
+    /// default): no limit, a trial fails only when Newton does or a point
+    /// is inadmissible.
+    #[serde(default)]
+    pub flow_limit: f64,
 }
 
 fn default_reduction_increment() -> f64 {
@@ -1153,6 +1162,9 @@ mod tests {
                 serde_json::json!({ "increment": increment, "tolerance": tolerance });
             wrong.push((v, ["stages[1].strength_reduction.", field].concat().leak()));
         }
+        let mut v = staged();
+        v["stages"][1]["strength_reduction"] = serde_json::json!({ "flow_limit": -1.0 });
+        wrong.push((v, "stages[1].strength_reduction.flow_limit"));
         for (v, path) in wrong {
             assert_eq!(error_for(v).path, path);
         }
@@ -1160,7 +1172,10 @@ mod tests {
         v["stages"][1]["strength_reduction"] = reduce;
         let case = Case::from_json(&v.to_string()).unwrap();
         let spec = case.stages[1].strength_reduction.unwrap();
-        assert_eq!((spec.increment, spec.tolerance), (0.1, 0.01));
+        assert_eq!(
+            (spec.increment, spec.tolerance, spec.flow_limit),
+            (0.1, 0.01, 0.0)
+        );
         let mut v = staged();
         v["stages"][1]["control"] = "arc_length".into();
         v["stages"][1]["load_increments"] = serde_json::json!({ "gravity": [0.0, -1.0] });

@@ -809,6 +809,12 @@ fn strength_reduction(
             "must be at least 1e-6 of the increment (twenty bisections)",
         );
     }
+    if !(spec.flow_limit >= 0.0 && spec.flow_limit.is_finite()) {
+        return refuse(
+            format!("{path}.flow_limit"),
+            "must be a finite number, 0 or above (0: no limit)",
+        );
+    }
     Ok(())
 }
 
