@@ -9,14 +9,16 @@
 //! iterations) give FS = 1.4; Bishop and Morgenstern's (1960) charts,
 //! limit equilibrium on circles, give 1.38, as they report.
 //!
-//! Each run: gravity on in 4 steps (the base held, the far side on
-//! rollers, both by the implicit boundary method), then the reduction
-//! (increment 0.1, tolerance 0.01). GIMP, 2x2 points a cell, the grid's
-//! origin at `-0.3 h` in both directions unless a row moves it. Rows: the
-//! cell from H/10 to H/40 without the ghost penalty; with the default
-//! penalty; associated flow (psi = phi); the grid moved; smaller
-//! increments of the factor, and the increments again with Newton's
-//! limit at 100 iterations; Drucker-Prager, the smooth cone; and the
+//! Each run is the built-in `slope` (`mpm example slope`): gravity on in
+//! 4 steps (the base held, the far side on rollers, both by the implicit
+//! boundary method), then the reduction (increment 0.1, tolerance 0.01,
+//! flow limit 10: a trial that holds only after its points slid on the
+//! grid fails, `crate::strength_reduction` in the solver). GIMP, 2x2
+//! points a cell, the grid's origin at `-0.3 h` in both directions unless
+//! a row moves it. Rows: the cell from H/10 to H/40, and the grid moved;
+//! smaller increments of the factor; the flow limit at 20 and off (the
+//! factor then follows the increments); the default ghost penalty;
+//! associated flow (psi = phi); Drucker-Prager, the smooth cone; and the
 //! cell-mean strain.
 
 use std::fmt::Write as _;
@@ -29,9 +31,8 @@ use serde_json::{Value, json};
 
 use crate::LabError;
 
-/// Slope height (m), and the crest's run beyond the slope's top.
+/// Slope height (m), as the built-in `slope` has it.
 const HEIGHT: f64 = 10.0;
-const CREST: f64 = 1.5 * HEIGHT;
 /// Griffiths and Lane's finite-element factor, and Bishop and
 /// Morgenstern's.
 const GRIFFITHS_LANE: f64 = 1.4;
@@ -55,6 +56,8 @@ struct Row {
     /// The cell-mean strain with this hourglass stiffness, if not the
     /// points' own strains.
     cell_mean: Option<f64>,
+    /// The reduction's flow limit (0: none).
+    flow_limit: f64,
 }
 
 impl Row {
@@ -81,11 +84,17 @@ impl Row {
         if let Some(h) = self.cell_mean {
             label += &format!(", cell mean (hourglass {h:e})");
         }
+        if self.flow_limit != 10.0 {
+            label += &match self.flow_limit {
+                0.0 => ", no flow limit".to_string(),
+                k => format!(", flow limit {k}"),
+            };
+        }
         label
     }
 }
 
-/// The slope case of a run.
+/// The slope case of a run: the built-in `slope` as the row changes it.
 fn slope_case(row: &Row) -> Value {
     let Row {
         cells,
@@ -96,12 +105,19 @@ fn slope_case(row: &Row) -> Value {
         model,
         max_iterations,
         cell_mean,
+        flow_limit,
     } = *row;
     let h = HEIGHT / cells;
-    let length = 2.0 * HEIGHT + CREST;
-    let mut analysis = json!({ "type": "plane_strain" });
-    if let Some(g) = ghost {
-        analysis["stabilisation"] = json!({ "ghost_penalty": g });
+    let mut case = mpm::case::builtin::json("slope").expect("the built-in slope");
+    let analysis = &mut case["analysis"];
+    match ghost {
+        Some(g) => analysis["stabilisation"]["ghost_penalty"] = json!(g),
+        None => {
+            analysis
+                .as_object_mut()
+                .expect("analysis")
+                .remove("stabilisation");
+        }
     }
     if let Some(n) = max_iterations {
         analysis["newton"] = json!({ "max_iterations": n });
@@ -110,28 +126,16 @@ fn slope_case(row: &Row) -> Value {
         analysis["volumetric"] = json!("cell_mean");
         analysis["stabilisation"]["hourglass"] = json!(hourglass);
     }
-    json!({
-        "version": 1,
-        "title": format!("Griffiths and Lane (1999) example 1: 2:1 slope, H = 10 m, c' = 10 kPa, phi' = 20, psi = {dilation}, h = H/{cells}"),
-        "analysis": analysis,
-        "grid": { "cell_size": h, "origin": [-offset * h, -0.3 * h] },
-        "basis": "gimp",
-        "bodies": [ {
-            "name": "slope",
-            "geometry": { "polygon": { "vertices": [[0.0, 0.0], [length, 0.0], [length, HEIGHT], [2.0 * HEIGHT, HEIGHT]] } },
-            "points": { "per_cell": 2 },
-            "material": { "model": model, "youngs_modulus": 1e8, "poisson_ratio": 0.3,
-                "density": 2000.0, "cohesion": 10e3, "friction_angle": 20.0, "dilation_angle": dilation }
-        } ],
-        "stages": [
-            { "name": "gravity", "load_steps": 4, "loads": { "gravity": [0.0, -10.0] },
-              "supports": [ { "on": { "y": 0.0 }, "fix": "xy", "method": "ibm" },
-                            { "on": { "x": length }, "fix": "normal", "method": "ibm" } ] },
-            { "name": "safety", "load_steps": 80,
-              "strength_reduction": { "increment": increment, "tolerance": 0.01 } }
-        ],
-        "probes": [ { "name": "crest", "at": [2.0 * HEIGHT, HEIGHT] } ]
-    })
+    case["title"] = json!(format!(
+        "Griffiths and Lane (1999) example 1: 2:1 slope, H = 10 m, c' = 10 kPa, phi' = 20, psi = {dilation}, h = H/{cells}"
+    ));
+    case["grid"] = json!({ "cell_size": h, "origin": [-offset * h, -0.3 * h] });
+    let material = &mut case["bodies"][0]["material"];
+    material["model"] = json!(model);
+    material["dilation_angle"] = json!(dilation);
+    case["stages"][1]["strength_reduction"] =
+        json!({ "increment": increment, "tolerance": 0.01, "flow_limit": flow_limit });
+    case
 }
 
 /// What a run found.
@@ -147,6 +151,8 @@ struct Found {
     iterations: usize,
     failed_iterations: usize,
     crest_settlement: f64,
+    /// The flow of the last trial that held, if measured.
+    flow: Option<f64>,
     seconds: f64,
 }
 
@@ -180,6 +186,8 @@ fn solve(row: Row) -> Result<Found, LabError> {
         iterations: report.steps.iter().map(|s| s.newton.iterations).sum(),
         failed_iterations: report.steps.iter().map(|s| s.failed_iterations).sum(),
         crest_settlement: -last.probes[0].displacement[1],
+        flow: (report.steps.iter().rev())
+            .find_map(|s| s.strength_reduction.as_ref().and_then(|r| r.flow)),
         seconds,
     })
 }
@@ -196,45 +204,45 @@ pub fn slope(out: &Path, quick: bool) -> Result<(), LabError> {
         model: "mohr_coulomb",
         max_iterations: None,
         cell_mean: None,
+        flow_limit: 10.0,
     };
     let at = |cells: f64| Row { cells, ..base };
-    let refinement: &[f64] = if quick {
-        &[10.0, 20.0]
+    let (refinement, variants, finest): (&[f64], f64, f64) = if quick {
+        (&[10.0, 20.0], 10.0, 20.0)
     } else {
-        &[10.0, 20.0, 40.0]
+        (&[10.0, 20.0, 40.0], 20.0, 40.0)
     };
     let mut rows: Vec<Row> = refinement.iter().map(|&c| at(c)).collect();
-    let variants = if quick { 10.0 } else { 20.0 };
-    rows.extend([
-        Row {
-            ghost: None,
-            ..at(variants)
-        },
-        Row {
-            dilation: 20.0,
-            ..at(variants)
-        },
-        Row {
-            offset: 0.7,
-            ..at(variants)
-        },
-        Row {
-            increment: 0.05,
-            ..at(variants)
-        },
-        Row {
-            increment: 0.03,
-            ..at(variants)
-        },
-    ]);
-    // Newton's limit raised: does the factor still follow the increments?
-    rows.extend([0.1, 0.05, 0.03].map(|increment| Row {
+    // The grid moved, at the variants' cell and the finest.
+    rows.extend([variants, finest].map(|cells| Row {
+        offset: 0.7,
+        ..at(cells)
+    }));
+    rows.extend([0.05, 0.03].map(|increment| Row {
         increment,
-        max_iterations: Some(100),
         ..at(variants)
     }));
-    let smooth: &[f64] = if quick { &[10.0] } else { &[20.0, 40.0] };
-    rows.extend(smooth.iter().map(|&cells| Row {
+    // The flow limit raised, and off: without it the factor follows the
+    // increments.
+    rows.push(Row {
+        flow_limit: 20.0,
+        ..at(variants)
+    });
+    rows.extend([0.1, 0.05, 0.03].map(|increment| Row {
+        increment,
+        flow_limit: 0.0,
+        ..at(variants)
+    }));
+    rows.push(Row {
+        ghost: None,
+        ..at(variants)
+    });
+    // Associated flow, what limit equilibrium and limit analysis assume.
+    rows.extend([variants, finest].map(|cells| Row {
+        dilation: 20.0,
+        ..at(cells)
+    }));
+    rows.extend([variants, finest].map(|cells| Row {
         model: "drucker_prager",
         ..at(cells)
     }));
@@ -273,9 +281,11 @@ fn markdown(found: &[Found], quick: bool) -> String {
          A 2:1 slope, H = 10 m, on a firm base at the toe's level; Mohr-Coulomb, c' = 10 kPa \
          (c' / gamma H = 0.05), phi' = 20 degrees, psi = 0, E = 100 MPa, nu = 0.3, gamma = 20 kN/m^3. \
          References: Griffiths and Lane's finite elements FS = {GRIFFITHS_LANE}, Bishop and \
-         Morgenstern's charts {BISHOP_MORGENSTERN}. Gravity in 4 steps, then the reduction \
-         (increment 0.1 unless the row says, tolerance 0.01: the factor is within 0.01 below the first that fails). \
-         GIMP, 2x2 points a cell, origin at -0.3 h unless the row says.\n",
+         Morgenstern's charts {BISHOP_MORGENSTERN}. The built-in `slope` (`mpm example slope`): gravity in 4 steps, then the reduction \
+         (increment 0.1 unless the row says, tolerance 0.01: the factor is within 0.01 below the first that fails; \
+         flow limit 10 unless the row says: a trial whose points move, per unit of the factor's rise, more than 10 times \
+         their displacement at the stage's start, once they have moved 1% of a cell, fails). \
+         GIMP, 2x2 points a cell, origin at -0.3 h unless the row says, no ghost penalty unless the row says.\n",
         if quick { " --quick" } else { "" }
     );
     let _ = writeln!(
@@ -286,13 +296,16 @@ fn markdown(found: &[Found], quick: bool) -> String {
     );
     let _ = writeln!(
         s,
-        "| run | points | FS | vs G&L | vs Bishop | first failed | found | on the ramp | crest settlement (mm) | steps | iterations (failed) | s | the failure that closed it |"
+        "| run | points | FS | vs G&L | vs Bishop | first failed | found | on the ramp | crest settlement (mm) | flow of the last that held | steps | iterations (failed) | s | the failure that closed it |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(
+        s,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    );
     for f in found {
         let _ = writeln!(
             s,
-            "| {} | {} | {:.4} | {:+.1}% | {:+.1}% | {} | {} | {} | {:.1} | {} | {} ({}) | {:.1} | {} |",
+            "| {} | {} | {:.4} | {:+.1}% | {:+.1}% | {} | {} | {} | {:.1} | {} | {} | {} ({}) | {:.1} | {} |",
             f.row.label(),
             f.points,
             f.factor,
@@ -302,6 +315,7 @@ fn markdown(found: &[Found], quick: bool) -> String {
             f.found,
             on_the_ramp(f),
             1e3 * f.crest_settlement,
+            f.flow.map_or("-".into(), |v| format!("{v:.1}")),
             f.steps,
             f.iterations,
             f.failed_iterations,
