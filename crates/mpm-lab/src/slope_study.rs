@@ -33,6 +33,9 @@ use crate::LabError;
 
 /// Slope height (m), as the built-in `slope` has it.
 const HEIGHT: f64 = 10.0;
+/// The reduction's flow limit unless a row says, as the built-in `slope`
+/// has it.
+const FLOW_LIMIT: f64 = 10.0;
 /// Griffiths and Lane's finite-element factor, and Bishop and
 /// Morgenstern's.
 const GRIFFITHS_LANE: f64 = 1.4;
@@ -51,8 +54,6 @@ struct Row {
     increment: f64,
     /// `mohr_coulomb` or `drucker_prager` (matched in plane strain).
     model: &'static str,
-    /// Newton's iteration limit, if not the default.
-    max_iterations: Option<u32>,
     /// The cell-mean strain with this hourglass stiffness, if not the
     /// points' own strains.
     cell_mean: Option<f64>,
@@ -78,13 +79,10 @@ impl Row {
         if self.increment != 0.1 {
             label += &format!(", increment {}", self.increment);
         }
-        if let Some(n) = self.max_iterations {
-            label += &format!(", {n} Newton iterations");
-        }
         if let Some(h) = self.cell_mean {
             label += &format!(", cell mean (hourglass {h:e})");
         }
-        if self.flow_limit != 10.0 {
+        if self.flow_limit != FLOW_LIMIT {
             label += &match self.flow_limit {
                 0.0 => ", no flow limit".to_string(),
                 k => format!(", flow limit {k}"),
@@ -103,7 +101,6 @@ fn slope_case(row: &Row) -> Value {
         offset,
         increment,
         model,
-        max_iterations,
         cell_mean,
         flow_limit,
     } = *row;
@@ -118,9 +115,6 @@ fn slope_case(row: &Row) -> Value {
                 .expect("analysis")
                 .remove("stabilisation");
         }
-    }
-    if let Some(n) = max_iterations {
-        analysis["newton"] = json!({ "max_iterations": n });
     }
     if let Some(hourglass) = cell_mean {
         analysis["volumetric"] = json!("cell_mean");
@@ -202,9 +196,8 @@ pub fn slope(out: &Path, quick: bool) -> Result<(), LabError> {
         offset: 0.3,
         increment: 0.1,
         model: "mohr_coulomb",
-        max_iterations: None,
         cell_mean: None,
-        flow_limit: 10.0,
+        flow_limit: FLOW_LIMIT,
     };
     let at = |cells: f64| Row { cells, ..base };
     let (refinement, variants, finest): (&[f64], f64, f64) = if quick {

@@ -60,9 +60,9 @@ pub struct Checkpoint {
     pub(crate) last_increment: Option<IncrementState>,
     /// The strength reduction, once its stage has begun: the largest
     /// factor that held, the smallest that failed with the factor it was
-    /// tried from, and `[scale, moved]`: the points' displacement at the
-    /// stage's start that trials' movement is measured against, and how
-    /// far the trials that held moved them.
+    /// tried from, and `[scale, travelled]`: the points' displacement at
+    /// the stage's start that trials' movement is measured against, and
+    /// how far the trials that held moved them.
     pub(crate) reduction: Option<(f64, Option<[f64; 2]>, [f64; 2])>,
     /// What the last step reported of its state (reactions, tractions).
     pub(crate) settled: Option<Settled>,

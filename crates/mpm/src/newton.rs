@@ -126,6 +126,8 @@ pub enum SolveError {
     )]
     Flowed {
         step: usize,
+        /// Newton's iterations to the state that flowed.
+        iterations: usize,
         moved: f64,
         ratio: f64,
         limit: f64,
@@ -321,9 +323,12 @@ impl SolveError {
                 residual,
                 ..
             } => (step, Some(iteration), residual),
-            SolveError::LeftGrid { step, .. }
-            | SolveError::NonFinite { step, .. }
-            | SolveError::Flowed { step, .. } => (step, None, None),
+            SolveError::Flowed {
+                step, iterations, ..
+            } => (step, Some(iterations), None),
+            SolveError::LeftGrid { step, .. } | SolveError::NonFinite { step, .. } => {
+                (step, None, None)
+            }
             SolveError::SubstepsExhausted { ref cause, .. } => return cause.location(),
         };
         (step, iteration, residual.filter(|r| r.is_finite()))

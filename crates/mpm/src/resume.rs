@@ -83,7 +83,7 @@ impl Simulation {
             last_increment: self.last_increment.as_ref().map(LastIncrement::state),
             reduction: self.reduction.as_ref().map(|r| {
                 let failed = r.failed.map(|f| [f.factor, f.tried_from]);
-                (r.held, failed, [r.scale, r.moved])
+                (r.held, failed, [r.scale, r.travelled])
             }),
             settled: self.settled.clone(),
         }
@@ -190,12 +190,12 @@ impl Simulation {
         // reduction's own are those at the factor that last held.
         self.reduction = c
             .reduction
-            .map(|(held, failed, [scale, moved])| ReductionState {
+            .map(|(held, failed, [scale, travelled])| ReductionState {
                 base: self.points.materials.clone(),
                 held,
                 failed: failed.map(|[factor, tried_from]| Failed { factor, tried_from }),
                 scale,
-                moved,
+                travelled,
             });
         if let Some(r) = &self.reduction {
             self.points.materials = r.materials_at(r.held);
@@ -448,6 +448,7 @@ mod tests {
                 resumed.points.stress_slopes, straight.points.stress_slopes,
                 "after {stop_after}"
             );
+            assert_eq!(resumed.reduction, straight.reduction, "after {stop_after}");
         }
     }
 
@@ -611,14 +612,18 @@ mod tests {
             last.factor <= 1.23 && last.failed.unwrap() > 1.23,
             "{last:?}"
         );
-        // The flow limit measured every trial (the block's points, all
-        // yielding at once, move too little on the grid for it to cut
-        // one), and the resumed runs carry what they moved.
-        let flows = whole
-            .steps
-            .iter()
-            .filter_map(|s| s.strength_reduction.as_ref());
-        assert!(flows.filter(|r| r.flow.is_some()).count() >= 3);
+        // The flow limit measured every trial that held (the block's
+        // points, all yielding at once, move too little on the grid for
+        // it to cut one), and a resumed run carries what they travelled
+        // (`resumes_to_the_bit` compares the reduction's state).
+        let reduced = (whole.steps.iter()).filter_map(|s| s.strength_reduction.as_ref());
+        let held: Vec<_> = reduced.filter(|r| !r.found).collect();
+        assert!(
+            held.len() >= 3 && held.iter().all(|r| r.flow.is_some()),
+            "{held:?}"
+        );
+        let travelled = straight.reduction.as_ref().map(|r| r.travelled);
+        assert!(travelled.is_some_and(|t| t > 0.0), "{travelled:?}");
         let after_failure = (whole.steps.iter())
             .position(|s| s.cutbacks > 0 && s.newton.iterations > 0)
             .expect("a trial that held after one that failed");

@@ -525,7 +525,7 @@ impl Simulation {
             match tried {
                 Ok((mut report, _, flow)) => {
                     reduction.record(factor, true);
-                    reduction.moved += flow.map_or(0.0, |f| f.largest);
+                    reduction.travelled += flow.map_or(0.0, |f| f.largest);
                     let ratio = flow.map(|f| f.ratio);
                     report.strength_reduction = Some(verdict(reduction, failure, ratio));
                     report.cutbacks = cutbacks;
@@ -628,23 +628,20 @@ impl Simulation {
         let newton_seconds = clock.lap();
         let flow = match control {
             Increment::Trial { flow: Some(limit) } => {
-                let moved_by = |p| increment(conn.point_links(p), &u).0;
-                let moved = strength_reduction::volume_rms(&self.points.volume0, moved_by);
-                let largest = (0..self.points.len())
-                    .map(|p| {
-                        let d = moved_by(p);
-                        d[0].hypot(d[1])
-                    })
-                    .fold(0.0, f64::max);
-                match limit.measure(moved, largest) {
+                let (rms, largest) =
+                    strength_reduction::trial_movement(&self.points.volume0, |p| {
+                        increment(conn.point_links(p), &u).0
+                    });
+                match limit.measure(rms, largest) {
                     Ok(flow) => Some(flow),
                     Err(flow) => {
                         return Err(SolveError::Flowed {
                             step,
-                            moved,
+                            iterations: newton.iterations,
+                            moved: rms,
                             ratio: flow.ratio,
                             limit: limit.limit,
-                            cells: limit.moved(largest) / self.grid.h,
+                            cells: limit.travelled_with(largest) / self.grid.h,
                         });
                     }
                 }

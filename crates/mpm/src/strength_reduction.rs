@@ -50,8 +50,8 @@ pub(crate) struct ReductionState {
     /// over their volume (m): what a trial's movement is measured against.
     pub(crate) scale: f64,
     /// The largest movements of the trials that held, summed (m): a bound
-    /// on how far any point has moved since the stage began.
-    pub(crate) moved: f64,
+    /// on how far any point has travelled since the stage began.
+    pub(crate) travelled: f64,
 }
 
 /// How far, as a fraction of the cell, the points must have moved since
@@ -67,13 +67,14 @@ pub(crate) const FLOW_CELL_FRACTION: f64 = 0.01;
 /// (the module's docs): their displacement in the trial (root mean square
 /// over the volume) at most `limit` times `per_factor`, the stage's
 /// [`ReductionState::scale`] times the factor's rise from the last that
-/// held, unless `moved`, the trials that held, and the trial's largest
-/// movement add up to at most [`FLOW_CELL_FRACTION`] of the cell `h`.
+/// held, unless what the trials that held have `travelled` and the
+/// trial's largest movement add up to at most [`FLOW_CELL_FRACTION`] of
+/// the cell `h`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct FlowLimit {
     pub(crate) per_factor: f64,
     pub(crate) limit: f64,
-    pub(crate) moved: f64,
+    pub(crate) travelled: f64,
     pub(crate) h: f64,
 }
 
@@ -86,20 +87,21 @@ pub(crate) struct Flow {
 }
 
 impl FlowLimit {
-    /// How far the points may have moved since the stage began, with a
-    /// trial that moved one `largest` (m).
-    pub(crate) fn moved(&self, largest: f64) -> f64 {
-        self.moved + largest
+    /// How far the points may have travelled since the stage began, with
+    /// a trial that moved one `largest` (m).
+    pub(crate) fn travelled_with(&self, largest: f64) -> f64 {
+        self.travelled + largest
     }
 
-    /// What a trial that moved the points `moved` (rms), one of them
-    /// `largest`, flowed by; `Err` when past the limit.
-    pub(crate) fn measure(&self, moved: f64, largest: f64) -> Result<Flow, Flow> {
+    /// What a trial that moved the points `rms` (the root mean square over
+    /// their volume), one of them `largest`, flowed by; `Err` when past
+    /// the limit.
+    pub(crate) fn measure(&self, rms: f64, largest: f64) -> Result<Flow, Flow> {
         let flow = Flow {
-            ratio: moved / self.per_factor,
+            ratio: rms / self.per_factor,
             largest,
         };
-        if flow.ratio > self.limit && self.moved(largest) > FLOW_CELL_FRACTION * self.h {
+        if flow.ratio > self.limit && self.travelled_with(largest) > FLOW_CELL_FRACTION * self.h {
             Err(flow)
         } else {
             Ok(flow)
@@ -107,20 +109,32 @@ impl FlowLimit {
     }
 }
 
-/// The root mean square of `displacement` over the points, weighted by
-/// their reference `volume` (a weightless body has no mass to weigh by).
-pub(crate) fn volume_rms(volume: &[f64], displacement: impl Fn(usize) -> [f64; 2]) -> f64 {
-    let (mut sum, mut total) = (0.0, 0.0);
-    for (p, m) in volume.iter().enumerate() {
+/// How far a trial moved the points, each by `displacement`: the root
+/// mean square over their reference `volume`, and the largest (m).
+pub(crate) fn trial_movement(
+    volume: &[f64],
+    displacement: impl Fn(usize) -> [f64; 2],
+) -> (f64, f64) {
+    let (mut sum, mut total, mut largest) = (0.0, 0.0, 0.0f64);
+    for (p, v) in volume.iter().enumerate() {
         let d = displacement(p);
-        sum += m * (d[0] * d[0] + d[1] * d[1]);
-        total += m;
+        let squared = d[0] * d[0] + d[1] * d[1];
+        sum += v * squared;
+        total += v;
+        largest = largest.max(squared.sqrt());
     }
-    if total > 0.0 {
+    let rms = if total > 0.0 {
         (sum / total).sqrt()
     } else {
         0.0
-    }
+    };
+    (rms, largest)
+}
+
+/// The root mean square of `displacement` over the points, weighted by
+/// their reference `volume` (a weightless body has no mass to weigh by).
+pub(crate) fn volume_rms(volume: &[f64], displacement: impl Fn(usize) -> [f64; 2]) -> f64 {
+    trial_movement(volume, displacement).0
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -147,7 +161,7 @@ impl ReductionState {
             held: 1.0,
             failed: None,
             scale,
-            moved: 0.0,
+            travelled: 0.0,
         }
     }
 
@@ -165,7 +179,7 @@ impl ReductionState {
         (spec.flow_limit > 0.0 && per_factor > 0.0).then_some(FlowLimit {
             per_factor,
             limit: spec.flow_limit,
-            moved: self.moved,
+            travelled: self.travelled,
             h,
         })
     }
@@ -244,8 +258,9 @@ mod tests {
         };
         // Two points of volumes 1 and 3, moved 2 m and 0 m: the root mean
         // square over the volume is sqrt(4 / 4) = 1 m.
-        let scale = volume_rms(&[1.0, 3.0], |p| if p == 0 { [0.0, 2.0] } else { [0.0; 2] });
-        assert_eq!(scale, 1.0);
+        let (scale, largest) =
+            trial_movement(&[1.0, 3.0], |p| if p == 0 { [0.0, 2.0] } else { [0.0; 2] });
+        assert_eq!((scale, largest), (1.0, 2.0));
         let mut state = ReductionState::new(Vec::new(), scale);
         state.record(1.3, true);
         // A rise of 0.05 that moves the points 0.4 m (rms): 8 times the
@@ -259,7 +274,7 @@ mod tests {
         // 0.5 m cell, less what the trials that held have moved.
         assert!(limit.measure(1.5, 0.0051).is_err());
         assert!(limit.measure(1.5, 0.0049).is_ok());
-        state.moved = 0.003;
+        state.travelled = 0.003;
         let limit = state.flow_limit(&spec, 1.35, 0.5).expect("measured");
         assert!(limit.measure(1.5, 0.0021).is_err());
         assert!(limit.measure(1.5, 0.0019).is_ok());

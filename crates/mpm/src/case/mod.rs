@@ -803,9 +803,10 @@ pub struct StrengthReductionSpec {
     /// points move (root mean square over their volume), per unit of the
     /// factor's rise, more than this many times their displacement at the
     /// stage's start, once they have moved 1% of a cell since it began
-    /// (10 suits a slope; docs/guide.md, Strength reduction). 0 (the
-    /// default): no limit, a trial fails only when Newton does or a point
-    /// is inadmissible.
+    /// (10 suits a slope; docs/guide.md, Strength reduction); not right
+    /// after a geostatic stage, which leaves no displacement to measure
+    /// against. 0 (the default): no limit, a trial fails only when Newton
+    /// does or a point is inadmissible.
     #[serde(default)]
     pub flow_limit: f64,
 }
@@ -1164,6 +1165,12 @@ mod tests {
         }
         let mut v = staged();
         v["stages"][1]["strength_reduction"] = serde_json::json!({ "flow_limit": -1.0 });
+        wrong.push((v, "stages[1].strength_reduction.flow_limit"));
+        // A flow limit right after a geostatic stage would measure nothing.
+        let mut v = staged();
+        v["stages"][0]["geostatic"] = serde_json::json!({});
+        v["stages"][0]["loads"] = serde_json::json!({ "gravity": [0.0, -10.0] });
+        v["stages"][1]["strength_reduction"] = serde_json::json!({ "flow_limit": 10.0 });
         wrong.push((v, "stages[1].strength_reduction.flow_limit"));
         for (v, path) in wrong {
             assert_eq!(error_for(v).path, path);

@@ -257,7 +257,8 @@ impl Case {
                     geostatic(k, st, g)?;
                 }
                 if let Some(r) = &st.strength_reduction {
-                    strength_reduction(k, views.len(), st, r)?;
+                    let after_geostatic = k > 0 && self.stages[k - 1].geostatic.is_some();
+                    strength_reduction(k, views.len(), st, r, after_geostatic)?;
                 }
                 if let Some(l) = &st.load_increments {
                     validate_loads(&format!("{stage}load_increments"), l)?;
@@ -768,6 +769,7 @@ fn strength_reduction(
     n: usize,
     stage: &StageSpec,
     spec: &StrengthReductionSpec,
+    before_is_geostatic: bool,
 ) -> Result<(), CaseError> {
     let path = format!("stages[{k}].strength_reduction");
     let refuse = |field: String, why: &str| Err(CaseError::new(field, why));
@@ -813,6 +815,12 @@ fn strength_reduction(
         return refuse(
             format!("{path}.flow_limit"),
             "must be a finite number, 0 or above (0: no limit)",
+        );
+    }
+    if spec.flow_limit > 0.0 && before_is_geostatic {
+        return refuse(
+            format!("{path}.flow_limit"),
+            "a strength reduction right after a geostatic stage starts with no displacement to measure its trials against: load the body in a stage between them, or set it to 0",
         );
     }
     Ok(())

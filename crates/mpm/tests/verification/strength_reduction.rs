@@ -163,10 +163,10 @@ fn strength_reduction_with_the_cell_mean_gives_back_the_collapse_load() {
 ///
 /// Before the flow limit the factor followed the path: 1.5125 rising by
 /// 0.1, 1.60 by 0.05 and 1.39 by 0.03, 1.50 with the grid moved, each
-/// trial past about 1.4 holding after its crest had slid 25-250 mm. With
-/// it (default 10): 1.3625 at both placements, 1.35 rising by 0.05 (the
-/// curve turns up between 1.35 and 1.40 at every placement and
-/// increment). Associated flow (psi = phi), which is what limit
+/// trial past about 1.4 holding after its crest slid a further 24-212 mm.
+/// With it (10, as the built-in sets it): 1.3625 at both placements, 1.35
+/// rising by 0.05 (the curve turns up between 1.35 and 1.40 at every
+/// placement and increment). Associated flow (psi = phi), which is what limit
 /// equilibrium and limit analysis assume: 1.40. The bound is the issue's,
 /// 3% of Bishop's; the spread of the three psi = 0 runs at most 0.02, two
 /// steps of the bisection's tolerance. Non-associated flow lowers the
