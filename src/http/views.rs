@@ -245,4 +245,24 @@ mod tests {
         assert_eq!(rfc3339(951_782_400.5), "2000-02-29T00:00:00.500Z");
         assert_eq!(rfc3339(1_795_507_200.0), "2026-11-24T08:00:00.000Z");
     }
+
+    /// The service answers from step reports stored as JSON text, so they
+    /// must parse back to the solver's own bits. serde_json's default
+    /// float parser is off by an ulp or two on some numbers: the built-in
+    /// slope's factor of safety, 1.3625000000000003 in the CLI's
+    /// summary.json, came back from `GET /jobs/{id}/result` as
+    /// 1.3625000000000005 (fixed by its `float_roundtrip` feature).
+    #[test]
+    fn stored_numbers_parse_back_to_the_same_bits() {
+        let strength = mpm::report::StrengthStep {
+            factor: 1.3625000000000003,
+            failed: Some(1.3687500000000004),
+            found: true,
+            failure: None,
+            flow: Some(10.4572125588708),
+        };
+        let text = serde_json::to_string(&strength).unwrap();
+        let back: mpm::report::StrengthStep = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, strength, "{text}");
+    }
 }
