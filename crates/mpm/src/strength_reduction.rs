@@ -29,8 +29,8 @@
 //!   largest movements of the trials that held and of this one add up to
 //!   more than [`FLOW_CELL_FRACTION`] of a cell, far enough for the
 //!   discretisation to hold them again. A body whose points moved less,
-//!   however steep its curve (a block whose points all yield at once, a
-//!   footing an increment below collapse), fails only when Newton does.
+//!   however steep its curve (a block whose points all yield at once),
+//!   fails only when Newton does.
 
 use crate::material::Material;
 use crate::stages::StrengthReduction;
@@ -57,10 +57,12 @@ pub(crate) struct ReductionState {
 /// How far, as a fraction of the cell, the points must have moved since
 /// a strength-reduction stage began before a trial may count as flowing
 /// (the module's docs). Griffiths and Lane's slope at h = H/20 had moved
-/// its crest 0.4-2% of a cell when its curve turned up, and the trials
-/// that held past that moved points 7-50% of a cell each; the built-in
-/// footing's clay and a uniform block reach their collapse having moved
-/// under 0.1%.
+/// its crest about 0.7% of a cell when its curve turned up, and the
+/// trials that held past that moved points 7-50% of a cell each; a
+/// uniform block reaches its collapse having moved under 0.1%. The
+/// built-in footing's clay moves the points by its edge 1-3% of a cell
+/// before its collapse, which the limit then finds up to 2.5% low
+/// (docs/guide.md, Strength reduction).
 pub(crate) const FLOW_CELL_FRACTION: f64 = 0.01;
 
 /// How far a trial may move the points before it counts as failed
