@@ -25,7 +25,11 @@
 //! Each case's volume treatment (`analysis.volumetric`) is drawn too:
 //! the points' own strains half the time, F-bar or the cell-mean strain a
 //! quarter each, from a stream of its own, so that the rest of each case
-//! is what it was before the treatment was drawn.
+//! is what it was before the treatment was drawn. From a third stream, a
+//! third of the plastic cases are loaded in a first stage and then
+//! reduced in strength to their factor of safety (a last stage of up to
+//! 20 trials rising by 0.05, 0.1 or 0.2, half of them with the flow limit
+//! 10); the rest of such a case is what it was.
 //!
 //! A drawn case is valid by construction (the case's own checks accept
 //! it) and physically loaded below collapse: each is expected to finish.
@@ -130,6 +134,9 @@ pub struct Drawn {
     pub magnitude: &'static str,
     /// `standard`, `fbar` or `cell_mean` (`analysis.volumetric`).
     pub volumetric: &'static str,
+    /// `none`, or whether the case ends in a strength reduction with or
+    /// without a flow limit: `reduced` or `reduced, flow limit`.
+    pub reduction: &'static str,
     pub case: Value,
 }
 
@@ -137,7 +144,7 @@ impl Drawn {
     /// A one-line description: the classes and the seed to draw it again.
     pub fn label(&self) -> String {
         format!(
-            "seed {} case {}: {} {} {} {} ({} support, {} points a cell, {} steps, {}, {})",
+            "seed {} case {}: {} {} {} {} ({} support, {} points a cell, {} steps, {}, {}, strength reduction {})",
             self.seed,
             self.index,
             self.scene.name(),
@@ -148,7 +155,8 @@ impl Drawn {
             self.per_cell,
             self.load_steps,
             self.magnitude,
-            self.volumetric
+            self.volumetric,
+            self.reduction
         )
     }
 }
@@ -207,6 +215,20 @@ pub fn draw(seed: u64, index: usize) -> Drawn {
             body["points"] = json!({ "per_cell": per_cell });
         }
     }
+    let mut reducing = Rng::new(seed ^ (index as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F) ^ 0x5AFE);
+    let plastic = matches!(drawn.model, "von_mises" | "drucker_prager" | "mohr_coulomb");
+    let reduction = if plastic && reducing.chance(1.0 / 3.0) {
+        let increment = reducing.pick(&[0.05, 0.1, 0.2]);
+        let flow_limit = reducing.pick(&[0.0, 10.0]);
+        then_reduced(&mut drawn.case, increment, flow_limit);
+        if flow_limit > 0.0 {
+            "reduced, flow limit"
+        } else {
+            "reduced"
+        }
+    } else {
+        "none"
+    };
     Drawn {
         seed,
         index,
@@ -215,8 +237,26 @@ pub fn draw(seed: u64, index: usize) -> Drawn {
         per_cell,
         load_steps,
         volumetric,
+        reduction,
         ..drawn
     }
+}
+
+/// Makes `case` two stages: its loads, supports and load steps, then a
+/// strength reduction of up to 20 trials rising by `increment` (the
+/// bisection's tolerance an eighth of it) with the flow limit `flow_limit`.
+fn then_reduced(case: &mut Value, increment: f64, flow_limit: f64) {
+    let object = case.as_object_mut().expect("a case is an object");
+    let loads = object.remove("loads").unwrap_or_else(|| json!({}));
+    let supports = object.remove("supports").unwrap_or_else(|| json!([]));
+    let load_steps = (case["analysis"].as_object_mut())
+        .and_then(|a| a.remove("load_steps"))
+        .unwrap_or_else(|| json!(1));
+    case["stages"] = json!([
+        { "name": "load", "load_steps": load_steps, "loads": loads, "supports": supports },
+        { "name": "safety", "load_steps": 20,
+          "strength_reduction": { "increment": increment, "tolerance": increment / 8.0, "flow_limit": flow_limit } }
+    ]);
 }
 
 /// The scene's part of a draw: the case without its basis, points and
@@ -241,6 +281,7 @@ fn scene_draw(
         load_steps: 0,
         magnitude,
         volumetric: "standard",
+        reduction: "none",
         case,
     }
 }
@@ -702,5 +743,11 @@ mod tests {
         assert!(drawn.iter().any(|d| d.load_steps == 1));
         assert!(drawn.iter().any(|d| d.load_steps >= 40));
         assert!(drawn.iter().all(|d| (1..=50).contains(&d.load_steps)));
+        for reduction in ["none", "reduced", "reduced, flow limit"] {
+            assert!(
+                drawn.iter().any(|d| d.reduction == reduction),
+                "{reduction}"
+            );
+        }
     }
 }

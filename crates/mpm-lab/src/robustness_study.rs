@@ -93,6 +93,7 @@ fn classes(d: &Drawn) -> Vec<(&'static str, String)> {
         ("points a cell", format!("{0} x {0}", d.per_cell)),
         ("magnitude", d.magnitude.to_string()),
         ("volume treatment", d.volumetric.to_string()),
+        ("strength reduction", d.reduction.to_string()),
         (
             "load steps",
             match d.load_steps {
