@@ -148,7 +148,7 @@ fn sand_markdown(md: &mut String, sand: &[Run]) {
         md,
         "## Self-weight: N_gamma on heavy sand, phi = psi = 30 degrees: Martin's {MARTIN_N_GAMMA}\n\n\
          `2 q / (gamma B)` where the footing's centre has settled {SAND_READ_AT} B (the \
-         curves level off from there), and at the end of the push, {SAND_SETTLEMENT} B \
+         curves still rise there and after: docs/guide.md), and at the end of the push, {SAND_SETTLEMENT} B \
          (the module's doc gives the case).\n\n\
          | formulation | h (m) | points | at {SAND_READ_AT} B | error | at the end | error | Newton iterations | cut increments | seconds |\n\
          |---|---|---|---|---|---|---|---|---|---|"
