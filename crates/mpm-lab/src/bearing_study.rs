@@ -13,7 +13,8 @@
 //! What it shows: the standard points lock by dilatancy (associated flow
 //! binds each point's volume change to its shear, four constraints a
 //! cell), and the cell mean binds one a cell (docs/guide.md, Material
-//! models).
+//! models). Then the phi = 30 cell-mean row at B/8 pushed in 20 to 200
+//! steps: how much of its error is the load steps'.
 //!
 //! Then the self-weight factor `N_gamma`: the same rough footing on heavy
 //! cohesionless sand (phi = psi = 30 degrees, c = 0, gamma = 20 kN/m3,
@@ -45,12 +46,14 @@ const SETTLEMENT: f64 = 0.02;
 const STEPS: usize = 20;
 /// The strain each point's model answers to.
 const FORMULATIONS: [&str; 2] = ["standard", "cell_mean"];
+/// The load steps of the steps' table (phi = 30, the cell mean, B/8).
+const STEP_COUNTS: [usize; 4] = [20, 50, 100, 200];
 
 /// Martin's (2005) exact `N_gamma` of a rough strip footing, phi = 30
 /// degrees.
 const MARTIN_N_GAMMA: f64 = 14.75;
 /// The sand's push (m, 0.01 B), its steps, and where the table reads the
-/// curve besides its end (where it levels off: 0.005 B).
+/// curve besides its end (0.005 B; the curves still rise there).
 const SAND_SETTLEMENT: f64 = 0.01;
 const SAND_STEPS: usize = 8;
 const SAND_READ_AT: f64 = 0.005;
@@ -117,7 +120,25 @@ pub fn bearing(out: &Path, quick: bool) -> Result<(), LabError> {
             });
         }
     }
+    // The same push in more steps: how much of the error is the steps'.
+    let counts: &[usize] = if quick {
+        &STEP_COUNTS[..2]
+    } else {
+        &STEP_COUNTS
+    };
+    let mut stepped = Vec::new();
+    for &steps in counts {
+        let mut case = footing_case(CELLS[1], Soil::MohrCoulomb(30.0), loading, steps);
+        case["analysis"]["volumetric"] = json!("cell_mean");
+        let curve = run_curve(&case, loading)?;
+        eprintln!(
+            "phi 30 cell_mean h {} in {steps} steps: {} iterations, {:.0} s",
+            CELLS[1], curve.newton_iterations, curve.seconds
+        );
+        stepped.push((steps, curve));
+    }
     let mut md = markdown(&runs, quick);
+    steps_markdown(&mut md, &stepped);
     sand_markdown(&mut md, &sand);
     fs::write(out.join("bearing.md"), md)?;
     Ok(())
@@ -141,6 +162,34 @@ fn sand_case(h: f64, formulation: &str) -> serde_json::Value {
         .expect("a case object")
         .remove("supports");
     case
+}
+
+/// The steps' table: the phi = 30 cell-mean row at B/8 pushed in more
+/// steps.
+fn steps_markdown(md: &mut String, stepped: &[(usize, Curve)]) {
+    let n_c = prandtl_reissner(30.0);
+    let _ = writeln!(
+        md,
+        "## The same push in more steps (phi = psi = 30, cell mean, h = {} m)\n\n\
+         `q / c` at the end of the push ({SETTLEMENT} B) and at the curve's peak, against N_c = {n_c:.2}: \
+         how much of the table's error is the load steps'.\n\n\
+         | steps | at the end | error | peak | error | Newton iterations | seconds |\n\
+         |---|---|---|---|---|---|---|",
+        CELLS[1]
+    );
+    for (steps, c) in stepped {
+        let end = c.points.last().map_or(f64::NAN, |p| p.1);
+        let peak = c.points.iter().map(|p| p.1).fold(f64::NAN, f64::max);
+        let _ = writeln!(
+            md,
+            "| {steps} | {end:.3} | {:+.2}% | {peak:.3} | {:+.2}% | {} | {:.0} |",
+            100.0 * (end / n_c - 1.0),
+            100.0 * (peak / n_c - 1.0),
+            c.newton_iterations,
+            c.seconds
+        );
+    }
+    md.push('\n');
 }
 
 fn sand_markdown(md: &mut String, sand: &[Run]) {
