@@ -477,7 +477,8 @@ impl Simulation {
         let mut failure: Option<String> = None;
         if self.reduction.is_none() {
             let points = &self.points;
-            let scale = strength_reduction::volume_rms(&points.volume0, |p| points.displacement(p));
+            let (scale, _) =
+                strength_reduction::trial_movement(&points.volume0, |p| points.displacement(p));
             self.reduction = Some(ReductionState::new(points.materials.clone(), scale));
         }
         loop {

@@ -112,7 +112,8 @@ impl FlowLimit {
 }
 
 /// How far a trial moved the points, each by `displacement`: the root
-/// mean square over their reference `volume`, and the largest (m).
+/// mean square over their reference `volume` (a weightless body has no
+/// mass to weigh by), and the largest (m).
 pub(crate) fn trial_movement(
     volume: &[f64],
     displacement: impl Fn(usize) -> [f64; 2],
@@ -131,12 +132,6 @@ pub(crate) fn trial_movement(
         0.0
     };
     (rms, largest)
-}
-
-/// The root mean square of `displacement` over the points, weighted by
-/// their reference `volume` (a weightless body has no mass to weigh by).
-pub(crate) fn volume_rms(volume: &[f64], displacement: impl Fn(usize) -> [f64; 2]) -> f64 {
-    trial_movement(volume, displacement).0
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -289,7 +284,7 @@ mod tests {
         let still = ReductionState::new(Vec::new(), 0.0);
         assert_eq!(still.flow_limit(&spec, 1.1, 0.5), None);
         // No points: nothing to measure.
-        assert_eq!(volume_rms(&[], |_| [1.0, 1.0]), 0.0);
+        assert_eq!(trial_movement(&[], |_| [1.0, 1.0]), (0.0, 0.0));
     }
 
     #[test]
