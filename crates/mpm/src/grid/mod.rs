@@ -1,5 +1,6 @@
-//! The background grid: an unbounded lattice of square cells; a node is
-//! named by its integer coordinates `(i, j)` and sits at `origin + h (i, j)`.
+//! The background grid: an unbounded lattice of square (cubic) cells in
+//! `D` dimensions, 2 (plane strain) or 3; a node is named by its integer
+//! coordinates `(i, j)` (`(i, j, k)`) and sits at `origin + h (i, j)`.
 //! Nothing is allocated per cell: the nodes a step uses are the ones the
 //! material's shape functions touch ([`connectivity`]).
 
@@ -9,54 +10,83 @@ pub mod connectivity;
 pub use basis::{Basis, NodeWeight, Support};
 pub use connectivity::{Connectivity, Link, increment};
 
-/// A lattice node packed into one integer; ordering is by `i`, then `j`.
+/// A lattice node packed into one integer, `64 / D` bits a coordinate;
+/// ordering is by `i`, then `j` (then `k`).
 pub type NodeKey = u64;
 
-const BIAS: i64 = 1 << 31;
+/// Bits of a node key per coordinate in `D` dimensions.
+const fn key_bits(d: usize) -> u32 {
+    64 / d as u32
+}
 
-/// How far from the grid's origin, in cells, material may go: node keys
-/// hold indices within 2^31 of it, and this leaves room for the nodes
+/// How far from the grid's origin, in cells, material may go in 2D: node
+/// keys hold indices within 2^31 of it, and this leaves room for the nodes
 /// around the material.
 pub const REACH_CELLS: f64 = (1u64 << 30) as f64;
 
-#[inline]
-pub fn node_key(i: i64, j: i64) -> NodeKey {
-    (((i + BIAS) as u64) << 32) | ((j + BIAS) as u64 & 0xffff_ffff)
+/// [`REACH_CELLS`] in `D` dimensions: half the span a key's coordinate
+/// holds (2^30 cells in 2D, 2^19 in 3D).
+pub const fn reach_cells(d: usize) -> f64 {
+    (1u64 << (key_bits(d) - 2)) as f64
 }
 
+/// The key of the node at lattice coordinates `c`.
+#[inline]
+pub fn lattice_key<const D: usize>(c: [i64; D]) -> NodeKey {
+    let bits = key_bits(D);
+    let (bias, mask) = (1i64 << (bits - 1), u64::MAX >> (64 - bits));
+    let mut key = 0;
+    for (d, &c) in c.iter().enumerate() {
+        key |= ((c + bias) as u64 & mask) << (bits * (D - 1 - d) as u32);
+    }
+    key
+}
+
+/// The lattice coordinates of a node key: [`lattice_key`]'s inverse.
+#[inline]
+pub fn lattice_coordinates<const D: usize>(key: NodeKey) -> [i64; D] {
+    let bits = key_bits(D);
+    let (bias, mask) = (1i64 << (bits - 1), u64::MAX >> (64 - bits));
+    std::array::from_fn(|d| ((key >> (bits * (D - 1 - d) as u32)) & mask) as i64 - bias)
+}
+
+/// The 2D key of node `(i, j)`.
+#[inline]
+pub fn node_key(i: i64, j: i64) -> NodeKey {
+    lattice_key([i, j])
+}
+
+/// The 2D coordinates `(i, j)` of a node key.
 #[inline]
 pub fn node_indices(key: NodeKey) -> (i64, i64) {
-    ((key >> 32) as i64 - BIAS, (key & 0xffff_ffff) as i64 - BIAS)
+    let [i, j] = lattice_coordinates(key);
+    (i, j)
 }
 
 /// [`node_indices`] as an array.
 pub fn node_coordinates(key: NodeKey) -> [i64; 2] {
-    let (i, j) = node_indices(key);
-    [i, j]
+    lattice_coordinates(key)
 }
 
-/// Cell size and the position of node (0, 0).
+/// Cell size and the position of node (0, 0) (or (0, 0, 0)).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Grid {
+pub struct Grid<const D: usize = 2> {
     pub h: f64,
-    pub origin: [f64; 2],
+    pub origin: [f64; D],
 }
 
-impl Grid {
-    /// Integer coordinates `(i, j)` of the cell holding `x`: the one whose
-    /// lower-left node is `(i, j)`.
+impl<const D: usize> Grid<D> {
+    /// Integer coordinates of the cell holding `x`: the one whose lowest
+    /// node is those coordinates.
     #[inline]
-    pub fn cell_of(&self, x: [f64; 2]) -> [i64; 2] {
-        [0, 1].map(|d| ((x[d] - self.origin[d]) / self.h).floor() as i64)
+    pub fn cell_of(&self, x: [f64; D]) -> [i64; D] {
+        std::array::from_fn(|d| ((x[d] - self.origin[d]) / self.h).floor() as i64)
     }
 
     #[inline]
-    pub fn node_position(&self, key: NodeKey) -> [f64; 2] {
-        let (i, j) = node_indices(key);
-        [
-            self.origin[0] + self.h * i as f64,
-            self.origin[1] + self.h * j as f64,
-        ]
+    pub fn node_position(&self, key: NodeKey) -> [f64; D] {
+        let c = lattice_coordinates::<D>(key);
+        std::array::from_fn(|d| self.origin[d] + self.h * c[d] as f64)
     }
 }
 
@@ -150,6 +180,29 @@ mod tests {
         }
         assert_eq!(sparse.get(1_000_000, 1_000_000), Some(1));
         assert_eq!(sparse.get(5, 5), None);
+    }
+
+    /// Keys in 3D round-trip to the reach, and sort by `i`, then `j`,
+    /// then `k`, as in 2D.
+    #[test]
+    fn keys_in_three_dimensions_round_trip_and_sort_lexicographically() {
+        let reach = reach_cells(3) as i64;
+        for c in [[0, 0, 0], [-3, 7, 2], [reach, -reach, 5], [-1, -1, -1]] {
+            assert_eq!(lattice_coordinates::<3>(lattice_key(c)), c);
+        }
+        let order = [
+            [-1, 5, 5],
+            [0, -5, 9],
+            [0, 4, -9],
+            [0, 4, 2],
+            [3, -reach, -reach],
+        ];
+        assert!(
+            order
+                .windows(2)
+                .all(|w| lattice_key(w[0]) < lattice_key(w[1]))
+        );
+        assert_eq!(reach_cells(2), REACH_CELLS);
     }
 
     #[test]

@@ -6,20 +6,24 @@
 //!   averaged the same way ([`bspline`]).
 //!
 //! A point whose domain is not an axis-aligned rectangle has either family
-//! averaged over its own cell ([`quadrilateral_domain`]).
+//! averaged over its own cell ([`quadrilateral_domain`], in 2D).
+//!
+//! In `D` dimensions a node's function is the product of `D` 1D functions
+//! and each gradient component the product with one of them differentiated,
+//! multiplied in axis order; in 2D that is `sx sy` and `(dsx sy, sx dsy)`.
 
 mod bspline;
 mod hat;
 pub mod quadrilateral_domain;
 
-use super::{Grid, NodeKey, node_key};
+use super::{Grid, NodeKey, lattice_key};
 
 /// One node's contribution at a point: `N` and its gradient.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NodeWeight {
+pub struct NodeWeight<const D: usize = 2> {
     pub node: NodeKey,
     pub n: f64,
-    pub grad: [f64; 2],
+    pub grad: [f64; D],
 }
 
 /// Up to five 1D weights per direction (the averaged cubic B-spline).
@@ -27,12 +31,25 @@ type Weights1d = smallvec1d::Small;
 
 /// A point's domain for GIMP, about the point.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Support {
-    /// An axis-aligned rectangle of these half-widths.
-    Rectangle([f64; 2]),
-    /// A convex quadrilateral: its corners relative to the point, in order
-    /// round it.
+pub enum Support<const D: usize = 2> {
+    /// An axis-aligned rectangle (a box in 3D) of these half-widths.
+    Rectangle([f64; D]),
+    /// In 2D, a convex quadrilateral: its corners relative to the point, in
+    /// order round it.
     Quadrilateral([[f64; 2]; 4]),
+}
+
+/// A 2D quadrilateral domain's coordinates in the grid's `D`: only 2D
+/// points have quadrilateral domains, so `D` is 2 and this is the identity.
+fn in_plane<const D: usize>(x: [f64; D]) -> [f64; 2] {
+    assert_eq!(D, 2, "quadrilateral domains are 2D");
+    [x[0], x[1]]
+}
+
+/// [`in_plane`]'s inverse.
+fn from_plane<T: Copy, const D: usize>(x: [T; 2]) -> [T; D] {
+    assert_eq!(D, 2, "quadrilateral domains are 2D");
+    std::array::from_fn(|d| x[d])
 }
 
 /// A quadrilateral domain's corners about `x`, shrunk about it to reach at
@@ -60,16 +77,22 @@ pub enum Basis {
 impl Basis {
     /// Appends to `out` every node whose shape function or gradient is
     /// non-zero at `x`, for a point of domain `support` (ignored by the
-    /// linear basis).
-    pub fn eval(&self, grid: &Grid, x: [f64; 2], support: Support, out: &mut Vec<NodeWeight>) {
+    /// linear basis), the first axis's nodes fastest.
+    pub fn eval<const D: usize>(
+        &self,
+        grid: &Grid<D>,
+        x: [f64; D],
+        support: Support<D>,
+        out: &mut Vec<NodeWeight<D>>,
+    ) {
         let half_width = match (self, support) {
-            (Basis::Linear, _) => [0.0, 0.0],
-            (_, Support::Rectangle(half_width)) => half_width.map(|l| l.min(self.widest(grid))),
+            (Basis::Linear, _) => [0.0; D],
+            (_, Support::Rectangle(half_width)) => half_width.map(|l| l.min(self.widest(grid.h))),
             (_, Support::Quadrilateral(corners)) => {
-                let corners = placed(x, corners, self.widest(grid));
+                let corners = placed(in_plane(x), corners, self.widest(grid.h));
                 if quadrilateral_domain::area(&corners).abs() <= 1e-12 * grid.h * grid.h {
                     // A cell crushed flat has no average: the functions at x.
-                    return self.eval(grid, x, Support::Rectangle([0.0, 0.0]), out);
+                    return self.eval(grid, x, Support::Rectangle([0.0; D]), out);
                 }
                 return match self.degree() {
                     1 => quadrilateral_domain::eval(grid, &corners, out),
@@ -77,17 +100,48 @@ impl Basis {
                 };
             }
         };
-        let wx = self.eval_1d(grid.h, x[0] - grid.origin[0], half_width[0]);
-        let wy = self.eval_1d(grid.h, x[1] - grid.origin[1], half_width[1]);
-        for &(j, sy, dsy) in wy.as_slice() {
-            for &(i, sx, dsx) in wx.as_slice() {
-                let w = NodeWeight {
-                    node: node_key(i, j),
-                    n: sx * sy,
-                    grad: [dsx * sy, sx * dsy],
-                };
-                if w.n != 0.0 || w.grad != [0.0, 0.0] {
-                    out.push(w);
+        let weights: [Weights1d; D] =
+            std::array::from_fn(|d| self.eval_1d(grid.h, x[d] - grid.origin[d], half_width[d]));
+        let weights = weights.each_ref().map(Weights1d::as_slice);
+        if weights.iter().any(|w| w.is_empty()) {
+            return;
+        }
+        // An odometer over the nodes of every axis, the first fastest.
+        let mut at = [0usize; D];
+        loop {
+            let (node, s, ds) = (
+                at_each(&weights, &at, |w| w.0),
+                at_each(&weights, &at, |w| w.1),
+                at_each(&weights, &at, |w| w.2),
+            );
+            let mut n = s[0];
+            for &s in &s[1..] {
+                n *= s;
+            }
+            let grad: [f64; D] = std::array::from_fn(|d| {
+                let mut g = if d == 0 { ds[0] } else { s[0] };
+                for e in 1..D {
+                    g *= if e == d { ds[e] } else { s[e] };
+                }
+                g
+            });
+            if n != 0.0 || grad != [0.0; D] {
+                out.push(NodeWeight {
+                    node: lattice_key(node),
+                    n,
+                    grad,
+                });
+            }
+            let mut d = 0;
+            loop {
+                at[d] += 1;
+                if at[d] < weights[d].len() {
+                    break;
+                }
+                at[d] = 0;
+                d += 1;
+                if d == D {
+                    return;
                 }
             }
         }
@@ -113,8 +167,8 @@ impl Basis {
     /// direction), half a cell for the wider B-splines (a domain of one
     /// point per cell, the coarsest a case is seeded with, and one node
     /// more per direction than at a point).
-    fn widest(&self, grid: &Grid) -> f64 {
-        self.widest_domain(grid.h)
+    fn widest(&self, h: f64) -> f64 {
+        self.widest_domain(h)
     }
 
     /// [`Basis::widest`] on a grid of cell size `h`.
@@ -138,7 +192,12 @@ impl Basis {
 
     /// The lowest and highest cell `(i, j)` that a point at `x` with domain
     /// `support` reaches (its own cell for the linear basis).
-    pub fn cell_range(&self, grid: &Grid, x: [f64; 2], support: Support) -> ([i64; 2], [i64; 2]) {
+    pub fn cell_range<const D: usize>(
+        &self,
+        grid: &Grid<D>,
+        x: [f64; D],
+        support: Support<D>,
+    ) -> ([i64; D], [i64; D]) {
         // The functions' reach past the domain: none for the hat and GIMP,
         // whose functions are cell-wise; the B-splines' half-support.
         let beyond = if self.degree() == 1 {
@@ -149,16 +208,24 @@ impl Basis {
         let (lo, hi) = match (self, support) {
             (Basis::Linear, _) => (x, x),
             (_, Support::Rectangle(half_width)) => {
-                let l = half_width.map(|l| l.min(self.widest(grid)));
-                ([x[0] - l[0], x[1] - l[1]], [x[0] + l[0], x[1] + l[1]])
+                let l = half_width.map(|l| l.min(self.widest(grid.h)));
+                (
+                    std::array::from_fn(|d| x[d] - l[d]),
+                    std::array::from_fn(|d| x[d] + l[d]),
+                )
             }
             (_, Support::Quadrilateral(corners)) => {
-                quadrilateral_domain::bounds(&placed(x, corners, self.widest(grid)))
+                let (lo, hi) = quadrilateral_domain::bounds(&placed(
+                    in_plane(x),
+                    corners,
+                    self.widest(grid.h),
+                ));
+                (from_plane(lo), from_plane(hi))
             }
         };
         (
-            grid.cell_of([lo[0] - beyond, lo[1] - beyond]),
-            grid.cell_of([hi[0] + beyond, hi[1] + beyond]),
+            grid.cell_of(lo.map(|v| v - beyond)),
+            grid.cell_of(hi.map(|v| v + beyond)),
         )
     }
 
@@ -258,6 +325,15 @@ impl Basis {
 fn reaches(n: f64, dn_h: f64, x_h: f64, width_h: f64) -> bool {
     let floor = ROUND_OFF.max(64.0 * f64::EPSILON * (x_h.abs() + 1.0) / width_h);
     n > floor || dn_h.abs() > floor
+}
+
+/// One field of the 1D weights at the odometer's place on every axis.
+fn at_each<T, const D: usize>(
+    weights: &[&[(i64, f64, f64)]; D],
+    at: &[usize; D],
+    field: impl Fn(&(i64, f64, f64)) -> T,
+) -> [T; D] {
+    std::array::from_fn(|d| field(&weights[d][at[d]]))
 }
 
 /// What [`reaches`] takes for round-off in a value of order one.
@@ -491,6 +567,85 @@ mod tests {
                     prop_assert!((sum(&q, 3) - 2.0).abs() < 100.0 * tol_d, "{}", sum(&q, 3));
                 }
             }
+        }
+    }
+
+    proptest! {
+        // In 3D every basis, at a point or averaged over a box, is a
+        // partition of unity and reproduces linear fields, value and
+        // gradient (`sum N x_i = x`, `sum x_i (x) grad N = I`): the patch
+        // test's homogeneous deformation, to round-off, on a grid through
+        // the origin and on one offset in every axis.
+        #[test]
+        fn every_basis_in_three_dimensions_reproduces_linear_fields(
+            x in proptest::array::uniform3(-5.0..5.0f64),
+            l in proptest::array::uniform3(0.0..0.7f64),
+            which in 0usize..4, offset in proptest::bool::ANY,
+        ) {
+            let basis = [Basis::Linear, Basis::Gimp, Basis::BSpline2, Basis::BSpline3][which];
+            let grid = Grid { h: 0.7, origin: if offset { [-0.3, 1.1, 0.45] } else { [0.0; 3] } };
+            let mut w = Vec::new();
+            basis.eval(&grid, x, Support::Rectangle(l), &mut w);
+            let per_axis = basis.degree() + 3;
+            prop_assert!(!w.is_empty() && w.len() <= per_axis.pow(3));
+            let (mut n, mut g, mut lin, mut dlin) = (0.0, [0.0; 3], [0.0; 3], [[0.0; 3]; 3]);
+            for nw in &w {
+                let p = grid.node_position(nw.node);
+                n += nw.n;
+                for d in 0..3 {
+                    g[d] += nw.grad[d];
+                    lin[d] += nw.n * p[d];
+                    for e in 0..3 {
+                        dlin[d][e] += p[d] * nw.grad[e];
+                    }
+                }
+            }
+            // As in 2D: an averaged gradient rounds to about eps / l a node.
+            let narrowest = l.iter().map(|&l| l.min(basis.widest_domain(grid.h)))
+                .filter(|&l| l > 0.0).fold(f64::INFINITY, f64::min);
+            let round_off = if narrowest.is_finite() { f64::EPSILON / narrowest } else { 0.0 };
+            let tol = 1e-11 + 500.0 * round_off;
+            prop_assert!((n - 1.0).abs() < 1e-12, "{}", n);
+            for d in 0..3 {
+                prop_assert!(g[d].abs() < tol, "{:?}", g);
+                prop_assert!((lin[d] - x[d]).abs() < 1e-11, "{:?} {:?}", lin, x);
+                for e in 0..3 {
+                    let identity = if d == e { 1.0 } else { 0.0 };
+                    prop_assert!((dlin[d][e] - identity).abs() < tol, "{:?}", dlin);
+                }
+            }
+        }
+
+        // A 3D function is the 2D one times the third axis's 1D function:
+        // what makes a one-cell slab a plane-strain body. Exactly, for the
+        // product is taken in the same order.
+        #[test]
+        fn a_three_dimensional_function_is_the_planar_one_times_the_third_axis(
+            x in proptest::array::uniform3(-5.0..5.0f64),
+            l in proptest::array::uniform3(0.0..0.7f64),
+            which in 0usize..4,
+        ) {
+            let basis = [Basis::Linear, Basis::Gimp, Basis::BSpline2, Basis::BSpline3][which];
+            let grid = Grid { h: 0.7, origin: [-0.3, 1.1, 0.45] };
+            let (mut planar, mut solid) = (Vec::new(), Vec::new());
+            basis.eval(&GRID, [x[0], x[1]], Support::Rectangle([l[0], l[1]]), &mut planar);
+            basis.eval(&grid, x, Support::Rectangle(l), &mut solid);
+            let lz = if basis == Basis::Linear { 0.0 } else { l[2].min(basis.widest_domain(grid.h)) };
+            let along_z = basis.eval_1d(grid.h, x[2] - grid.origin[2], lz);
+            let expected: Vec<NodeWeight<3>> = along_z
+                .as_slice()
+                .iter()
+                .flat_map(|&(k, sz, dsz)| planar.iter().map(move |p| {
+                    let [i, j] = crate::grid::lattice_coordinates::<2>(p.node);
+                    NodeWeight {
+                        node: crate::grid::lattice_key([i, j, k]),
+                        n: p.n * sz,
+                        grad: [p.grad[0] * sz, p.grad[1] * sz, p.n * dsz],
+                    }
+                }))
+                .filter(|w| w.n != 0.0 || w.grad != [0.0; 3])
+                .collect();
+            prop_assert_eq!(solid, expected);
         }
     }
 

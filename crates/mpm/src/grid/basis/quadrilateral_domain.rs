@@ -21,7 +21,7 @@
 //! rectangle this is the tensor product of [`super`] (tested).
 
 use super::{Basis, NodeWeight};
-use crate::grid::{Grid, node_key};
+use crate::grid::{Grid, lattice_key};
 
 /// The most vertices a convex quadrilateral clipped to a rectangle has.
 const MAX_VERTICES: usize = 8;
@@ -108,14 +108,14 @@ fn cell_range(grid: &Grid, corners: &[[f64; 2]; 4]) -> ([i64; 2], [i64; 2]) {
 
 /// Pushes a zero weight for every node `(i, j)` with `lo <= (i, j) <= hi`,
 /// in `(i, j)` order, and returns the first one's index in `out`.
-fn push_slots(lo: [i64; 2], hi: [i64; 2], out: &mut Vec<NodeWeight>) -> usize {
+fn push_slots<const D: usize>(lo: [i64; 2], hi: [i64; 2], out: &mut Vec<NodeWeight<D>>) -> usize {
     let first = out.len();
     for j in lo[1]..=hi[1] {
         for i in lo[0]..=hi[0] {
             out.push(NodeWeight {
-                node: node_key(i, j),
+                node: lattice_key::<D>(super::from_plane([i, j])),
                 n: 0.0,
-                grad: [0.0, 0.0],
+                grad: [0.0; D],
             });
         }
     }
@@ -123,10 +123,10 @@ fn push_slots(lo: [i64; 2], hi: [i64; 2], out: &mut Vec<NodeWeight>) -> usize {
 }
 
 /// Drops the weights from `first` on that are zero with their gradient.
-fn drop_zeros(first: usize, out: &mut Vec<NodeWeight>) {
+fn drop_zeros<const D: usize>(first: usize, out: &mut Vec<NodeWeight<D>>) {
     let mut k = first;
     for i in first..out.len() {
-        if out[i].n != 0.0 || out[i].grad != [0.0, 0.0] {
+        if out[i].n != 0.0 || out[i].grad != [0.0; D] {
             out[k] = out[i];
             k += 1;
         }
@@ -145,8 +145,9 @@ fn clip_to_box(domain: &Polygon, x0: [f64; 2], h: f64) -> Polygon {
 
 /// Appends to `out` the averaged hats of every node the convex
 /// quadrilateral `corners` (absolute positions, either orientation)
-/// reaches.
-pub fn eval(grid: &Grid, corners: &[[f64; 2]; 4], out: &mut Vec<NodeWeight>) {
+/// reaches. The grid is 2D; `D` is the weights' (2).
+pub fn eval<const D: usize>(grid: &Grid<D>, corners: &[[f64; 2]; 4], out: &mut Vec<NodeWeight<D>>) {
+    let grid = &planar(grid);
     let whole = area(corners);
     let (lo, hi) = cell_range(grid, corners);
     // One slot per node of the overlapped cells, in (i, j) order.
@@ -200,13 +201,15 @@ pub fn eval(grid: &Grid, corners: &[[f64; 2]; 4], out: &mut Vec<NodeWeight>) {
 
 /// Appends to `out` the uniform B-splines of `degree` (2 or 3) averaged
 /// over the convex quadrilateral `corners` (absolute positions, either
-/// orientation), for every node it reaches.
-pub fn eval_bsplines(
-    grid: &Grid,
+/// orientation), for every node it reaches. The grid is 2D; `D` is the
+/// weights' (2).
+pub fn eval_bsplines<const D: usize>(
+    grid: &Grid<D>,
     corners: &[[f64; 2]; 4],
     degree: usize,
-    out: &mut Vec<NodeWeight>,
+    out: &mut Vec<NodeWeight<D>>,
 ) {
+    let grid = &planar(grid);
     let basis = if degree == 2 {
         Basis::BSpline2
     } else {
@@ -261,6 +264,14 @@ pub fn eval_bsplines(
         }
     }
     drop_zeros(first, out);
+}
+
+/// A 2D grid as itself: quadrilateral domains are 2D.
+fn planar<const D: usize>(grid: &Grid<D>) -> Grid {
+    Grid {
+        h: grid.h,
+        origin: super::in_plane(grid.origin),
+    }
 }
 
 /// Gauss-Legendre points and weights on `[0, 1]`, 3 and 4 points.
