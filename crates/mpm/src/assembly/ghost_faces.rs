@@ -36,7 +36,7 @@ use super::{Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
 use rayon::prelude::*;
 
-use crate::grid::{Basis, LatticeIndex, node_indices};
+use crate::grid::{Basis, LatticeIndex, node_coordinates};
 use crate::parallel;
 use crate::particles::MaterialPoints;
 
@@ -77,18 +77,17 @@ impl GhostFaces {
         let Configuration {
             grid, conn, points, ..
         } = *start;
-        let node_coordinates: Vec<(i64, i64)> =
-            conn.nodes.iter().map(|&k| node_indices(k)).collect();
-        let nodes = LatticeIndex::new(&node_coordinates);
-        let node = |i: i64, j: i64| nodes.get(i, j).map(|a| a as u32);
+        let lattice: Vec<[i64; 2]> = conn.nodes.iter().map(|&k| node_coordinates(k)).collect();
+        let nodes = LatticeIndex::new(&lattice);
+        let node = |i: i64, j: i64| nodes.get([i, j]).map(|a| a as u32);
         let mut cells = super::soft_cells::overlapped_cells(start, basis);
-        cells.retain(|&(i, j)| {
+        cells.retain(|&[i, j]| {
             [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
                 .iter()
                 .all(|&(a, b)| node(a, b).is_some())
         });
         let reached = LatticeIndex::new(&cells);
-        let active = |(i, j): (i64, i64)| reached.get(i, j).is_some();
+        let active = |(i, j): (i64, i64)| reached.get([i, j]).is_some();
         let at_edge =
             |(i, j): (i64, i64)| (-1..=1).any(|di| (-1..=1).any(|dj| !active((i + di, j + dj))));
         let stiffest = points
@@ -102,7 +101,7 @@ impl GhostFaces {
         let mut census = vec![(0.0, 0u32); cells.len()];
         for p in 0..points.len() {
             let [i, j] = grid.cell_of(points.position[p]);
-            if let Some(c) = reached.get(i, j) {
+            if let Some(c) = reached.get([i, j]) {
                 census[c].0 += point_modulus(points, p) / stiffest;
                 census[c].1 += 1;
             }
@@ -110,8 +109,8 @@ impl GhostFaces {
         // A face's weight from its two cells' points (the stiffest
         // material's when neither holds a point's centre).
         let weight = |a: (i64, i64), b: (i64, i64)| {
-            let (sa, na) = reached.get(a.0, a.1).map_or((0.0, 0), |c| census[c]);
-            let (sb, nb) = reached.get(b.0, b.1).map_or((0.0, 0), |c| census[c]);
+            let (sa, na) = reached.get([a.0, a.1]).map_or((0.0, 0), |c| census[c]);
+            let (sb, nb) = reached.get([b.0, b.1]).map_or((0.0, 0), |c| census[c]);
             let share = if na + nb == 0 {
                 1.0
             } else {
@@ -122,7 +121,7 @@ impl GhostFaces {
         let (faces, weights) = cells
             .par_iter()
             .with_min_len(parallel::BOOKKEEPING)
-            .flat_map_iter(|&(i, j)| {
+            .flat_map_iter(|&[i, j]| {
                 let edge = at_edge((i, j));
                 // The face to the right: node rows j and j + 1, columns i..=i+2.
                 let right = (active((i + 1, j)) && (edge || at_edge((i + 1, j))))

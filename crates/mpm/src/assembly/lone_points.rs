@@ -85,7 +85,7 @@ use rayon::prelude::*;
 use super::{Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
 use crate::grid::basis::quadrilateral_domain;
-use crate::grid::{Basis, LatticeIndex, Support, node_indices};
+use crate::grid::{Basis, LatticeIndex, Support, node_coordinates};
 use crate::parallel;
 
 /// A point is stabilised when its reference volume is at least this
@@ -139,9 +139,8 @@ impl LonePoints {
             .filter(|&p| points.volume0[p as usize] >= LONE_VOLUME * grid.h * grid.h)
             .filter(|&p| points.materials[points.material[p as usize] as usize].is_elastic())
             .collect();
-        let node_coordinates: Vec<(i64, i64)> =
-            conn.nodes.iter().map(|&k| node_indices(k)).collect();
-        let index = LatticeIndex::new(&node_coordinates);
+        let lattice: Vec<[i64; 2]> = conn.nodes.iter().map(|&k| node_coordinates(k)).collect();
+        let index = LatticeIndex::new(&lattice);
         let built: Vec<(LonePoint, Vec<u32>, Vec<Slopes>)> = alone
             .par_iter()
             .with_min_len(parallel::BOOKKEEPING)
@@ -156,7 +155,7 @@ impl LonePoints {
                 let mut dropped = false;
                 for &(j, my) in &m[1] {
                     for &(i, mx) in &m[0] {
-                        let a = index.get(i, j).map(|a| a as u32);
+                        let a = index.get([i, j]).map(|a| a as u32);
                         let Some(a) = a.filter(|a| linked.contains(a)) else {
                             dropped = true;
                             continue;

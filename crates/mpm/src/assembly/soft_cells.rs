@@ -48,7 +48,7 @@ impl SoftCells {
         };
         let cells = keys
             .into_iter()
-            .filter_map(|(i, j)| {
+            .filter_map(|[i, j]| {
                 Some([
                     node(i, j)?,
                     node(i + 1, j)?,
@@ -105,23 +105,23 @@ impl StepTerm for SoftCells {
     }
 }
 
-/// The cells (`(i, j)`, sorted) that any point's domain overlaps (its
+/// The cells (`[i, j]`, sorted) that any point's domain overlaps (its
 /// containing cell for the linear basis).
-pub(crate) fn overlapped_cells(start: &Configuration, basis: Basis) -> Vec<(i64, i64)> {
+pub(crate) fn overlapped_cells(start: &Configuration, basis: Basis) -> Vec<[i64; 2]> {
     let Configuration { grid, points, .. } = *start;
     // Each run of points' cells sorted and deduplicated first: neighbours
     // reach most of the same cells (16 a point for quadratic B-splines).
-    let mut keys: Vec<(i64, i64)> = (0..points.len().div_ceil(parallel::BOOKKEEPING))
+    let mut keys: Vec<[i64; 2]> = (0..points.len().div_ceil(parallel::BOOKKEEPING))
         .into_par_iter()
         .flat_map_iter(|run| {
             let first = run * parallel::BOOKKEEPING;
-            let mut keys: Vec<(i64, i64)> = (first
+            let mut keys: Vec<[i64; 2]> = (first
                 ..(first + parallel::BOOKKEEPING).min(points.len()))
                 .flat_map(|p| {
                     let (lo, hi) = basis.cell_range(grid, points.position[p], points.support(p));
                     let range = |d: usize| lo[d]..=hi[d];
                     let ys = range(1);
-                    range(0).flat_map(move |i| ys.clone().map(move |j| (i, j)))
+                    range(0).flat_map(move |i| ys.clone().map(move |j| [i, j]))
                 })
                 .collect();
             keys.sort_unstable();

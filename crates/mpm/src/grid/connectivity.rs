@@ -3,47 +3,58 @@
 //! (numbered `0..n` in key order). Every Newton iteration of the step reuses
 //! it.
 
-use nalgebra::Matrix2;
+use nalgebra::SMatrix;
 use rayon::prelude::*;
 
-use super::{Basis, Grid, LatticeIndex, NodeKey, NodeWeight, Support, node_indices};
+use super::{Basis, Grid, LatticeIndex, NodeKey, NodeWeight, Support, lattice_coordinates};
 
 /// A point's view of one active node.
 #[derive(Debug, Clone, Copy)]
-pub struct Link {
+pub struct Link<const D: usize = 2> {
     /// Active node index.
     pub node: u32,
     /// Shape function value.
     pub n: f64,
     /// Shape function gradient in the step's start configuration.
-    pub grad: [f64; 2],
+    pub grad: [f64; D],
 }
 
-/// Shape functions of every point on the active nodes of one load step.
-#[derive(Debug, Clone, Default)]
-pub struct Connectivity {
+/// Shape functions of every point on the active nodes of one load step;
+/// node `a`'s degrees of freedom are `D a .. D a + D`.
+#[derive(Debug, Clone)]
+pub struct Connectivity<const D: usize = 2> {
     /// Active node keys, sorted.
     pub nodes: Vec<NodeKey>,
     /// `links[offsets[p]..offsets[p + 1]]` are point `p`'s nodes.
     pub offsets: Vec<usize>,
-    pub links: Vec<Link>,
+    pub links: Vec<Link<D>>,
+}
+
+impl<const D: usize> Default for Connectivity<D> {
+    fn default() -> Self {
+        Self {
+            nodes: Vec::new(),
+            offsets: Vec::new(),
+            links: Vec::new(),
+        }
+    }
 }
 
 const CHUNK: usize = 4096;
 
-impl Connectivity {
+impl<const D: usize> Connectivity<D> {
     /// Evaluates the shape functions of every point, at `positions` with
     /// the domains `support` gives, keeping the nodes for which `in_grid`
     /// holds: the grid ends there, as a finite mesh would.
     pub fn build(
-        grid: &Grid,
+        grid: &Grid<D>,
         basis: Basis,
-        positions: &[[f64; 2]],
-        support: impl Fn(usize) -> Support + Sync,
+        positions: &[[f64; D]],
+        support: impl Fn(usize) -> Support<D> + Sync,
         in_grid: impl Fn(NodeKey) -> bool + Sync,
     ) -> Self {
         let n = positions.len();
-        let chunks: Vec<(Vec<usize>, Vec<NodeWeight>)> = (0..n)
+        let chunks: Vec<(Vec<usize>, Vec<NodeWeight<D>>)> = (0..n)
             .into_par_iter()
             .chunks(CHUNK)
             .map(|idx| {
@@ -85,17 +96,16 @@ impl Connectivity {
             .collect();
         nodes.par_sort_unstable();
         nodes.dedup();
-        let coordinates: Vec<(i64, i64)> = nodes.iter().map(|&k| node_indices(k)).collect();
+        let coordinates: Vec<[i64; D]> = nodes.iter().map(|&k| lattice_coordinates(k)).collect();
         let place = LatticeIndex::new(&coordinates);
         let mut links = Vec::with_capacity(offsets[n]);
         links.par_extend(chunks.par_iter().flat_map_iter(|(_, weights)| {
-            weights.iter().map(|w| {
-                let (i, j) = node_indices(w.node);
-                Link {
-                    node: place.get(i, j).expect("every linked node is active") as u32,
-                    n: w.n,
-                    grad: w.grad,
-                }
+            weights.iter().map(|w| Link {
+                node: place
+                    .get(lattice_coordinates(w.node))
+                    .expect("every linked node is active") as u32,
+                n: w.n,
+                grad: w.grad,
             })
         }));
         Self {
@@ -118,11 +128,11 @@ impl Connectivity {
     }
 
     pub fn n_dofs(&self) -> usize {
-        2 * self.nodes.len()
+        D * self.nodes.len()
     }
 
     #[inline]
-    pub fn point_links(&self, p: usize) -> &[Link] {
+    pub fn point_links(&self, p: usize) -> &[Link<D>] {
         &self.links[self.offsets[p]..self.offsets[p + 1]]
     }
 
@@ -133,14 +143,14 @@ impl Connectivity {
 /// Displacement `sum_a N_a u_a` and displacement gradient
 /// `grad_u = sum_a u_a (x) g_a` of a point (`dF = I + grad_u`).
 #[inline]
-pub fn increment(links: &[Link], u: &[f64]) -> ([f64; 2], Matrix2<f64>) {
-    let mut dx = [0.0; 2];
-    let mut df = Matrix2::zeros();
+pub fn increment<const D: usize>(links: &[Link<D>], u: &[f64]) -> ([f64; D], SMatrix<f64, D, D>) {
+    let mut dx = [0.0; D];
+    let mut df = SMatrix::zeros();
     for l in links {
-        let ua = [u[2 * l.node as usize], u[2 * l.node as usize + 1]];
-        for i in 0..2 {
+        let ua: [f64; D] = std::array::from_fn(|i| u[D * l.node as usize + i]);
+        for i in 0..D {
             dx[i] += l.n * ua[i];
-            for j in 0..2 {
+            for j in 0..D {
                 df[(i, j)] += ua[i] * l.grad[j];
             }
         }

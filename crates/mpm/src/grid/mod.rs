@@ -90,68 +90,83 @@ impl<const D: usize> Grid<D> {
     }
 }
 
-/// The places of a sorted list of lattice coordinates `(i, j)` (nodes or
-/// cells), looked up in a dense table over their bounding box when it is
-/// at most 8 times the list's length plus 1024, else by binary search.
-pub struct LatticeIndex<'k> {
-    keys: &'k [(i64, i64)],
-    dense: Option<DenseTable>,
+/// The places of a sorted list of lattice coordinates (nodes or cells),
+/// looked up in a dense table over their bounding box when it is at most 8
+/// times the list's length plus 1024, else by binary search.
+pub struct LatticeIndex<'k, const D: usize = 2> {
+    keys: &'k [[i64; D]],
+    dense: Option<DenseTable<D>>,
 }
 
-struct DenseTable {
-    lo: (i64, i64),
-    rows: i64,
-    columns: i64,
-    /// Place + 1 of `(lo.0 + c, lo.1 + r)` at `c * rows + r`; 0 for none.
+struct DenseTable<const D: usize> {
+    lo: [i64; D],
+    extent: [i64; D],
+    /// Place + 1 of `lo + c` at `((c_0 extent_1) + c_1) extent_2 + ...`;
+    /// 0 for none.
     place: Vec<u32>,
 }
 
 /// How much larger than the list a dense table may be.
 const DENSE_SLACK: usize = 8;
 
-impl<'k> LatticeIndex<'k> {
-    /// `keys` sorted by `i`, then `j`, without repeats.
-    pub fn new(keys: &'k [(i64, i64)]) -> Self {
+impl<'k, const D: usize> LatticeIndex<'k, D> {
+    /// `keys` sorted (by the first coordinate, then the next), without
+    /// repeats.
+    pub fn new(keys: &'k [[i64; D]]) -> Self {
         debug_assert!(keys.windows(2).all(|w| w[0] < w[1]), "sorted, no repeats");
         let dense = (|| {
             let (first, last) = (keys.first()?, keys.last()?);
-            let (lo_j, hi_j) = keys.iter().fold((i64::MAX, i64::MIN), |(lo, hi), k| {
-                (lo.min(k.1), hi.max(k.1))
-            });
-            let (columns, rows) = (last.0 - first.0 + 1, hi_j - lo_j + 1);
-            let area = usize::try_from(columns.checked_mul(rows)?).ok()?;
-            if area > DENSE_SLACK * keys.len() + 1024 || keys.len() >= u32::MAX as usize {
+            let mut lo = *first;
+            let mut hi = *last;
+            for k in keys {
+                for d in 1..D {
+                    lo[d] = lo[d].min(k[d]);
+                    hi[d] = hi[d].max(k[d]);
+                }
+            }
+            let extent: [i64; D] = std::array::from_fn(|d| hi[d] - lo[d] + 1);
+            let volume = extent.iter().try_fold(1i64, |v, &e| v.checked_mul(e))?;
+            let volume = usize::try_from(volume).ok()?;
+            if volume > DENSE_SLACK * keys.len() + 1024 || keys.len() >= u32::MAX as usize {
                 return None;
             }
-            let mut place = vec![0u32; area];
-            for (k, &(i, j)) in keys.iter().enumerate() {
-                place[((i - first.0) * rows + j - lo_j) as usize] = k as u32 + 1;
+            let mut table = DenseTable {
+                lo,
+                extent,
+                place: vec![0u32; volume],
+            };
+            for (k, key) in keys.iter().enumerate() {
+                let at = table.offset(key).expect("a key is inside its bounding box");
+                table.place[at] = k as u32 + 1;
             }
-            Some(DenseTable {
-                lo: (first.0, lo_j),
-                rows,
-                columns,
-                place,
-            })
+            Some(table)
         })();
         Self { keys, dense }
     }
 
-    /// The place of `(i, j)` in the list.
+    /// The place of `c` in the list.
     #[inline]
-    pub fn get(&self, i: i64, j: i64) -> Option<usize> {
+    pub fn get(&self, c: [i64; D]) -> Option<usize> {
         match &self.dense {
-            Some(t) => {
-                let (c, r) = (i - t.lo.0, j - t.lo.1);
-                if c < 0 || r < 0 || c >= t.columns || r >= t.rows {
-                    return None;
-                }
-                t.place[(c * t.rows + r) as usize]
-                    .checked_sub(1)
-                    .map(|k| k as usize)
-            }
-            None => self.keys.binary_search(&(i, j)).ok(),
+            Some(t) => t.place[t.offset(&c)?].checked_sub(1).map(|k| k as usize),
+            None => self.keys.binary_search(&c).ok(),
         }
+    }
+}
+
+impl<const D: usize> DenseTable<D> {
+    /// Where `c` sits in the table, if inside its box.
+    #[inline]
+    fn offset(&self, c: &[i64; D]) -> Option<usize> {
+        let mut at = 0i64;
+        for d in 0..D {
+            let r = c[d] - self.lo[d];
+            if r < 0 || r >= self.extent[d] {
+                return None;
+            }
+            at = at * self.extent[d] + r;
+        }
+        Some(at as usize)
     }
 }
 
@@ -163,23 +178,46 @@ mod tests {
     /// and outside the bounding box.
     #[test]
     fn a_lattice_index_finds_what_a_search_finds() {
-        let keys: Vec<(i64, i64)> = (-3..7_i64)
-            .flat_map(|i| (-5..4).map(move |j| (i, j)))
-            .filter(|&(i, j)| (i * 7 + j * 3).rem_euclid(5) != 0)
+        let keys: Vec<[i64; 2]> = (-3..7_i64)
+            .flat_map(|i| (-5..4).map(move |j| [i, j]))
+            .filter(|&[i, j]| (i * 7 + j * 3).rem_euclid(5) != 0)
             .collect();
         let dense = LatticeIndex::new(&keys);
         assert!(dense.dense.is_some());
         // Two far-apart keys: a table would be 1e12 entries.
-        let sparse_keys = [(0, 0), (1_000_000, 1_000_000)];
+        let sparse_keys = [[0, 0], [1_000_000, 1_000_000]];
         let sparse = LatticeIndex::new(&sparse_keys);
         assert!(sparse.dense.is_none());
         for i in -6..10 {
             for j in -8..7 {
-                assert_eq!(dense.get(i, j), keys.binary_search(&(i, j)).ok(), "{i} {j}");
+                assert_eq!(
+                    dense.get([i, j]),
+                    keys.binary_search(&[i, j]).ok(),
+                    "{i} {j}"
+                );
             }
         }
-        assert_eq!(sparse.get(1_000_000, 1_000_000), Some(1));
-        assert_eq!(sparse.get(5, 5), None);
+        assert_eq!(sparse.get([1_000_000, 1_000_000]), Some(1));
+        assert_eq!(sparse.get([5, 5]), None);
+    }
+
+    /// In 3D too the dense table finds what a binary search finds.
+    #[test]
+    fn a_lattice_index_in_three_dimensions_finds_what_a_search_finds() {
+        let keys: Vec<[i64; 3]> = (-3..4_i64)
+            .flat_map(|i| (-2..3).flat_map(move |j| (-4..2).map(move |k| [i, j, k])))
+            .filter(|&[i, j, k]| (i * 7 + j * 3 + k * 5).rem_euclid(4) != 0)
+            .collect();
+        let index = LatticeIndex::new(&keys);
+        assert!(index.dense.is_some());
+        for i in -5..6 {
+            for j in -4..5 {
+                for k in -6..4 {
+                    let c = [i, j, k];
+                    assert_eq!(index.get(c), keys.binary_search(&c).ok(), "{c:?}");
+                }
+            }
+        }
     }
 
     /// Keys in 3D round-trip to the reach, and sort by `i`, then `j`,
