@@ -29,7 +29,7 @@
 use nalgebra::Matrix2;
 
 use super::return_map::{
-    InvariantModuli, Moduli, Predictor, Returned, off_apex_flow_rule, respond,
+    InvariantModuli, Moduli, Predictor, Returned, Trial, off_apex_flow_rule, respond,
 };
 use super::{Elastic, History, Response};
 
@@ -97,15 +97,23 @@ pub(super) fn drucker_prager(
     want_tangent: bool,
 ) -> Response {
     let df = &(Matrix2::identity() + grad_u);
+    let trial = Trial::new(state, grad_u);
+    let returned = drucker_prager_return(m, trial.strains);
+    respond(state, df, j_start, &trial, &returned, want_tangent)
+}
+
+/// The return of the trial's principal logarithmic `strains`, in any
+/// dimension (perfectly plastic: the accumulated plastic strain is only
+/// reported).
+pub(super) fn drucker_prager_return(m: &DruckerPrager, strains: [f64; 3]) -> Returned {
     let Elastic { mu, .. } = m.elastic;
     let bulk = m.elastic.bulk();
     let Predictor {
-        trial,
         volumetric,
         deviator,
         unit,
         norm,
-    } = Predictor::new(state, grad_u, mu);
+    } = Predictor::new(strains, mu);
     let j_trial = norm / 2f64.sqrt();
     let p_trial = bulk * volumetric;
     let strength = m.xi * m.cohesion;
@@ -113,13 +121,13 @@ pub(super) fn drucker_prager(
     let scale = strength + m.eta * p_trial.abs() + j_trial;
     let elastic = Returned {
         tau: deviator.map(|e| p_trial + 2.0 * mu * e),
-        elastic_strains: trial.strains,
+        elastic_strains: strains,
         plastic_increment: 0.0,
         unit,
         moduli: Moduli::Invariant(InvariantModuli::elastic(bulk, mu)),
         off_flow_rule: false,
     };
-    let returned = if phi_trial <= 1e-12 * scale {
+    if phi_trial <= 1e-12 * scale {
         elastic
     } else {
         let a = mu + bulk * m.eta * m.eta_flow;
@@ -129,8 +137,7 @@ pub(super) fn drucker_prager(
         } else {
             to_apex(m, &elastic, volumetric, norm)
         }
-    };
-    respond(state, df, j_start, &trial, &returned, want_tangent)
+    }
 }
 
 /// The return to the cone's smooth part by `dgamma`.

@@ -18,6 +18,7 @@ mod hencky;
 mod mohr_coulomb;
 mod return_map;
 mod small_strain;
+mod three_dimensional;
 mod von_mises;
 
 use nalgebra::{Matrix2, Matrix4};
@@ -29,6 +30,7 @@ pub use mohr_coulomb::MohrCoulomb;
 use mohr_coulomb::mohr_coulomb;
 pub use return_map::APEX_SEPARATION;
 use small_strain::small_strain;
+pub use three_dimensional::{History3, Response3, Tangent3};
 pub use von_mises::VonMises;
 use von_mises::von_mises;
 

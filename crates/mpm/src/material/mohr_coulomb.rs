@@ -131,9 +131,16 @@ pub(super) fn mohr_coulomb(
     want_tangent: bool,
 ) -> Response {
     let df = &(Matrix2::identity() + grad_u);
-    let Elastic { lambda, mu } = m.elastic;
     let trial = Trial::new(state, grad_u);
-    let e = Vector3::from(trial.strains);
+    let returned = mohr_coulomb_return(m, trial.strains);
+    respond(state, df, j_start, &trial, &returned, want_tangent)
+}
+
+/// The return of the trial's principal logarithmic `strains`, in any
+/// dimension.
+pub(super) fn mohr_coulomb_return(m: &MohrCoulomb, strains: [f64; 3]) -> Returned {
+    let Elastic { lambda, mu } = m.elastic;
+    let e = Vector3::from(strains);
     let d = m.moduli();
     let tau_trial = d * e;
     // Order the principal stresses, largest first.
@@ -173,7 +180,7 @@ pub(super) fn mohr_coulomb(
             },
         }
     };
-    // Back to the trial's principal directions (in-plane, then zz).
+    // Back to the trial's principal directions.
     let mut tau = [0.0; 3];
     let mut moduli = [[0.0; 3]; 3];
     for i in 0..3 {
@@ -186,11 +193,11 @@ pub(super) fn mohr_coulomb(
     // stresses, they would differ by round-off, and read as plastic flow.
     let mean_part = lambda / (3.0 * lambda + 2.0 * mu) * tau.iter().sum::<f64>();
     let elastic_strains = if elastic {
-        trial.strains
+        strains
     } else {
         tau.map(|t| (t - mean_part) / (2.0 * mu))
     };
-    let plastic_strains: [f64; 3] = std::array::from_fn(|i| trial.strains[i] - elastic_strains[i]);
+    let plastic_strains: [f64; 3] = std::array::from_fn(|i| strains[i] - elastic_strains[i]);
     let plastic = plastic_strains.iter().map(|e| e * e).sum::<f64>().sqrt();
     // At the apex the flow vectors of the six planes make `sin(psi)` of
     // volume per unit principal range each (`2 sin(psi)` against `2`),
@@ -201,15 +208,14 @@ pub(super) fn mohr_coulomb(
             - plastic_strains.iter().copied().fold(f64::MAX, f64::min);
         off_apex_flow_rule(volume, m.dilation.sin() * range, m.dilation > 0.0)
     };
-    let returned = Returned {
+    Returned {
         tau,
         elastic_strains,
         plastic_increment: (2.0f64 / 3.0).sqrt() * plastic,
         unit: [0.0; 3],
         moduli: Moduli::Principal(moduli),
         off_flow_rule,
-    };
-    respond(state, df, j_start, &trial, &returned, want_tangent)
+    }
 }
 
 #[cfg(test)]

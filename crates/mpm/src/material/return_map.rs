@@ -40,12 +40,12 @@ impl Trial {
         let strains = [e0, e1, 0.5 * state.zz.ln_1p()];
         Self { eig, strains }
     }
+}
 
-    /// The trace of the strains and their deviator.
-    pub fn split(&self) -> (f64, [f64; 3]) {
-        let volumetric = self.strains.iter().sum::<f64>();
-        (volumetric, self.strains.map(|e| e - volumetric / 3.0))
-    }
+/// The trace of principal strains and their deviator.
+fn split(strains: [f64; 3]) -> (f64, [f64; 3]) {
+    let volumetric = strains.iter().sum::<f64>();
+    (volumetric, strains.map(|e| e - volumetric / 3.0))
 }
 
 /// The derivative of the returned Kirchhoff stress in the trial strains.
@@ -205,12 +205,11 @@ pub(super) fn respond(
     }
 }
 
-/// The elastic predictor of the invariant return maps: the trial state
-/// at `df` from `state`, its volumetric and deviatoric logarithmic
-/// strains, and the unit direction and norm of its deviatoric Kirchhoff
-/// stress `2 mu e_dev` (shear modulus `mu`).
+/// The elastic predictor of the invariant return maps, in any dimension:
+/// of the trial's principal logarithmic strains, their trace and deviator,
+/// and the unit direction and norm of its deviatoric Kirchhoff stress
+/// `2 mu e_dev` (shear modulus `mu`).
 pub(super) struct Predictor {
-    pub trial: Trial,
     pub volumetric: f64,
     pub deviator: [f64; 3],
     pub unit: [f64; 3],
@@ -218,12 +217,10 @@ pub(super) struct Predictor {
 }
 
 impl Predictor {
-    pub fn new(state: &History, grad_u: &Matrix2<f64>, mu: f64) -> Self {
-        let trial = Trial::new(state, grad_u);
-        let (volumetric, deviator) = trial.split();
+    pub fn new(strains: [f64; 3], mu: f64) -> Self {
+        let (volumetric, deviator) = split(strains);
         let (unit, norm) = unit(deviator.map(|e| 2.0 * mu * e));
         Self {
-            trial,
             volumetric,
             deviator,
             unit,

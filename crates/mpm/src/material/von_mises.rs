@@ -25,7 +25,7 @@
 
 use nalgebra::Matrix2;
 
-use super::return_map::{InvariantModuli, Moduli, Predictor, Returned, respond};
+use super::return_map::{InvariantModuli, Moduli, Predictor, Returned, Trial, respond};
 use super::{Elastic, History, Response};
 
 /// The model's constants.
@@ -49,17 +49,24 @@ pub(super) fn von_mises(
     want_tangent: bool,
 ) -> Response {
     let df = &(Matrix2::identity() + grad_u);
+    let trial = Trial::new(state, grad_u);
+    let returned = von_mises_return(m, state.plastic_strain, trial.strains);
+    respond(state, df, j_start, &trial, &returned, want_tangent)
+}
+
+/// The return of the trial's principal logarithmic `strains` from the
+/// accumulated plastic strain `alpha_n`, in any dimension.
+pub(super) fn von_mises_return(m: &VonMises, alpha_n: f64, strains: [f64; 3]) -> Returned {
     let Elastic { mu, .. } = m.elastic;
     let kappa = m.elastic.bulk();
     let Predictor {
-        trial,
         volumetric,
         deviator,
         unit,
         norm,
-    } = Predictor::new(state, grad_u, mu);
+    } = Predictor::new(strains, mu);
     let q_trial = (1.5f64).sqrt() * norm;
-    let yield_now = m.yield_stress + m.hardening * state.plastic_strain;
+    let yield_now = m.yield_stress + m.hardening * alpha_n;
     let mut moduli = InvariantModuli::elastic(kappa, mu);
     let dgamma = if q_trial > yield_now * (1.0 + 1e-12) {
         let dgamma = (q_trial - yield_now) / (3.0 * mu + m.hardening);
@@ -75,15 +82,14 @@ pub(super) fn von_mises(
     let theta = moduli.identity / (2.0 * mu);
     let elastic_strains = [0, 1, 2].map(|i| volumetric / 3.0 + theta * deviator[i]);
     let tau = [0, 1, 2].map(|i| kappa * volumetric + 2.0 * mu * theta * deviator[i]);
-    let returned = Returned {
+    Returned {
         tau,
         elastic_strains,
         plastic_increment: dgamma,
         unit,
         moduli: Moduli::Invariant(moduli),
         off_flow_rule: false,
-    };
-    respond(state, df, j_start, &trial, &returned, want_tangent)
+    }
 }
 
 #[cfg(test)]
