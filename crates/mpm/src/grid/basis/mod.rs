@@ -100,31 +100,12 @@ impl Basis {
                 };
             }
         };
-        let weights: [Weights1d; D] =
-            std::array::from_fn(|d| self.eval_1d(grid.h, x[d] - grid.origin[d], half_width[d]));
-        let weights = weights.each_ref().map(Weights1d::as_slice);
-        if weights.iter().any(|w| w.is_empty()) {
-            return;
-        }
-        // An odometer over the nodes of every axis, the first fastest.
-        let mut at = [0usize; D];
-        loop {
-            let (node, s, ds) = (
-                at_each(&weights, &at, |w| w.0),
-                at_each(&weights, &at, |w| w.1),
-                at_each(&weights, &at, |w| w.2),
-            );
-            let mut n = s[0];
-            for &s in &s[1..] {
-                n *= s;
-            }
-            let grad: [f64; D] = std::array::from_fn(|d| {
-                let mut g = if d == 0 { ds[0] } else { s[0] };
-                for e in 1..D {
-                    g *= if e == d { ds[e] } else { s[e] };
-                }
-                g
-            });
+        // The product over the axes in axis order, the first axis's nodes
+        // fastest, written out per dimension: as fast as the 2D code before
+        // it, where an array of the axes' weights and a loop over them
+        // cost GIMP 10% more.
+        let along = |d: usize| self.eval_1d(grid.h, x[d] - grid.origin[d], half_width[d]);
+        let mut emit = |node: [i64; D], n: f64, grad: [f64; D]| {
             if n != 0.0 || grad != [0.0; D] {
                 out.push(NodeWeight {
                     node: lattice_key(node),
@@ -132,18 +113,37 @@ impl Basis {
                     grad,
                 });
             }
-            let mut d = 0;
-            loop {
-                at[d] += 1;
-                if at[d] < weights[d].len() {
-                    break;
-                }
-                at[d] = 0;
-                d += 1;
-                if d == D {
-                    return;
+        };
+        match D {
+            2 => {
+                let (wx, wy) = (along(0), along(1));
+                for &(j, sy, dsy) in wy.as_slice() {
+                    for &(i, sx, dsx) in wx.as_slice() {
+                        let grad = [dsx * sy, sx * dsy];
+                        emit(
+                            std::array::from_fn(|d| [i, j][d]),
+                            sx * sy,
+                            std::array::from_fn(|d| grad[d]),
+                        );
+                    }
                 }
             }
+            3 => {
+                let (wx, wy, wz) = (along(0), along(1), along(2));
+                for &(k, sz, dsz) in wz.as_slice() {
+                    for &(j, sy, dsy) in wy.as_slice() {
+                        for &(i, sx, dsx) in wx.as_slice() {
+                            let grad = [dsx * sy * sz, sx * dsy * sz, sx * sy * dsz];
+                            emit(
+                                std::array::from_fn(|d| [i, j, k][d]),
+                                sx * sy * sz,
+                                std::array::from_fn(|d| grad[d]),
+                            );
+                        }
+                    }
+                }
+            }
+            _ => unreachable!("the grid is 2D or 3D"),
         }
     }
 
@@ -325,15 +325,6 @@ impl Basis {
 fn reaches(n: f64, dn_h: f64, x_h: f64, width_h: f64) -> bool {
     let floor = ROUND_OFF.max(64.0 * f64::EPSILON * (x_h.abs() + 1.0) / width_h);
     n > floor || dn_h.abs() > floor
-}
-
-/// One field of the 1D weights at the odometer's place on every axis.
-fn at_each<T, const D: usize>(
-    weights: &[&[(i64, f64, f64)]; D],
-    at: &[usize; D],
-    field: impl Fn(&(i64, f64, f64)) -> T,
-) -> [T; D] {
-    std::array::from_fn(|d| field(&weights[d][at[d]]))
 }
 
 /// What [`reaches`] takes for round-off in a value of order one.
