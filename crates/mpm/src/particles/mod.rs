@@ -6,6 +6,7 @@ use nalgebra::Matrix2;
 pub mod admissible;
 pub mod geostatic;
 pub mod seeding;
+pub mod solid_seeding;
 
 use crate::grid::Support;
 use crate::material::{CauchyStress, History, Material};
