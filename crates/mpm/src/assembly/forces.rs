@@ -1,47 +1,65 @@
-//! Internal and external forces on the active nodes.
+//! Internal and external forces on the active nodes, in `D` dimensions
+//! (node `a`'s components at `D a .. D a + D`).
 
-use nalgebra::Matrix2;
+use nalgebra::SMatrix;
 
 use super::scatter_sum;
 use crate::grid::Connectivity;
-use crate::particles::MaterialPoints;
+use crate::particles::{Dim, MaterialPoints, Space};
 
 /// Internal force `f_a = sum_p V0_p P_p g_pa` over all active DOFs, with
 /// `stress(p)` point `p`'s `P_p`, asked for once.
-pub fn internal_force(
-    conn: &Connectivity,
-    points: &MaterialPoints,
-    stress: impl Fn(usize) -> Matrix2<f64> + Sync,
-) -> Vec<f64> {
+pub fn internal_force<const D: usize>(
+    conn: &Connectivity<D>,
+    points: &MaterialPoints<D>,
+    stress: impl Fn(usize) -> SMatrix<f64, D, D> + Sync,
+) -> Vec<f64>
+where
+    Dim<D>: Space<D>,
+{
     scatter_sum(conn.n_points(), conn.n_dofs(), |p, f| {
         let v0 = points.volume0[p];
         let pk = &stress(p);
         for l in conn.point_links(p) {
-            let a = 2 * l.node as usize;
-            f[a] += v0 * (pk[(0, 0)] * l.grad[0] + pk[(0, 1)] * l.grad[1]);
-            f[a + 1] += v0 * (pk[(1, 0)] * l.grad[0] + pk[(1, 1)] * l.grad[1]);
+            let a = D * l.node as usize;
+            for i in 0..D {
+                // Summed from the first term: in 2D, P_i0 g_0 + P_i1 g_1.
+                let mut sum = pk[(i, 0)] * l.grad[0];
+                for k in 1..D {
+                    sum += pk[(i, k)] * l.grad[k];
+                }
+                f[a + i] += v0 * sum;
+            }
         }
     })
 }
 
 /// Body force `f_a = sum_p m_p N_pa g`.
-pub fn body_force(conn: &Connectivity, points: &MaterialPoints, gravity: [f64; 2]) -> Vec<f64> {
+pub fn body_force<const D: usize>(
+    conn: &Connectivity<D>,
+    points: &MaterialPoints<D>,
+    gravity: [f64; D],
+) -> Vec<f64>
+where
+    Dim<D>: Space<D>,
+{
     scatter_sum(conn.n_points(), conn.n_dofs(), |p, f| {
         let m = points.mass[p];
         for l in conn.point_links(p) {
-            let a = 2 * l.node as usize;
-            f[a] += m * l.n * gravity[0];
-            f[a + 1] += m * l.n * gravity[1];
+            let a = D * l.node as usize;
+            for i in 0..D {
+                f[a + i] += m * l.n * gravity[i];
+            }
         }
     })
 }
 
-/// A dead force (N per metre) on a material point: held at its full value
-/// through the stage, or ramped with the load factor.
+/// A dead force (N per metre in 2D, N in 3D) on a material point: held at
+/// its full value through the stage, or ramped with the load factor.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PointLoad {
+pub struct PointLoad<const D: usize = 2> {
     pub point: usize,
-    pub force: [f64; 2],
+    pub force: [f64; D],
     pub held: bool,
 }
 
@@ -49,16 +67,19 @@ pub struct PointLoad {
 /// ramped` (`gravity = [held, ramped]`, `t` the load factor) on every
 /// point's mass and each point load, held or scaled by `t`, on its point's
 /// nodes.
-pub fn external_force(
-    conn: &Connectivity,
-    points: &MaterialPoints,
-    gravity: [[f64; 2]; 2],
-    point_loads: &[PointLoad],
+pub fn external_force<const D: usize>(
+    conn: &Connectivity<D>,
+    points: &MaterialPoints<D>,
+    gravity: [[f64; D]; 2],
+    point_loads: &[PointLoad<D>],
     load_factor: f64,
-) -> Vec<f64> {
+) -> Vec<f64>
+where
+    Dim<D>: Space<D>,
+{
     let [held, ramped] = gravity;
-    let g = [0, 1].map(|c| held[c] + ramped[c] * load_factor);
-    let mut f = if g == [0.0, 0.0] {
+    let g: [f64; D] = std::array::from_fn(|c| held[c] + ramped[c] * load_factor);
+    let mut f = if g == [0.0; D] {
         vec![0.0; conn.n_dofs()]
     } else {
         body_force(conn, points, g)
@@ -66,8 +87,8 @@ pub fn external_force(
     for load in point_loads {
         let factor = if load.held { 1.0 } else { load_factor };
         for l in conn.point_links(load.point) {
-            for c in 0..2 {
-                f[2 * l.node as usize + c] += factor * l.n * load.force[c];
+            for c in 0..D {
+                f[D * l.node as usize + c] += factor * l.n * load.force[c];
             }
         }
     }
@@ -76,13 +97,79 @@ pub fn external_force(
 
 /// The derivative of [`external_force`] by the load factor: the ramped
 /// gravity on every point's mass and the ramped point loads.
-pub fn external_force_rate(
-    conn: &Connectivity,
-    points: &MaterialPoints,
-    gravity: [[f64; 2]; 2],
-    point_loads: &[PointLoad],
-) -> Vec<f64> {
-    let ramped = [[0.0; 2], gravity[1]];
-    let ramped_loads: Vec<PointLoad> = point_loads.iter().filter(|l| !l.held).cloned().collect();
+pub fn external_force_rate<const D: usize>(
+    conn: &Connectivity<D>,
+    points: &MaterialPoints<D>,
+    gravity: [[f64; D]; 2],
+    point_loads: &[PointLoad<D>],
+) -> Vec<f64>
+where
+    Dim<D>: Space<D>,
+{
+    let ramped = [[0.0; D], gravity[1]];
+    let ramped_loads: Vec<PointLoad<D>> = point_loads.iter().filter(|l| !l.held).cloned().collect();
     external_force(conn, points, ramped, &ramped_loads, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Matrix3;
+
+    use super::*;
+    use crate::grid::{Basis, Grid};
+    use crate::material::{Elastic, Material};
+    use crate::particles::solid_seeding::{Solid, fill};
+
+    /// In 3D, on GIMP over a grid offset from a box of points: gravity's
+    /// nodal forces add up to the weight, and a uniform stress `P` gives
+    /// internal forces with no resultant whose first moment
+    /// `sum_a f_a,i x_a,k` is `V P_ik` (the shape functions' partition of
+    /// unity and their reproduction of `x`), to round-off.
+    #[test]
+    fn three_dimensional_forces_add_up_to_the_weight_and_the_stress() {
+        let mut points = MaterialPoints::<3>::default();
+        let seeds = fill(&Solid::cuboid([0.1, 0.2, 0.3], [1.1, 0.7, 0.8]), 0.125);
+        let elastic = Elastic::from_young_poisson(1e6, 0.3);
+        points.add_solid(Material::Hencky(elastic), 1000.0, &seeds);
+        let grid = Grid {
+            h: 0.25,
+            origin: [-0.03, 0.05, 0.11],
+        };
+        let conn = Connectivity::build(
+            &grid,
+            Basis::Gimp,
+            &points.position,
+            |p| points.support(p),
+            |_| true,
+        );
+        let g = [0.5, -2.0, -9.81];
+        let weight = body_force(&conn, &points, g);
+        let mass: f64 = points.mass.iter().sum();
+        for i in 0..3 {
+            let sum: f64 = weight.iter().skip(i).step_by(3).sum();
+            assert!(
+                (sum - mass * g[i]).abs() < 1e-10 * mass * 10.0,
+                "{i}: {sum}"
+            );
+        }
+        let p = Matrix3::new(3.0, 1.0, -2.0, 0.5, -4.0, 1.5, 2.5, -1.0, 6.0) * 1e3;
+        let f = internal_force(&conn, &points, |_| p);
+        let volume: f64 = points.volume0.iter().sum();
+        for i in 0..3 {
+            let resultant: f64 = f.iter().skip(i).step_by(3).sum();
+            assert!(resultant.abs() < 1e-9 * p.norm(), "{i}: {resultant}");
+            for k in 0..3 {
+                let moment: f64 = conn
+                    .nodes
+                    .iter()
+                    .enumerate()
+                    .map(|(a, &key)| f[3 * a + i] * grid.node_position(key)[k])
+                    .sum();
+                assert!(
+                    (moment - volume * p[(i, k)]).abs() < 1e-9 * p.norm(),
+                    "{i}{k}: {moment}"
+                );
+            }
+        }
+    }
 }
