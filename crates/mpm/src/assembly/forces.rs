@@ -172,4 +172,61 @@ mod tests {
             }
         }
     }
+
+    /// The 3D patch test through the grid: nodal displacements of a
+    /// homogeneous deformation, `u_a = (F - I) x_a`, give every point of
+    /// a box on an offset grid the increment `F - I` to round-off, on each
+    /// basis (the functions reproduce linear fields), so every point has
+    /// the model's stress at `F`: the same for all, a Mohr-Coulomb soil past
+    /// yield included.
+    #[test]
+    fn a_homogeneous_deformation_reaches_every_point_in_three_dimensions() {
+        use crate::grid::increment;
+        use crate::material::{History3, MohrCoulomb};
+        let mut points = MaterialPoints::<3>::default();
+        let seeds = fill(&Solid::cuboid([0.1, 0.2, 0.3], [1.1, 0.7, 0.8]), 0.125);
+        let soil = Material::MohrCoulomb(MohrCoulomb {
+            elastic: Elastic::from_young_poisson(1e7, 0.3),
+            cohesion: 1e3,
+            friction: 30f64.to_radians(),
+            dilation: 5f64.to_radians(),
+        });
+        points.add_solid(soil, 1000.0, &seeds);
+        let grid = Grid {
+            h: 0.25,
+            origin: [-0.03, 0.05, 0.11],
+        };
+        let grad_u = Matrix3::new(-2e-3, 1e-3, 0.0, 5e-4, 1.5e-3, -1e-3, 0.0, 2e-3, -3e-3);
+        let reference = soil.respond_3d(&History3::virgin(), &grad_u, 1.0);
+        assert!(reference.history.plastic_strain > 0.0);
+        for basis in [Basis::Linear, Basis::Gimp, Basis::BSpline2, Basis::BSpline3] {
+            let conn = Connectivity::build(
+                &grid,
+                basis,
+                &points.position,
+                |p| points.support(p),
+                |_| true,
+            );
+            let u: Vec<f64> = conn
+                .nodes
+                .iter()
+                .flat_map(|&key| {
+                    let x = grid.node_position(key);
+                    let v = grad_u * nalgebra::Vector3::from(x);
+                    [v[0], v[1], v[2]]
+                })
+                .collect();
+            for p in 0..points.len() {
+                let (dx, g) = increment(conn.point_links(p), &u);
+                let x = nalgebra::Vector3::from(points.position[p]);
+                assert!((g - grad_u).norm() < 1e-13, "{basis:?} point {p}: {g}");
+                assert!(
+                    (nalgebra::Vector3::from(dx) - grad_u * x).norm() < 1e-13,
+                    "{basis:?}"
+                );
+                let r = soil.respond_3d(&points.history[p], &g, 1.0);
+                assert!((r.cauchy - reference.cauchy).norm() < 1e-8 * reference.cauchy.norm());
+            }
+        }
+    }
 }
