@@ -12,7 +12,7 @@
 //! - the return map met the model's own flow rule
 //!   ([`Response::off_flow_rule`]).
 
-use crate::material::{APEX_SEPARATION, Response};
+use crate::material::{APEX_SEPARATION, Response, Response3};
 
 /// The largest factor by which one load step may grow or shrink a point's
 /// volume. A soil changes volume by its elastic strain (`p / K`, a few
@@ -98,23 +98,54 @@ pub fn check_volume(
     Ok(())
 }
 
+/// What [`check_response`] reads of a model's response, in either
+/// dimension.
+pub trait TrialResponse {
+    /// Its stress, `P` and history are finite numbers.
+    fn is_finite(&self) -> bool;
+    /// [`Response::off_flow_rule`].
+    fn off_flow_rule(&self) -> bool;
+}
+
+impl TrialResponse for Response {
+    fn is_finite(&self) -> bool {
+        self.p.iter().all(|x| x.is_finite())
+            && self.cauchy.plane.iter().all(|x| x.is_finite())
+            && self.cauchy.zz.is_finite()
+            && self.history.tensor.iter().all(|x| x.is_finite())
+            && self.history.zz.is_finite()
+            && self.history.plastic_strain.is_finite()
+    }
+
+    fn off_flow_rule(&self) -> bool {
+        self.off_flow_rule
+    }
+}
+
+impl TrialResponse for Response3 {
+    fn is_finite(&self) -> bool {
+        self.p.iter().all(|x| x.is_finite())
+            && self.cauchy.iter().all(|x| x.is_finite())
+            && self.history.tensor.iter().all(|x| x.is_finite())
+            && self.history.plastic_strain.is_finite()
+    }
+
+    fn off_flow_rule(&self) -> bool {
+        self.off_flow_rule
+    }
+}
+
 /// Point `point`'s response at a trial whose volume passed
 /// [`check_volume`] (`jacobian` its own): admissible when its numbers are
 /// finite and its return met the flow rule.
-pub fn check_response(
+pub fn check_response<R: TrialResponse>(
     point: usize,
     jacobian: f64,
-    response: Response,
-) -> Result<Response, InadmissiblePoint> {
-    let finite = response.p.iter().all(|x| x.is_finite())
-        && response.cauchy.plane.iter().all(|x| x.is_finite())
-        && response.cauchy.zz.is_finite()
-        && response.history.tensor.iter().all(|x| x.is_finite())
-        && response.history.zz.is_finite()
-        && response.history.plastic_strain.is_finite();
-    let reason = if !finite {
+    response: R,
+) -> Result<R, InadmissiblePoint> {
+    let reason = if !response.is_finite() {
         Inadmissible::NonFinite
-    } else if response.off_flow_rule {
+    } else if response.off_flow_rule() {
         Inadmissible::OffFlowRule
     } else {
         return Ok(response);
@@ -144,5 +175,33 @@ mod tests {
             let e = check_volume(3, 0.5, &[0.5, j]).unwrap_err();
             assert_eq!((e.point, e.reason), (3, reason), "{j}");
         }
+    }
+
+    /// In 3D as in plane strain: a Mohr-Coulomb point without dilation
+    /// pulled open past its apex is off its flow rule, one with a
+    /// non-finite stress is not finite, and a point compressed past yield
+    /// is admissible.
+    #[test]
+    fn three_dimensional_responses_are_checked_as_plane_strain_ones() {
+        use crate::material::{Elastic, History3, Material, MohrCoulomb};
+        use nalgebra::Matrix3;
+        let soil = Material::MohrCoulomb(MohrCoulomb {
+            elastic: Elastic::from_young_poisson(1e7, 0.3),
+            cohesion: 1e3,
+            friction: 30f64.to_radians(),
+            dilation: 0.0,
+        });
+        let virgin = History3::virgin();
+        let opened = soil.respond_3d(&virgin, &(Matrix3::identity() * 0.02), 1.0);
+        let e = check_response(7, 1.06, opened).unwrap_err();
+        assert_eq!((e.point, e.reason), (7, Inadmissible::OffFlowRule));
+        let squeezed = Matrix3::new(-0.01, 0.002, 0.0, 0.0, 0.003, 0.0, 0.001, 0.0, -0.002);
+        let yielded = soil.respond_3d(&virgin, &squeezed, 1.0);
+        assert!(yielded.history.plastic_strain > 0.0);
+        assert!(check_response(7, 0.99, yielded).is_ok());
+        let mut broken = yielded;
+        broken.cauchy[(2, 1)] = f64::NAN;
+        let e = check_response(7, 0.99, broken).unwrap_err();
+        assert_eq!(e.reason, Inadmissible::NonFinite);
     }
 }
