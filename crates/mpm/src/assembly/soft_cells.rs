@@ -134,8 +134,8 @@ pub(crate) fn overlapped_cells(start: &Configuration, basis: Basis) -> Vec<[i64;
     keys
 }
 
-/// Cells by `i`, then `j`: `[i64; 2]`'s own order, which compares as a
-/// slice, took 5-10% longer to sort.
+/// Cells by `i`, then `j`: `[i64; 2]`'s own order, but sorted 5-10%
+/// faster (arrays compare as slices).
 fn by_rows(a: &[i64; 2], b: &[i64; 2]) -> std::cmp::Ordering {
     (a[0], a[1]).cmp(&(b[0], b[1]))
 }
