@@ -3,13 +3,16 @@
 
 use rayon::prelude::*;
 
-use crate::grid::{Connectivity, node_indices};
+use crate::grid::{Connectivity, lattice_coordinates};
 use crate::parallel;
 
 /// Sparsity of the stiffness matrix, in compressed columns (faer's form,
-/// with 32-bit row indices).
-#[derive(Debug, Clone, Default)]
+/// with 32-bit row indices), in blocks of `D x D` for each pair of
+/// neighbouring nodes (`D` = 2 or 3, the nodes' DOFs).
+#[derive(Debug, Clone)]
 pub struct Pattern {
+    /// DOFs per node: the dimension.
+    dofs: usize,
     /// Neighbours of node `b` are `neighbours[first[b]..first[b + 1]]`, sorted.
     first: Vec<usize>,
     neighbours: Vec<u32>,
@@ -20,6 +23,20 @@ pub struct Pattern {
     /// (95 bytes a point at 1e6 GIMP points) for every product with the
     /// tangent to read. The solver widens them where faer needs it.
     pub row_idx: Vec<u32>,
+}
+
+impl Default for Pattern {
+    /// The empty 2D pattern.
+    fn default() -> Self {
+        Self {
+            dofs: 2,
+            first: Vec::new(),
+            neighbours: Vec::new(),
+            tiles: PointTiles::default(),
+            col_ptr: Vec::new(),
+            row_idx: Vec::new(),
+        }
+    }
 }
 
 /// The nodes adjacent to each active node: what determines a [`Pattern`]'s
@@ -45,10 +62,10 @@ impl Pattern {
     /// Two nodes are neighbours when some point links to both.
     /// Two nodes are also neighbours when they share one of the `groups`
     /// (couplings that do not come from points, e.g. boundary loads).
-    pub fn build(conn: &Connectivity, groups: &[Vec<u32>]) -> Self {
+    pub fn build<const D: usize>(conn: &Connectivity<D>, groups: &[Vec<u32>]) -> Self {
         let n_nodes = conn.n_nodes();
         assert!(
-            2 * n_nodes <= u32::MAX as usize,
+            D * n_nodes <= u32::MAX as usize,
             "DOFs beyond 32-bit row indices"
         );
         let mut node_groups: Vec<Vec<u32>> =
@@ -118,18 +135,23 @@ impl Pattern {
             first.push(first.last().unwrap() + l.len());
         }
         let neighbours: Vec<u32> = lists.into_iter().flatten().collect();
-        let mut col_ptr = Vec::with_capacity(2 * n_nodes + 1);
-        let mut row_idx = Vec::with_capacity(4 * neighbours.len());
+        let mut col_ptr = Vec::with_capacity(D * n_nodes + 1);
+        let mut row_idx = Vec::with_capacity(D * D * neighbours.len());
         col_ptr.push(0);
+        let dofs = D as u32;
         for b in 0..n_nodes {
             let nb = &neighbours[first[b]..first[b + 1]];
-            for _component in 0..2 {
-                row_idx.extend(nb.iter().flat_map(|&a| [2 * a, 2 * a + 1]));
+            for _component in 0..D {
+                row_idx.extend(
+                    nb.iter()
+                        .flat_map(|&a| (0..dofs).map(move |i| dofs * a + i)),
+                );
                 col_ptr.push(row_idx.len());
             }
         }
         drop((touching, incident));
         Self {
+            dofs: D,
             first,
             neighbours,
             tiles: PointTiles::build(conn),
@@ -138,7 +160,7 @@ impl Pattern {
         }
     }
 
-    /// Fills every 2x2 block below the diagonal from its mirror above it,
+    /// Fills every `D x D` block below the diagonal from its mirror above it,
     /// `K(b, a) = K(a, b)^T` for neighbours `a < b`, in parallel over
     /// columns.
     pub(crate) fn mirror_upper(&self, values: &mut [f64]) {
@@ -151,13 +173,14 @@ impl Pattern {
             .for_each(|a| {
                 let shared = &shared;
                 let nb = &self.neighbours[self.first[a]..self.first[a + 1]];
-                let stride = 2 * nb.len();
+                let d = self.dofs;
+                let stride = d * nb.len();
                 let below = nb.partition_point(|&b| b as usize <= a);
                 for (k, &b) in nb.iter().enumerate().skip(below) {
                     let (above, stride_b) = self.block(a as u32, b);
-                    let at = self.col_ptr[2 * a] + 2 * k;
-                    for r in 0..2 {
-                        for c in 0..2 {
+                    let at = self.col_ptr[d * a] + d * k;
+                    for r in 0..d {
+                        for c in 0..d {
                             // SAFETY: both offsets are inside `values` (the
                             // pattern's own places). This task writes only
                             // column a's blocks below the diagonal, which no
@@ -203,9 +226,14 @@ impl Pattern {
         self.row_idx.len()
     }
 
-    /// Index in the values array of the 2x2 block's entry `(0, 0)` for row
-    /// node `a` and column node `b`; entry `(r, c)` is at
-    /// `block(a, b) + r + c * 2 * degree(b)`.
+    /// DOFs per node.
+    pub fn dofs(&self) -> usize {
+        self.dofs
+    }
+
+    /// Index in the values array of the `D x D` block's entry `(0, 0)` for
+    /// row node `a` and column node `b`; entry `(r, c)` is at
+    /// `block(a, b) + r + c * D * degree(b)`.
     #[inline]
     pub(crate) fn block(&self, a: u32, b: u32) -> (usize, usize) {
         self.try_block(a, b).expect("linked nodes are neighbours")
@@ -219,7 +247,8 @@ impl Pattern {
         let neighbours = &self.neighbours[self.first[b as usize]..self.first[b as usize + 1]];
         Column {
             neighbours,
-            base: self.col_ptr[2 * b as usize],
+            base: self.col_ptr[self.dofs * b as usize],
+            dofs: self.dofs,
             k: 0,
         }
     }
@@ -228,16 +257,18 @@ impl Pattern {
     fn try_block(&self, a: u32, b: u32) -> Option<(usize, usize)> {
         let nb = &self.neighbours[self.first[b as usize]..self.first[b as usize + 1]];
         let k = nb.binary_search(&a).ok()?;
-        Some((self.col_ptr[2 * b as usize] + 2 * k, 2 * nb.len()))
+        let d = self.dofs;
+        Some((self.col_ptr[d * b as usize] + d * k, d * nb.len()))
     }
 
     /// Adds `value` at `(row, col)` (DOF indices); returns false, adding
     /// nothing, if the entry is outside the pattern.
     #[inline]
     pub fn add(&self, values: &mut [f64], row: usize, col: usize, value: f64) -> bool {
-        match self.try_block((row / 2) as u32, (col / 2) as u32) {
+        let d = self.dofs;
+        match self.try_block((row / d) as u32, (col / d) as u32) {
             Some((base, stride)) => {
-                values[base + row % 2 + (col % 2) * stride] += value;
+                values[base + row % d + (col % d) * stride] += value;
                 true
             }
             None => false,
@@ -251,6 +282,8 @@ pub(crate) struct Column<'a> {
     neighbours: &'a [u32],
     /// Where its first column starts in the values.
     base: usize,
+    /// DOFs per node.
+    dofs: usize,
     /// The neighbour the last row node asked for was (the walk's place).
     k: usize,
 }
@@ -269,8 +302,12 @@ impl Column<'_> {
         while self.neighbours.get(self.k).is_some_and(|&b| b < a) {
             self.k += 1;
         }
-        (self.neighbours.get(self.k) == Some(&a))
-            .then(|| (self.base + 2 * self.k, 2 * self.neighbours.len()))
+        (self.neighbours.get(self.k) == Some(&a)).then(|| {
+            (
+                self.base + self.dofs * self.k,
+                self.dofs * self.neighbours.len(),
+            )
+        })
     }
 }
 
@@ -301,9 +338,9 @@ impl TileValues<'_> {
 /// The points of a step in tiles of the grid, for an assembly that writes
 /// from many points at once without accumulators of its own.
 ///
-/// A point's tile is the square of `side` x `side` nodes that holds its
-/// lowest linked node in each direction, and a tile's colour is the parity
-/// of its two indices. A point's nodes lie within `span` nodes of its
+/// A point's tile is the square (the cube in 3D) of `side` nodes a side
+/// that holds its lowest linked node in each direction, and a tile's
+/// colour is the parity of its indices (4 colours in 2D, 8 in 3D). A point's nodes lie within `span` nodes of its
 /// lowest ones in each direction (2 for the bilinear basis, 3 for GIMP, 4
 /// for cubic B-splines), so the nodes of a tile's points lie within
 /// `side + span - 1` nodes of the tile's corner; two tiles of one colour
@@ -316,8 +353,9 @@ pub(crate) struct PointTiles {
     points: Vec<u32>,
     /// Tile `t`'s points are `points[start[t]..start[t + 1]]`.
     start: Vec<usize>,
-    /// Colour `c`'s tiles are `colour_start[c]..colour_start[c + 1]`.
-    colour_start: [usize; 5],
+    /// Colour `c`'s tiles are `colour_start[c]..colour_start[c + 1]`; the
+    /// last entry is the count of tiles (`2^D` colours).
+    colour_start: Vec<usize>,
 }
 
 /// A tile's side in nodes when the points' span is smaller: a few hundred
@@ -342,7 +380,7 @@ impl PointTiles {
     ) {
         let shared = SharedValues(values.as_mut_ptr());
         let len = values.len();
-        for colour in 0..4 {
+        for colour in 0..self.colour_start.len().saturating_sub(1) {
             self.of_colour(colour).into_par_iter().for_each(|t| {
                 let mut values = TileValues {
                     shared: &shared,
@@ -355,59 +393,72 @@ impl PointTiles {
         }
     }
 
-    fn build(conn: &Connectivity) -> Self {
-        let coordinates: Vec<(i64, i64)> = conn
+    fn build<const D: usize>(conn: &Connectivity<D>) -> Self {
+        let coordinates: Vec<[i64; D]> = conn
             .nodes
             .par_iter()
             .with_min_len(parallel::BOOKKEEPING)
-            .map(|&key| node_indices(key))
+            .map(|&key| lattice_coordinates(key))
             .collect();
         // Each point's lowest node and its span (points that link to no
         // node have none and add nothing).
         let lowest = |p: usize| {
             let links = conn.point_links(p);
-            let ends = links.iter().fold(
-                ((i64::MAX, i64::MAX), (i64::MIN, i64::MIN)),
-                |((i0, j0), (i1, j1)), l| {
-                    let (i, j) = coordinates[l.node as usize];
-                    ((i0.min(i), j0.min(j)), (i1.max(i), j1.max(j)))
-                },
-            );
+            let ends = links
+                .iter()
+                .fold(([i64::MAX; D], [i64::MIN; D]), |(lo, hi), l| {
+                    let c = coordinates[l.node as usize];
+                    (
+                        std::array::from_fn(|d| lo[d].min(c[d])),
+                        std::array::from_fn(|d| hi[d].max(c[d])),
+                    )
+                });
             (!links.is_empty()).then_some(ends)
         };
         let span = (0..conn.n_points())
             .into_par_iter()
             .with_min_len(parallel::BOOKKEEPING)
             .filter_map(lowest)
-            .map(|((i0, j0), (i1, j1))| (i1 - i0 + 1).max(j1 - j0 + 1))
+            .map(|(lo, hi)| (0..D).map(|d| hi[d] - lo[d] + 1).max().unwrap_or(1))
             .max()
             .unwrap_or(1);
         let side = (span - 1).max(MIN_TILE_SIDE);
         let tile = |p: usize| {
-            let ((i0, j0), _) = lowest(p)?;
-            Some((i0.div_euclid(side), j0.div_euclid(side)))
+            let (lo, _) = lowest(p)?;
+            Some(lo.map(|c| c.div_euclid(side)))
         };
-        let (ti_min, tj_min) = (0..conn.n_points())
+        let tile_min = (0..conn.n_points())
             .into_par_iter()
             .with_min_len(parallel::BOOKKEEPING)
             .filter_map(tile)
-            .reduce(|| (i64::MAX, i64::MAX), |a, b| (a.0.min(b.0), a.1.min(b.1)));
-        // Sorted by colour, then tile, then point: (colour, tile row and
-        // column from the lowest, in 30 bits each) over the point.
+            .reduce(
+                || [i64::MAX; D],
+                |a, b| std::array::from_fn(|d| a[d].min(b[d])),
+            );
+        // Sorted by colour, then tile, then point: (colour, the tile's
+        // places from the lowest, in 60 / D bits each) over the point. A
+        // tile's colour is the parity of its places, axis d's bit d.
+        let bits = 60 / D as u32;
         let mut keyed: Vec<(u64, u32)> = (0..conn.n_points())
             .into_par_iter()
             .with_min_len(parallel::BOOKKEEPING)
             .filter_map(|p| {
-                let (ti, tj) = tile(p)?;
-                let colour = (ti.rem_euclid(2) + 2 * tj.rem_euclid(2)) as u64;
-                let (di, dj) = ((ti - ti_min) as u64, (tj - tj_min) as u64);
-                assert!(di < 1 << 30 && dj < 1 << 30, "a grid of 8e9 nodes a side");
-                Some((colour << 60 | di << 30 | dj, p as u32))
+                let t = tile(p)?;
+                let mut key = 0u64;
+                let mut colour = 0u64;
+                for d in 0..D {
+                    colour += (t[d].rem_euclid(2) as u64) << d;
+                    let place = (t[d] - tile_min[d]) as u64;
+                    assert!(place < 1 << bits, "a grid of 8e9 nodes a side");
+                    key |= place << (bits * (D - 1 - d) as u32);
+                }
+                Some((colour << 60 | key, p as u32))
             })
             .collect();
         keyed.par_sort_unstable();
+        let colours = 1 << D;
         let mut start = Vec::new();
-        let mut colour_start = [0; 5];
+        let mut colour_start = vec![0; colours + 1];
         for (k, &(key, _)) in keyed.iter().enumerate() {
             if k == 0 || keyed[k - 1].0 != key {
                 start.push(k);
@@ -417,7 +468,7 @@ impl PointTiles {
                 }
             }
         }
-        colour_start[4] = start.len();
+        colour_start[colours] = start.len();
         start.push(keyed.len());
         Self {
             points: keyed.into_iter().map(|(_, p)| p).collect(),
@@ -428,10 +479,10 @@ impl PointTiles {
 
     /// How many tiles there are, of every colour.
     pub(crate) fn count(&self) -> usize {
-        self.colour_start[4]
+        self.colour_start.last().copied().unwrap_or(0)
     }
 
-    /// The tiles of colour `colour` (of 4).
+    /// The tiles of colour `colour` (of `2^D`).
     pub(crate) fn of_colour(&self, colour: usize) -> std::ops::Range<usize> {
         self.colour_start[colour]..self.colour_start[colour + 1]
     }
@@ -531,6 +582,70 @@ mod tests {
                 tiles_of_colour.iter().all(|&n| n >= 9),
                 "{basis}: {tiles_of_colour:?}"
             );
+        }
+    }
+
+    /// In 3D: a box of points on GIMP and on quadratic B-splines over an
+    /// offset grid. Every pair of nodes a point links holds a 3x3 block
+    /// (all nine entries inside the pattern), each column's rows are
+    /// sorted, and the tiles of each of the 8 colours share no node while
+    /// every point is in exactly one tile.
+    #[test]
+    fn three_dimensional_patterns_hold_every_block_and_tile_safely() {
+        use crate::grid::{Basis, Connectivity, Grid};
+        use crate::material::{Elastic, Material};
+        use crate::particles::MaterialPoints;
+        use crate::particles::solid_seeding::{Solid, fill};
+        let mut points = MaterialPoints::<3>::default();
+        let seeds = fill(&Solid::cuboid([0.0; 3], [3.0, 2.5, 2.0]), 0.125);
+        let elastic = Elastic::from_young_poisson(1e6, 0.3);
+        points.add_solid(Material::Hencky(elastic), 1.0, &seeds);
+        let grid = Grid {
+            h: 0.25,
+            origin: [-0.03, 0.05, 0.11],
+        };
+        for basis in [Basis::Gimp, Basis::BSpline2] {
+            let conn = Connectivity::build(
+                &grid,
+                basis,
+                &points.position,
+                |p| points.support(p),
+                |_| true,
+            );
+            let pattern = Pattern::build(&conn, &[]);
+            assert_eq!(pattern.dofs(), 3);
+            assert_eq!(pattern.col_ptr.len(), 3 * conn.n_nodes() + 1);
+            for c in 0..3 * conn.n_nodes() {
+                let rows = &pattern.row_idx[pattern.col_ptr[c]..pattern.col_ptr[c + 1]];
+                assert!(rows.windows(2).all(|w| w[0] < w[1]), "{basis:?} column {c}");
+            }
+            let mut values = vec![0.0; pattern.nnz()];
+            for p in 0..conn.n_points() {
+                for la in conn.point_links(p) {
+                    for lb in conn.point_links(p) {
+                        for (r, c) in (0..3).flat_map(|r| (0..3).map(move |c| (r, c))) {
+                            let (row, col) = (3 * la.node as usize + r, 3 * lb.node as usize + c);
+                            assert!(pattern.add(&mut values, row, col, 1.0), "{basis:?}");
+                        }
+                    }
+                }
+            }
+            let tiles = &pattern.tiles;
+            let mut seen = vec![0; conn.n_points()];
+            let mut owner: HashMap<(usize, u32), usize> = HashMap::new();
+            for colour in 0..8 {
+                for t in tiles.of_colour(colour) {
+                    for &p in tiles.points(t) {
+                        seen[p as usize] += 1;
+                        for l in conn.point_links(p as usize) {
+                            let first = *owner.entry((colour, l.node)).or_insert(t);
+                            assert_eq!(first, t, "{basis:?}: node {} in two tiles", l.node);
+                        }
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&n| n == 1), "{basis:?}");
+            assert_eq!(tiles.count(), tiles.of_colour(7).end);
         }
     }
 }
