@@ -32,3 +32,26 @@ pub fn case(case: &Value) -> Case {
 pub fn simulation(case: &Value) -> Simulation {
     Simulation::new(&self::case(case)).expect("a case that builds")
 }
+
+/// The points of a 3D box from `min` to `max` (Hencky, E = 1e6, nu = 0.3,
+/// density 1000), `spacing` apart, and a grid of cells of `cell_size`
+/// offset from the box in every axis: what the 3D unit tests build on
+/// until a case can be 3D.
+pub fn solid_box(
+    min: [f64; 3],
+    max: [f64; 3],
+    spacing: f64,
+    cell_size: f64,
+) -> (crate::particles::MaterialPoints<3>, crate::grid::Grid<3>) {
+    use crate::material::{Elastic, Material};
+    use crate::particles::solid_seeding::{Solid, fill};
+    let mut points = crate::particles::MaterialPoints::<3>::default();
+    let seeds = fill(&Solid::cuboid(min, max), spacing);
+    let elastic = Elastic::from_young_poisson(1e6, 0.3);
+    points.add_solid(Material::Hencky(elastic), 1000.0, &seeds);
+    let grid = crate::grid::Grid {
+        h: cell_size,
+        origin: [-0.12, 0.2, 0.44].map(|f| f * cell_size),
+    };
+    (points, grid)
+}

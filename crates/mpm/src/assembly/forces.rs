@@ -116,9 +116,9 @@ mod tests {
     use nalgebra::Matrix3;
 
     use super::*;
-    use crate::grid::{Basis, Grid};
+    use crate::fixtures;
+    use crate::grid::Basis;
     use crate::material::{Elastic, Material};
-    use crate::particles::solid_seeding::{Solid, fill};
 
     /// In 3D, on GIMP over a grid offset from a box of points: gravity's
     /// nodal forces add up to the weight, and a uniform stress `P` gives
@@ -127,14 +127,7 @@ mod tests {
     /// unity and their reproduction of `x`), to round-off.
     #[test]
     fn three_dimensional_forces_add_up_to_the_weight_and_the_stress() {
-        let mut points = MaterialPoints::<3>::default();
-        let seeds = fill(&Solid::cuboid([0.1, 0.2, 0.3], [1.1, 0.7, 0.8]), 0.125);
-        let elastic = Elastic::from_young_poisson(1e6, 0.3);
-        points.add_solid(Material::Hencky(elastic), 1000.0, &seeds);
-        let grid = Grid {
-            h: 0.25,
-            origin: [-0.03, 0.05, 0.11],
-        };
+        let (points, grid) = fixtures::solid_box([0.1, 0.2, 0.3], [1.1, 0.7, 0.8], 0.125, 0.25);
         let conn = Connectivity::build(
             &grid,
             Basis::Gimp,
@@ -183,19 +176,14 @@ mod tests {
     fn a_homogeneous_deformation_reaches_every_point_in_three_dimensions() {
         use crate::grid::increment;
         use crate::material::{History3, MohrCoulomb};
-        let mut points = MaterialPoints::<3>::default();
-        let seeds = fill(&Solid::cuboid([0.1, 0.2, 0.3], [1.1, 0.7, 0.8]), 0.125);
+        let (mut points, grid) = fixtures::solid_box([0.1, 0.2, 0.3], [1.1, 0.7, 0.8], 0.125, 0.25);
         let soil = Material::MohrCoulomb(MohrCoulomb {
             elastic: Elastic::from_young_poisson(1e7, 0.3),
             cohesion: 1e3,
             friction: 30f64.to_radians(),
             dilation: 5f64.to_radians(),
         });
-        points.add_solid(soil, 1000.0, &seeds);
-        let grid = Grid {
-            h: 0.25,
-            origin: [-0.03, 0.05, 0.11],
-        };
+        points.materials[0] = soil;
         let grad_u = Matrix3::new(-2e-3, 1e-3, 0.0, 5e-4, 1.5e-3, -1e-3, 0.0, 2e-3, -3e-3);
         let reference = soil.respond_3d(&History3::virgin(), &grad_u, 1.0);
         assert!(reference.history.plastic_strain > 0.0);

@@ -592,18 +592,8 @@ mod tests {
     /// every point is in exactly one tile.
     #[test]
     fn three_dimensional_patterns_hold_every_block_and_tile_safely() {
-        use crate::grid::{Basis, Connectivity, Grid};
-        use crate::material::{Elastic, Material};
-        use crate::particles::MaterialPoints;
-        use crate::particles::solid_seeding::{Solid, fill};
-        let mut points = MaterialPoints::<3>::default();
-        let seeds = fill(&Solid::cuboid([0.0; 3], [3.0, 2.5, 2.0]), 0.125);
-        let elastic = Elastic::from_young_poisson(1e6, 0.3);
-        points.add_solid(Material::Hencky(elastic), 1.0, &seeds);
-        let grid = Grid {
-            h: 0.25,
-            origin: [-0.03, 0.05, 0.11],
-        };
+        use crate::grid::{Basis, Connectivity};
+        let (points, grid) = fixtures::solid_box([0.0; 3], [3.0, 2.5, 2.0], 0.125, 0.25);
         for basis in [Basis::Gimp, Basis::BSpline2] {
             let conn = Connectivity::build(
                 &grid,
