@@ -3,11 +3,12 @@
 //! The rest of a point's state is `[f64; D]` or a `D x D` matrix.
 
 use std::fmt::Debug;
+use std::ops::Index;
 
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Matrix4};
 
 use super::seeding::Domain;
-use crate::material::{CauchyStress, History, History3};
+use crate::material::{CauchyStress, History, History3, Tangent3};
 
 /// The dimension `D` as a type, to hang [`Space`] on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -27,6 +28,9 @@ pub trait Space<const D: usize> {
     /// The stress's slopes across the domain of a point seeded one a cell
     /// (plane strain: six; 3D: none yet).
     type Slopes: Copy + Debug + Default + PartialEq + Send + Sync;
+    /// The model's tangent `dP / d(dF)`, `D^2 x D^2`, entry `(D i + I, D j
+    /// + J)` for `dP_iI / d(dF)_jJ`.
+    type Tangent: Copy + Debug + Send + Sync + Index<(usize, usize), Output = f64>;
 }
 
 impl Space<2> for Dim<2> {
@@ -34,6 +38,7 @@ impl Space<2> for Dim<2> {
     type Stress = CauchyStress;
     type Domain = Domain;
     type Slopes = [f64; 6];
+    type Tangent = Matrix4<f64>;
 }
 
 impl Space<3> for Dim<3> {
@@ -41,4 +46,5 @@ impl Space<3> for Dim<3> {
     type Stress = Matrix3<f64>;
     type Domain = [f64; 3];
     type Slopes = ();
+    type Tangent = Tangent3;
 }
