@@ -55,3 +55,19 @@ pub fn solid_box(
     };
     (points, grid)
 }
+
+/// The connectivity of [`solid_box`]'s points on `basis`, every node
+/// active.
+pub fn solid_links(
+    points: &crate::particles::MaterialPoints<3>,
+    grid: &crate::grid::Grid<3>,
+    basis: crate::grid::Basis,
+) -> crate::grid::Connectivity<3> {
+    crate::grid::Connectivity::build(
+        grid,
+        basis,
+        &points.position,
+        |p| points.support(p),
+        |_| true,
+    )
+}

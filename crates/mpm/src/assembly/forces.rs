@@ -128,13 +128,7 @@ mod tests {
     #[test]
     fn three_dimensional_forces_add_up_to_the_weight_and_the_stress() {
         let (points, grid) = fixtures::solid_box([0.1, 0.2, 0.3], [1.1, 0.7, 0.8], 0.125, 0.25);
-        let conn = Connectivity::build(
-            &grid,
-            Basis::Gimp,
-            &points.position,
-            |p| points.support(p),
-            |_| true,
-        );
+        let conn = fixtures::solid_links(&points, &grid, Basis::Gimp);
         let g = [0.5, -2.0, -9.81];
         let weight = body_force(&conn, &points, g);
         let mass: f64 = points.mass.iter().sum();
@@ -188,13 +182,7 @@ mod tests {
         let reference = soil.respond_3d(&History3::virgin(), &grad_u, 1.0);
         assert!(reference.history.plastic_strain > 0.0);
         for basis in [Basis::Linear, Basis::Gimp, Basis::BSpline2, Basis::BSpline3] {
-            let conn = Connectivity::build(
-                &grid,
-                basis,
-                &points.position,
-                |p| points.support(p),
-                |_| true,
-            );
+            let conn = fixtures::solid_links(&points, &grid, basis);
             let u: Vec<f64> = conn
                 .nodes
                 .iter()

@@ -592,16 +592,10 @@ mod tests {
     /// every point is in exactly one tile.
     #[test]
     fn three_dimensional_patterns_hold_every_block_and_tile_safely() {
-        use crate::grid::{Basis, Connectivity};
+        use crate::grid::Basis;
         let (points, grid) = fixtures::solid_box([0.0; 3], [3.0, 2.5, 2.0], 0.125, 0.25);
         for basis in [Basis::Gimp, Basis::BSpline2] {
-            let conn = Connectivity::build(
-                &grid,
-                basis,
-                &points.position,
-                |p| points.support(p),
-                |_| true,
-            );
+            let conn = fixtures::solid_links(&points, &grid, basis);
             let pattern = Pattern::build(&conn, &[]);
             assert_eq!(pattern.dofs(), 3);
             assert_eq!(pattern.col_ptr.len(), 3 * conn.n_nodes() + 1);

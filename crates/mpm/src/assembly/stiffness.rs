@@ -230,16 +230,10 @@ mod tests {
     #[test]
     fn the_three_dimensional_stiffness_is_the_derivative_of_the_force() {
         use crate::assembly::internal_force;
-        use crate::grid::{Basis, Connectivity, increment};
+        use crate::grid::{Basis, increment};
         use crate::material::History3;
         let (points, grid) = fixtures::solid_box([0.0; 3], [1.0, 0.75, 0.5], 0.125, 0.25);
-        let conn = Connectivity::build(
-            &grid,
-            Basis::Gimp,
-            &points.position,
-            |p| points.support(p),
-            |_| true,
-        );
+        let conn = fixtures::solid_links(&points, &grid, Basis::Gimp);
         let pattern = Pattern::build(&conn, &[]);
         let n = conn.n_dofs();
         let u: Vec<f64> = (0..n)
