@@ -449,7 +449,7 @@ impl PointTiles {
                 for d in 0..D {
                     colour += (t[d].rem_euclid(2) as u64) << d;
                     let place = (t[d] - tile_min[d]) as u64;
-                    assert!(place < 1 << bits, "a grid of 8e9 nodes a side");
+                    assert!(place < 1 << bits, "more tiles a side than a key holds");
                     key |= place << (bits * (D - 1 - d) as u32);
                 }
                 Some((colour << 60 | key, p as u32))
