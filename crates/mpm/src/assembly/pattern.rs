@@ -501,9 +501,10 @@ impl PointTiles {
 /// solve returns zero increments there. Only the fixed DOFs' columns and
 /// their rows' blocks are visited (the held nodes are a boundary's few).
 pub fn constrain(pattern: &Pattern, values: &mut [f64], fixed: &[bool]) {
+    let d = pattern.dofs;
     let diagonal = |dof: usize| {
-        let (base, stride) = pattern.block((dof / 2) as u32, (dof / 2) as u32);
-        base + (dof % 2) * (1 + stride)
+        let (base, stride) = pattern.block((dof / d) as u32, (dof / d) as u32);
+        base + (dof % d) * (1 + stride)
     };
     let mut diag_sum = 0.0;
     let mut diag_count = 0usize;
@@ -517,15 +518,16 @@ pub fn constrain(pattern: &Pattern, values: &mut [f64], fixed: &[bool]) {
         1.0
     };
     for dof in (0..fixed.len()).filter(|&d| fixed[d]) {
-        let (a, c) = ((dof / 2) as u32, dof % 2);
+        let (a, c) = ((dof / d) as u32, dof % d);
         for k in pattern.col_ptr[dof]..pattern.col_ptr[dof + 1] {
             values[k] = 0.0;
         }
         let nb = &pattern.neighbours[pattern.first[a as usize]..pattern.first[a as usize + 1]];
         for &b in nb {
             let (base, stride) = pattern.block(a, b);
-            values[base + c] = 0.0;
-            values[base + c + stride] = 0.0;
+            for column in 0..d {
+                values[base + c + column * stride] = 0.0;
+            }
         }
         values[diagonal(dof)] = scale;
     }
@@ -630,6 +632,50 @@ mod tests {
             }
             assert!(seen.iter().all(|&n| n == 1), "{basis:?}");
             assert_eq!(tiles.count(), tiles.of_colour(7).end);
+        }
+    }
+
+    /// In 3D a held DOF's row and column are cleared but for its diagonal,
+    /// which takes the mean of the free diagonals' magnitudes, and every
+    /// other entry stays (a box on GIMP with the z DOFs of every node
+    /// below z = 0.3 held, the values made up).
+    #[test]
+    fn three_dimensional_held_dofs_become_a_scaled_identity() {
+        use super::constrain;
+        use crate::grid::Basis;
+        let (points, grid) = fixtures::solid_box([0.0; 3], [1.0, 0.75, 0.5], 0.125, 0.25);
+        let conn = fixtures::solid_links(&points, &grid, Basis::Gimp);
+        let pattern = Pattern::build(&conn, &[]);
+        let n = conn.n_dofs();
+        let fixed: Vec<bool> = (0..n)
+            .map(|dof| dof % 3 == 2 && grid.node_position(conn.nodes[dof / 3])[2] < 0.3)
+            .collect();
+        assert!(fixed.iter().any(|&f| f) && !fixed.iter().all(|&f| f));
+        let before: Vec<f64> = (0..pattern.nnz()).map(|k| 1.0 + (k % 17) as f64).collect();
+        let mut after = before.clone();
+        constrain(&pattern, &mut after, &fixed);
+        let (mut diagonal_sum, mut free) = (0.0, 0.0);
+        for col in (0..n).filter(|&c| !fixed[c]) {
+            for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
+                if pattern.row_idx[k] as usize == col {
+                    diagonal_sum += before[k];
+                    free += 1.0;
+                }
+            }
+        }
+        let scale = diagonal_sum / free;
+        for col in 0..n {
+            for k in pattern.col_ptr[col]..pattern.col_ptr[col + 1] {
+                let row = pattern.row_idx[k] as usize;
+                let expected = if row == col && fixed[col] {
+                    scale
+                } else if fixed[row] || fixed[col] {
+                    0.0
+                } else {
+                    before[k]
+                };
+                assert_eq!(after[k], expected, "({row}, {col})");
+            }
         }
     }
 }
