@@ -19,16 +19,16 @@ const fn key_bits(d: usize) -> u32 {
     64 / d as u32
 }
 
-/// How far from the grid's origin, in cells, material may go in 2D: node
-/// keys hold indices within 2^31 of it, and this leaves room for the nodes
-/// around the material.
-pub const REACH_CELLS: f64 = (1u64 << 30) as f64;
-
-/// [`REACH_CELLS`] in `D` dimensions: half the span a key's coordinate
-/// holds (2^30 cells in 2D, 2^19 in 3D).
+/// How far from the grid's origin, in cells, material may go in `d`
+/// dimensions: half the span a key's coordinate holds (node keys hold
+/// indices within 2^31 of it in 2D, 2^20 in 3D), which leaves room for the
+/// nodes around the material.
 pub const fn reach_cells(d: usize) -> f64 {
     (1u64 << (key_bits(d) - 2)) as f64
 }
+
+/// [`reach_cells`] in 2D: 2^30 cells.
+pub const REACH_CELLS: f64 = reach_cells(2);
 
 /// The key of the node at lattice coordinates `c`.
 #[inline]
@@ -221,7 +221,7 @@ mod tests {
     }
 
     /// Keys in 3D round-trip to the reach, and sort by `i`, then `j`,
-    /// then `k`, as in 2D.
+    /// then `k`, as in 2D; 2D keys round-trip to theirs.
     #[test]
     fn keys_in_three_dimensions_round_trip_and_sort_lexicographically() {
         let reach = reach_cells(3) as i64;
@@ -240,7 +240,10 @@ mod tests {
                 .windows(2)
                 .all(|w| lattice_key(w[0]) < lattice_key(w[1]))
         );
-        assert_eq!(reach_cells(2), REACH_CELLS);
+        let reach = REACH_CELLS as i64;
+        for c in [[reach, -reach], [-reach, reach]] {
+            assert_eq!(lattice_coordinates::<2>(lattice_key(c)), c);
+        }
     }
 
     #[test]
