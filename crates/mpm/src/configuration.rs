@@ -4,14 +4,17 @@
 //! loads, the IBM band, the soft background) take it as one bundle.
 
 use crate::grid::{Basis, Connectivity, Grid};
-use crate::particles::MaterialPoints;
+use crate::particles::{Dim, MaterialPoints, Space};
 
 #[derive(Clone, Copy)]
-pub struct Configuration<'a> {
-    pub grid: &'a Grid,
+pub struct Configuration<'a, const D: usize = 2>
+where
+    Dim<D>: Space<D>,
+{
+    pub grid: &'a Grid<D>,
     /// The shape functions, which the boundary's quadrature uses too.
     pub basis: Basis,
     /// The grid reset of the step: shape functions on the active nodes.
-    pub conn: &'a Connectivity,
-    pub points: &'a MaterialPoints,
+    pub conn: &'a Connectivity<D>,
+    pub points: &'a MaterialPoints<D>,
 }

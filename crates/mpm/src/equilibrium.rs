@@ -14,76 +14,107 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use nalgebra::Matrix2;
+use nalgebra::SMatrix;
 use rayon::prelude::*;
 
-use crate::assembly::cell_mean::{CellMean, CellTrial};
-use crate::assembly::fbar::{self, FbarCells, FbarTrial};
+use crate::assembly::averaging::{Averaging, CellAverages, Unaveraged};
 use crate::assembly::{self, NodeAdjacency, Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
-use crate::grid::{Basis, Connectivity, increment, node_coordinates};
-use crate::linsolve::{Factorisation, SolveTally, SolverSettings, SparseSolver};
-use crate::material::{CauchyStress, History, Material, Response};
+use crate::grid::{Basis, Connectivity, NodeKey, increment, lattice_coordinates};
+use crate::linsolve::{Factorisation, GridNodes, SolveTally, SolverSettings, SparseSolver};
+use crate::material::Material;
 use crate::newton::{Equilibrium, PathEquilibrium};
 use crate::parallel;
-use crate::particles::MaterialPoints;
 use crate::particles::admissible::{self, InadmissiblePoint};
+use crate::particles::{Dim, MaterialPoints, Space};
 use crate::report::{StepMemory, StepTimings};
 use crate::supports::HeldDofs;
 
+/// What a step's equilibrium needs that differs by dimension beyond the
+/// points' types ([`Space`]): the averagings it may hold, and the grid
+/// coordinates its solver orders the nodes by.
+pub trait StepSpace<const D: usize>: Space<D>
+where
+    Dim<D>: Space<D>,
+{
+    type Averages: Averaging<D>;
+    fn grid_nodes(keys: &[NodeKey]) -> GridNodes;
+}
+
+impl StepSpace<2> for Dim<2> {
+    type Averages = CellAverages;
+    fn grid_nodes(keys: &[NodeKey]) -> GridNodes {
+        GridNodes::Plane(keys.iter().map(|&key| lattice_coordinates(key)).collect())
+    }
+}
+
+impl StepSpace<3> for Dim<3> {
+    type Averages = Unaveraged;
+    fn grid_nodes(keys: &[NodeKey]) -> GridNodes {
+        GridNodes::Solid(keys.iter().map(|&key| lattice_coordinates(key)).collect())
+    }
+}
+
+type Averages<const D: usize> = <Dim<D> as StepSpace<D>>::Averages;
+type Trial<const D: usize> = <Averages<D> as Averaging<D>>::Trial;
+type Response<const D: usize> = <Dim<D> as Space<D>>::Response;
+
 /// What a load step's system is made of besides the material points: the
-/// grid supports' hold, the loads that do not move, F-bar's averaging
-/// cells (which change the points' own response), and the step terms
-/// (boundary loads, the IBM band, the soft background, the ghost penalty),
-/// whose stiffness goes into the tangent in the list's order.
-pub struct StepTerms<'a> {
+/// grid supports' hold, the loads that do not move, the averaging of the
+/// points' deformation over cells (which changes the points' own
+/// response), and the step terms (boundary loads, the IBM band, the soft
+/// background, the ghost penalty), whose stiffness goes into the tangent in
+/// the list's order.
+pub struct StepTerms<'a, const D: usize = 2>
+where
+    Dim<D>: StepSpace<D>,
+{
     pub held: HeldDofs,
     /// Gravity and point loads at the step's load factor.
     pub f_ext: Vec<f64>,
     /// For a step whose load factor is an unknown (path following): that
     /// factor, and the derivative of `f_ext` by it (the ramped parts).
     pub f_ext_rate: Option<(f64, Vec<f64>)>,
-    /// F-bar's averaging cells, when the case asks for it.
-    pub fbar: Option<FbarCells>,
-    /// The cell-mean strain's cells, when the case asks for it.
-    pub cell_mean: Option<CellMean>,
-    pub terms: Vec<Box<dyn StepTerm + 'a>>,
+    /// F-bar's or the cell-mean strain's cells, when the case asks for one.
+    pub averaging: Option<Averages<D>>,
+    pub terms: Vec<Box<dyn StepTerm<D> + 'a>>,
 }
 
-impl StepTerms<'_> {
+impl<const D: usize> StepTerms<'_, D>
+where
+    Dim<D>: StepSpace<D>,
+{
     /// The stiffness pattern: the material's couplings (points' nodes) and
-    /// those F-bar and the step terms add.
-    pub fn pattern(&self, conn: &Connectivity) -> Pattern {
+    /// those the averaging and the step terms add.
+    pub fn pattern(&self, conn: &Connectivity<D>) -> Pattern {
         let mut groups: Vec<Vec<u32>> = self
             .terms
             .iter()
             .flat_map(|term| term.coupling_groups())
             .collect();
-        if let Some(fbar) = &self.fbar {
-            groups.extend(fbar.coupling_groups());
-        }
-        if let Some(cells) = &self.cell_mean {
-            groups.extend(cells.coupling_groups());
+        if let Some(averaging) = &self.averaging {
+            groups.extend(averaging.coupling_groups());
         }
         Pattern::build(conn, &groups)
     }
 }
 
 /// The equilibrium equations of one load step, as Newton sees them.
-pub struct StepEquilibrium<'a> {
-    conn: &'a Connectivity,
+pub struct StepEquilibrium<'a, const D: usize = 2>
+where
+    Dim<D>: StepSpace<D>,
+{
+    conn: &'a Connectivity<D>,
     pattern: Pattern,
-    points: &'a MaterialPoints,
+    points: &'a MaterialPoints<D>,
     /// DOFs the grid supports hold.
     held: HeldDofs,
-    fbar: Option<FbarCells>,
-    /// F-bar's cell averages and coupling terms at the last trial state.
-    fbar_trial: Option<FbarTrial>,
-    cell_mean: Option<CellMean>,
-    /// The cell-mean strain's gradients and cell sums at the last trial.
-    cell_trial: Option<CellTrial>,
+    averaging: Option<Averages<D>>,
+    /// The averaging's state at the last trial state (F-bar's cell
+    /// averages and coupling terms, the cell mean's gradients and sums).
+    averaged_trial: Option<Trial<D>>,
     /// The step terms, in the order their stiffness is added.
-    terms: Vec<Box<dyn StepTerm + 'a>>,
+    terms: Vec<Box<dyn StepTerm<D> + 'a>>,
     /// The largest of the terms' [`StepTerm::force_scale`], once per step.
     terms_scale: f64,
     /// The supports' forces at the last trial state (kept apart from
@@ -121,15 +152,15 @@ pub struct AnalysedPattern {
 /// What a converged step leaves: the points' states to commit, what its
 /// terms carry to the next step ([`StepTerm::into_carried`]), what it
 /// cost, and its analysed pattern.
-pub struct ConvergedStep {
-    pub states: Vec<PointState>,
-    /// With F-bar, how far the mean pressure each point worked with stood
-    /// from its own ([`FbarCells::carried`]), which the next step carries.
-    pub fbar_pressure: Option<Vec<f64>>,
-    /// With the cell-mean strain, how far the stress each point worked
-    /// with stood from its own ([`CellMean::carried`]), which the next step
-    /// carries.
-    pub cell_mean_stress: Option<Vec<Matrix2<f64>>>,
+pub struct ConvergedStep<const D: usize = 2>
+where
+    Dim<D>: StepSpace<D>,
+{
+    pub states: Vec<PointState<D>>,
+    /// With an averaging, what the next step carries of it
+    /// ([`Averaging::carried`]: how far the pressure or the stress each
+    /// point worked with stood from its own model's).
+    pub averaged: Option<<Averages<D> as Averaging<D>>::Carried>,
     pub carried: Vec<Box<dyn Any>>,
     pub timings: StepTimings,
     pub memory: StepMemory,
@@ -139,19 +170,25 @@ pub struct ConvergedStep {
 /// What a point commits when its step converges: its response's history
 /// and Cauchy stress.
 #[derive(Debug, Clone, Copy)]
-pub struct PointState {
-    pub history: History,
-    pub cauchy: CauchyStress,
+pub struct PointState<const D: usize = 2>
+where
+    Dim<D>: Space<D>,
+{
+    pub history: <Dim<D> as Space<D>>::History,
+    pub cauchy: <Dim<D> as Space<D>>::Stress,
 }
 
-impl<'a> StepEquilibrium<'a> {
+impl<'a, const D: usize> StepEquilibrium<'a, D>
+where
+    Dim<D>: StepSpace<D>,
+{
     /// The system of a step on the configuration `start`; `pattern` must
     /// hold every coupling of `terms` ([`StepTerms::pattern`]). `previous`
     /// is the last step's analysed pattern, whose solver is reused when
     /// the patterns are the same.
     pub fn new(
-        start: &Configuration<'a>,
-        terms: StepTerms<'a>,
+        start: &Configuration<'a, D>,
+        terms: StepTerms<'a, D>,
         pattern: Pattern,
         previous: Option<AnalysedPattern>,
         (settings, tally): (&SolverSettings, &Arc<SolveTally>),
@@ -161,8 +198,7 @@ impl<'a> StepEquilibrium<'a> {
             held,
             f_ext,
             f_ext_rate,
-            fbar,
-            cell_mean,
+            averaging,
             terms,
         } = terms;
         let solver = match previous {
@@ -176,10 +212,7 @@ impl<'a> StepEquilibrium<'a> {
                 // are made from them. LU orders its own columns.
                 let solver = SparseSolver::new(conn.n_dofs(), None, settings, tally.clone())
                     .with_grid(
-                        conn.nodes
-                            .iter()
-                            .map(|&key| node_coordinates(key))
-                            .collect(),
+                        Dim::<D>::grid_nodes(&conn.nodes),
                         matches!(start.basis, Basis::BSpline2 | Basis::BSpline3),
                     );
                 if start.points.materials.iter().all(Material::is_elastic) {
@@ -194,10 +227,8 @@ impl<'a> StepEquilibrium<'a> {
             pattern,
             points: start.points,
             held,
-            fbar,
-            fbar_trial: None,
-            cell_mean,
-            cell_trial: None,
+            averaging,
+            averaged_trial: None,
             terms_scale: terms
                 .iter()
                 .map(|term| term.force_scale(conn.n_dofs()))
@@ -235,8 +266,8 @@ impl<'a> StepEquilibrium<'a> {
     /// Per support of the case (`n` of them), the force it exerts on the
     /// body at the converged increment `u`: grid supports' from the
     /// material's forces on their DOFs, the others' from their step terms.
-    pub fn reactions(&self, u: &[f64], n: usize) -> Vec<[f64; 2]> {
-        let mut reactions = vec![[0.0; 2]; n];
+    pub fn reactions(&self, u: &[f64], n: usize) -> Vec<[f64; D]> {
+        let mut reactions = vec![[0.0; D]; n];
         self.held
             .add_reactions(&self.f_int, &self.f_ext, &mut reactions);
         for term in &self.terms {
@@ -244,21 +275,22 @@ impl<'a> StepEquilibrium<'a> {
                 continue;
             };
             for (r, b) in reactions.iter_mut().zip(forces) {
-                r[0] += b[0];
-                r[1] += b[1];
+                for c in 0..D {
+                    r[c] += b[c];
+                }
             }
         }
         reactions
     }
 
     /// Resultant of the loads applied to the grid at the last trial state.
-    pub fn applied_load(&self) -> [f64; 2] {
-        [0, 1].map(|c| self.f_ext.iter().skip(c).step_by(2).sum())
+    pub fn applied_load(&self) -> [f64; D] {
+        std::array::from_fn(|c| self.f_ext.iter().skip(c).step_by(D).sum())
     }
 
     /// What the step commits once converged (the points' states at the
     /// last trial increment, Newton's converged one), and what it hands on.
-    pub fn into_converged(mut self) -> ConvergedStep {
+    pub fn into_converged(mut self) -> ConvergedStep<D> {
         // The tangent and the compressed columns are done with: given back
         // before the states are made.
         self.k = Vec::new();
@@ -269,23 +301,16 @@ impl<'a> StepEquilibrium<'a> {
             .into_par_iter()
             .with_min_len(parallel::POINT_RESPONSES)
             .map(|p| {
-                let r = responses.at(p, false);
-                PointState {
-                    history: r.history,
-                    cauchy: r.cauchy,
-                }
+                let (history, cauchy) = Dim::<D>::state_of(&responses.at(p, false));
+                PointState { history, cauchy }
             })
-            .collect::<Vec<PointState>>();
-        let fbar_pressure = (self.fbar.as_ref())
-            .zip(self.fbar_trial.as_ref())
-            .map(|(fbar, trial)| fbar.carried(trial));
-        let cell_mean_stress = (self.cell_mean.as_ref())
-            .zip(self.cell_trial.as_ref())
-            .map(|(cells, trial)| cells.carried(trial, self.points));
+            .collect::<Vec<PointState<D>>>();
+        let averaged = (self.averaging.as_ref())
+            .zip(self.averaged_trial.as_ref())
+            .map(|(averaging, trial)| averaging.carried(trial, self.points));
         ConvergedStep {
             states,
-            fbar_pressure,
-            cell_mean_stress,
+            averaged,
             carried: self
                 .terms
                 .into_iter()
@@ -302,24 +327,17 @@ impl<'a> StepEquilibrium<'a> {
 
     /// The points' responses at the last trial increment (which the point
     /// loop found admissible, if the tangent or a commit asks for them).
-    fn trial_responses(&self) -> TrialResponses<'_> {
+    fn trial_responses(&self) -> TrialResponses<'_, D> {
         TrialResponses {
             conn: self.conn,
             points: self.points,
             u: &self.u,
-            fbar: self.fbar.as_ref().map(|fbar| {
+            averaged: self.averaging.as_ref().map(|averaging| {
                 let trial = self
-                    .fbar_trial
+                    .averaged_trial
                     .as_ref()
-                    .expect("F-bar's averages are made with each trial state");
-                (fbar, trial)
-            }),
-            cell: self.cell_mean.as_ref().map(|cells| {
-                let trial = self
-                    .cell_trial
-                    .as_ref()
-                    .expect("the cell means are made with each trial state");
-                (cells, trial)
+                    .expect("the cells' averages are made with each trial state");
+                (averaging, trial)
             }),
         }
     }
@@ -329,40 +347,33 @@ impl<'a> StepEquilibrium<'a> {
     fn assemble_tangent(&mut self) {
         let t = Instant::now();
         let mut k = std::mem::take(&mut self.k);
-        if let (Some(cells), Some(trial)) = (&self.cell_mean, &self.cell_trial) {
-            // The points' own stiffness is the hourglass term's; the
-            // models' tangents enter through the cells' blocks.
-            let mp = self.points;
+        let (conn, mp) = (self.conn, self.points);
+        let responses = self.trial_responses();
+        if let (Some(averaging), Some(trial)) = (&self.averaging, &self.averaged_trial) {
             assembly::stiffness(
-                self.conn,
+                conn,
                 &self.pattern,
                 mp,
-                |p| cells.local_tangent(mp, p),
+                |p| {
+                    averaging
+                        .own_tangent(mp, p)
+                        .unwrap_or_else(|| Dim::<D>::tangent_of(&responses.at(p, true)))
+                },
                 false,
                 &mut k,
             );
-            cells.add_to(self.conn, mp, trial, &self.pattern, &mut k);
+            averaging.add_couplings(trial, conn, mp, &self.pattern, &mut k);
         } else {
-            // Loads that move add their own unsymmetric part below; F-bar's
-            // points answer to a modified gradient.
-            let symmetric_points = self.fbar.is_none()
-                && self
-                    .points
-                    .materials
-                    .iter()
-                    .all(Material::symmetric_tangent);
-            let responses = self.trial_responses();
+            // Loads that move add their own unsymmetric part below.
+            let symmetric_points = mp.materials.iter().all(Material::symmetric_tangent);
             assembly::stiffness(
-                self.conn,
+                conn,
                 &self.pattern,
-                self.points,
-                |p| responses.at(p, true).tangent,
+                mp,
+                |p| Dim::<D>::tangent_of(&responses.at(p, true)),
                 symmetric_points,
                 &mut k,
             );
-        }
-        if let (Some(fbar), Some(trial)) = (&self.fbar, &self.fbar_trial) {
-            fbar.add_to(self.conn, self.points, trial, &self.pattern, &mut k);
         }
         for term in &self.terms {
             term.add_stiffness(&self.u, &self.pattern, &mut k);
@@ -374,7 +385,10 @@ impl<'a> StepEquilibrium<'a> {
     }
 }
 
-impl Equilibrium for StepEquilibrium<'_> {
+impl<const D: usize> Equilibrium for StepEquilibrium<'_, D>
+where
+    Dim<D>: StepSpace<D>,
+{
     fn n_dofs(&self) -> usize {
         self.conn.n_dofs()
     }
@@ -384,40 +398,24 @@ impl Equilibrium for StepEquilibrium<'_> {
     fn out_of_balance(&mut self, u: &[f64]) -> Result<(Vec<f64>, f64), InadmissiblePoint> {
         let t = Instant::now();
         self.assembled = false;
-        self.fbar_trial = None;
-        self.cell_trial = None;
+        self.averaged_trial = None;
         self.u.clear();
         self.u.extend_from_slice(u);
         let (conn, mp) = (self.conn, self.points);
-        if let Some(cells) = &self.cell_mean {
-            let trial = cells.trial(conn, mp, u)?;
-            self.f_int = assembly::internal_force(conn, mp, |p| cells.stress(&trial, mp, p));
-            self.cell_trial = Some(trial);
-        } else if let Some(fbar) = &self.fbar {
-            let averages = fbar::trial_averages(fbar, conn, mp, u);
-            let (local, parts): (Vec<Matrix2<f64>>, Vec<_>) = (0..mp.len())
-                .into_par_iter()
-                .with_min_len(parallel::POINT_RESPONSES)
-                .map(|p| {
-                    fbar::point_response(fbar, (&averages, None), conn, mp, u, p)
-                        .map(|(response, part)| (response.p, part))
-                })
-                .collect::<Result<Vec<_>, _>>()?
-                .into_iter()
-                .unzip();
-            let trial = FbarTrial::new(fbar, averages, parts);
-            self.f_int = assembly::internal_force(conn, mp, |p| trial.stress(fbar, p, &local[p]));
-            self.fbar_trial = Some(trial);
+        if let Some(averaging) = &self.averaging {
+            let (f_int, trial) = averaging.internal_force(conn, mp, u)?;
+            self.f_int = f_int;
+            self.averaged_trial = Some(trial);
         } else {
             // An inadmissible point adds nothing meanwhile, and the
             // lowest-numbered one is reported.
             let responses = self.trial_responses();
             let refused = AtomicUsize::new(usize::MAX);
             let f_int = assembly::internal_force(conn, mp, |p| match responses.checked(p, false) {
-                Ok(response) => response.p,
+                Ok(response) => Dim::<D>::stress_of(&response),
                 Err(_) => {
                     refused.fetch_min(p, Ordering::Relaxed);
-                    Matrix2::zeros()
+                    SMatrix::zeros()
                 }
             });
             let point = refused.into_inner();
@@ -474,7 +472,10 @@ impl Equilibrium for StepEquilibrium<'_> {
     }
 }
 
-impl PathEquilibrium for StepEquilibrium<'_> {
+impl<const D: usize> PathEquilibrium for StepEquilibrium<'_, D>
+where
+    Dim<D>: StepSpace<D>,
+{
     fn set_load_factor(&mut self, lambda: f64) {
         let (made_at, rate) = self
             .f_ext_rate
@@ -515,7 +516,10 @@ impl PathEquilibrium for StepEquilibrium<'_> {
     }
 }
 
-impl StepEquilibrium<'_> {
+impl<const D: usize> StepEquilibrium<'_, D>
+where
+    Dim<D>: StepSpace<D>,
+{
     /// Solves `K x = b` for each of `rhs` with the tangent at the last
     /// trial state.
     fn solve_columns(
@@ -526,7 +530,7 @@ impl StepEquilibrium<'_> {
         if !self.assembled {
             self.assemble_tangent();
         }
-        let averaged = self.fbar.is_some() || self.cell_mean.is_some();
+        let averaged = self.averaging.is_some();
         let symmetric = symmetric_tangent(&self.terms, averaged, self.points);
         let solved = self
             .solver
@@ -536,8 +540,10 @@ impl StepEquilibrium<'_> {
             links: self.conn.heap_bytes(),
             pattern: self.pattern.heap_bytes(),
             tangent: std::mem::size_of_val(self.k.as_slice()),
-            responses: self.fbar_trial.as_ref().map_or(0, FbarTrial::heap_bytes)
-                + self.cell_trial.as_ref().map_or(0, CellTrial::heap_bytes),
+            responses: self
+                .averaged_trial
+                .as_ref()
+                .map_or(0, <Averages<D> as Averaging<D>>::trial_bytes),
             solver: self.solver.memory(),
         };
         let (du, kind, timing) = solved?;
@@ -556,66 +562,61 @@ impl StepEquilibrium<'_> {
 /// elastic models and associated flow under loads that do not move have a
 /// symmetric tangent; with the cells' averages (`averaged`, F-bar or the
 /// cell mean) it is taken as unsymmetric.
-fn symmetric_tangent(
-    terms: &[Box<dyn StepTerm + '_>],
+fn symmetric_tangent<const D: usize>(
+    terms: &[Box<dyn StepTerm<D> + '_>],
     averaged: bool,
-    points: &MaterialPoints,
-) -> bool {
+    points: &MaterialPoints<D>,
+) -> bool
+where
+    Dim<D>: Space<D>,
+{
     terms.iter().all(|term| term.symmetric())
         && !averaged
         && points.materials.iter().all(Material::symmetric_tangent)
 }
 
 /// Every point's response at a trial increment `u`, made on request.
-struct TrialResponses<'s> {
-    conn: &'s Connectivity,
-    points: &'s MaterialPoints,
+struct TrialResponses<'s, const D: usize>
+where
+    Dim<D>: StepSpace<D>,
+{
+    conn: &'s Connectivity<D>,
+    points: &'s MaterialPoints<D>,
     u: &'s [f64],
-    /// F-bar's cells, with their averages at `u`.
-    fbar: Option<(&'s FbarCells, &'s FbarTrial)>,
-    /// The cell-mean strain's cells, with their sums at `u`.
-    cell: Option<(&'s CellMean, &'s CellTrial)>,
+    /// The averaging's cells, with their state at `u`.
+    averaged: Option<(&'s Averages<D>, &'s Trial<D>)>,
 }
 
-impl TrialResponses<'_> {
+impl<const D: usize> TrialResponses<'_, D>
+where
+    Dim<D>: StepSpace<D>,
+{
     /// Point `p`'s response, or the point if it is not admissible at `u`
     /// ([`admissible`]). Without `want_tangent` its tangent may be left
     /// zero ([`Material::respond_without_tangent`]; F-bar's point needs it).
-    fn checked(&self, p: usize, want_tangent: bool) -> Result<Response, InadmissiblePoint> {
+    fn checked(&self, p: usize, want_tangent: bool) -> Result<Response<D>, InadmissiblePoint> {
         let (conn, mp) = (self.conn, self.points);
-        if let Some((cells, trial)) = self.cell {
-            return cells.response(trial, mp, p, want_tangent);
-        }
-        if let Some((fbar, trial)) = self.fbar {
-            let cells = (trial.averages.as_slice(), Some(trial.means.as_slice()));
-            return fbar::point_response(fbar, cells, conn, mp, self.u, p)
-                .map(|(response, _)| response);
+        if let Some((averaging, trial)) = self.averaged {
+            return averaging.response(trial, conn, mp, self.u, p, want_tangent);
         }
         let (_, grad_u) = increment(conn.point_links(p), self.u);
-        let j_start = mp.deformation[p].determinant();
-        let jacobian = j_start * (Matrix2::identity() + grad_u).determinant();
+        let j_start = Dim::<D>::determinant(&mp.deformation[p]);
+        let jacobian = j_start * Dim::<D>::determinant(&(SMatrix::identity() + grad_u));
         admissible::check_volume(p, j_start, &[jacobian])?;
         let material = &mp.materials[mp.material[p] as usize];
-        let response = if want_tangent {
-            material.respond(&mp.history[p], &grad_u, j_start)
-        } else {
-            material.respond_without_tangent(&mp.history[p], &grad_u, j_start)
-        };
+        let response = Dim::<D>::respond(material, &mp.history[p], &grad_u, j_start, want_tangent);
         admissible::check_response(p, jacobian, response)
     }
 
     /// Point `p`'s response at a trial state the point loop found
     /// admissible: the only ones Newton assembles a tangent at or converges
     /// to. (An inadmissible point would answer its start's response.)
-    fn at(&self, p: usize, want_tangent: bool) -> Response {
+    fn at(&self, p: usize, want_tangent: bool) -> Response<D> {
         self.checked(p, want_tangent).unwrap_or_else(|_| {
             let mp = self.points;
-            let j_start = mp.deformation[p].determinant();
-            mp.materials[mp.material[p] as usize].respond(
-                &mp.history[p],
-                &Matrix2::zeros(),
-                j_start,
-            )
+            let j_start = Dim::<D>::determinant(&mp.deformation[p]);
+            let material = &mp.materials[mp.material[p] as usize];
+            Dim::<D>::respond(material, &mp.history[p], &SMatrix::zeros(), j_start, true)
         })
     }
 }

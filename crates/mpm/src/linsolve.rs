@@ -201,9 +201,9 @@ pub struct SparseSolver {
     /// solve with a stale factor converged slower than [`REFRESH_RATE`]),
     /// or builds a fresh multigrid hierarchy.
     refresh: bool,
-    /// The grid coordinates of the nodes whose DOFs are `2k` and `2k + 1`,
-    /// for [`SymmetricMethod::Multigrid`]'s aggregates.
-    nodes: Option<Vec<[i64; 2]>>,
+    /// The grid coordinates of the nodes, for the nested-dissection order
+    /// and [`SymmetricMethod::Multigrid`]'s aggregates.
+    nodes: Option<GridNodes>,
     /// Whether the basis is a B-spline's, whose multigrid smooths more
     /// ([`Hierarchy::new`]).
     wide_stencil: bool,
@@ -270,6 +270,23 @@ const MULTIGRID_MAX_ITERATIONS_STALE: usize = 40;
 /// than this an iteration asks for a fresh one at the next solve.
 const MULTIGRID_REFRESH_RATE: f64 = 0.5;
 
+/// The grid coordinates of a step's active nodes: node `k`'s DOFs are
+/// `D k` to `D k + D - 1`.
+#[derive(Debug, Clone)]
+pub enum GridNodes {
+    Plane(Vec<[i64; 2]>),
+    Solid(Vec<[i64; 3]>),
+}
+
+/// The nodes' coordinates when they lie in a plane: the multigrid
+/// coarsens a 2D grid only, and a 3D pattern takes the kept factor.
+fn plane_nodes(nodes: &Option<GridNodes>) -> Option<&[[i64; 2]]> {
+    match nodes {
+        Some(GridNodes::Plane(nodes)) => Some(nodes),
+        _ => None,
+    }
+}
+
 /// How symmetric tangents are solved.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SymmetricMethod {
@@ -281,9 +298,9 @@ pub enum SymmetricMethod {
     /// CG preconditioned by a smoothed-aggregation multigrid V-cycle
     /// ([`crate::multigrid`]) built on an earlier tangent of the pattern,
     /// rebuilt when CG slows down: no factor, memory linear in the
-    /// unknowns. It needs the nodes' grid coordinates
-    /// ([`SparseSolver::with_grid`]); without them, or when its hierarchy
-    /// fails, the solver takes the kept factor.
+    /// unknowns. It needs the nodes' grid coordinates in a plane
+    /// ([`SparseSolver::with_grid`]); without them (in 3D too, for now), or
+    /// when its hierarchy fails, the solver takes the kept factor.
     Multigrid,
 }
 
@@ -551,12 +568,12 @@ impl SparseSolver {
         }
     }
 
-    /// This solver, told the grid coordinates of the nodes whose DOFs are
-    /// `2k` and `2k + 1`: the multigrid's aggregates are blocks of them,
-    /// and Cholesky's nested-dissection order, when the solver was given
-    /// none, is made from them when first needed. `wide_stencil` for the
-    /// B-splines, whose multigrid smooths more.
-    pub fn with_grid(mut self, nodes: Vec<[i64; 2]>, wide_stencil: bool) -> Self {
+    /// This solver, told the grid coordinates of the nodes: the
+    /// multigrid's aggregates are blocks of them (in 2D), and Cholesky's
+    /// nested-dissection order, when the solver was given none, is made
+    /// from them when first needed. `wide_stencil` for the B-splines, whose
+    /// multigrid smooths more.
+    pub fn with_grid(mut self, nodes: GridNodes, wide_stencil: bool) -> Self {
         self.nodes = Some(nodes);
         self.wide_stencil = wide_stencil;
         self
@@ -580,7 +597,7 @@ impl SparseSolver {
     pub fn with_elastic_tangents(mut self) -> Self {
         if !self.forced
             && !self.wide_stencil
-            && self.nodes.is_some()
+            && plane_nodes(&self.nodes).is_some()
             && self.n >= ELASTIC_GMRES_MULTIGRID_FROM_DOFS
         {
             self.gmres_method = SymmetricMethod::Multigrid;
@@ -785,7 +802,7 @@ impl SparseSolver {
             let hierarchy = fitted_hierarchy(
                 &mut self.hierarchy,
                 op,
-                (self.nodes.as_deref(), self.wide_stencil),
+                (plane_nodes(&self.nodes), self.wide_stencil),
                 fresh,
                 (&self.tally, &mut self.factorisations),
                 &mut timing,
@@ -829,10 +846,12 @@ impl SparseSolver {
     fn analyse_cholesky(&mut self, pattern: &Pattern, schedule: bool) -> Result<(), String> {
         if self.llt.is_none() {
             if self.order.is_none() && self.nested_dissection {
-                self.order = self
-                    .nodes
-                    .as_deref()
-                    .map(|nodes| with_inverse(ordering::nested_dissection(nodes, pattern)));
+                self.order = self.nodes.as_ref().map(|nodes| {
+                    with_inverse(match nodes {
+                        GridNodes::Plane(nodes) => ordering::nested_dissection(nodes, pattern),
+                        GridNodes::Solid(nodes) => ordering::nested_dissection(nodes, pattern),
+                    })
+                });
             }
             let (col_ptr, row_idx) = upper_triangle(pattern);
             let structure =

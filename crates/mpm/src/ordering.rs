@@ -1,17 +1,20 @@
 //! The fill-reducing ordering of the tangent's unknowns: nested dissection
-//! of the active grid nodes by grid lines.
+//! of the active grid nodes by grid lines (in 3D, grid planes).
 //!
 //! The active nodes carry integer grid coordinates, and two nodes couple
-//! only when they lie within a few cells of each other in both directions
+//! only when they lie within a few cells of each other in every direction
 //! (one for the bilinear basis, two for GIMP; the `reach`). Cutting the
-//! node set at the median grid line of its longer side, with the `reach`
+//! node set at the median grid line of its longest side, with the `reach`
 //! lines from there as the separator, leaves two halves that do not couple:
 //! each half is ordered the same way, then the separator after both. For a
 //! 2D mesh of n nodes this keeps the Cholesky factor's fill O(n log n) and
 //! its flops O(n^1.5) (George 1973, "Nested dissection of a regular finite
-//! element mesh"). Any order gives the same solution; the ordering only
-//! changes the fill, so a coupling beyond the reach (a boundary load
+//! element mesh"); in 3D the separators are planes, the fill O(n^(4/3))
+//! and the flops O(n^2). Any order gives the same solution; the ordering
+//! only changes the fill, so a coupling beyond the reach (a boundary load
 //! spanning several cells) costs fill, never correctness.
+
+use std::cmp::Ordering;
 
 use crate::assembly::Pattern;
 
@@ -24,47 +27,54 @@ const LEAF: usize = 16;
 const MAX_REACH: i64 = 4;
 
 /// The elimination order of the DOFs of the nodes at grid coordinates
-/// `coords` (two a node, interleaved as in `pattern`): `order[k]` is the
+/// `coords` (`D` a node, interleaved as in `pattern`): `order[k]` is the
 /// DOF eliminated k-th.
-pub fn nested_dissection(coords: &[[i64; 2]], pattern: &Pattern) -> Vec<usize> {
+pub fn nested_dissection<const D: usize>(coords: &[[i64; D]], pattern: &Pattern) -> Vec<usize> {
     let reach = reach(coords, pattern);
     let mut set: Vec<u32> = (0..coords.len() as u32).collect();
     let mut node_order = Vec::with_capacity(coords.len());
     dissect(&mut set, coords, reach, &mut node_order);
     node_order
         .into_iter()
-        .flat_map(|node| [2 * node as usize, 2 * node as usize + 1])
+        .flat_map(|node| (0..D).map(move |c| D * node as usize + c))
         .collect()
 }
 
-/// How many cells apart, at most, two coupled nodes lie in either
-/// direction (capped at [`MAX_REACH`]).
-fn reach(coords: &[[i64; 2]], pattern: &Pattern) -> i64 {
+/// How many cells apart, at most, two coupled nodes lie in any direction
+/// (capped at [`MAX_REACH`]).
+fn reach<const D: usize>(coords: &[[i64; D]], pattern: &Pattern) -> i64 {
     let mut reach = 1;
     for (node, c) in coords.iter().enumerate() {
-        let column = 2 * node;
+        let column = D * node;
         for &row in &pattern.row_idx[pattern.col_ptr[column]..pattern.col_ptr[column + 1]] {
-            let d = coords[row as usize / 2];
-            reach = reach.max((d[0] - c[0]).abs().max((d[1] - c[1]).abs()));
+            let d = coords[row as usize / D];
+            reach = (0..D).fold(reach, |r, a| r.max((d[a] - c[a]).abs()));
         }
     }
     reach.min(MAX_REACH)
 }
 
 /// Appends the elimination order of the nodes in `set` to `order`.
-fn dissect(set: &mut [u32], coords: &[[i64; 2]], reach: i64, order: &mut Vec<u32>) {
-    let (mut lo, mut hi) = ([i64::MAX; 2], [i64::MIN; 2]);
+fn dissect<const D: usize>(set: &mut [u32], coords: &[[i64; D]], reach: i64, order: &mut Vec<u32>) {
+    let (mut lo, mut hi) = ([i64::MAX; D], [i64::MIN; D]);
     for &n in set.iter() {
-        for d in 0..2 {
+        for d in 0..D {
             lo[d] = lo[d].min(coords[n as usize][d]);
             hi[d] = hi[d].max(coords[n as usize][d]);
         }
     }
-    let axis = usize::from(hi[1] - lo[1] > hi[0] - lo[0]);
-    // A small set is eliminated along its longer side, across the shorter:
-    // a band as wide as the shorter side.
+    // The longest side (the first of equal ones).
+    let axis = (1..D).fold(0, |a, d| if hi[d] - lo[d] > hi[a] - lo[a] { d } else { a });
+    // A small set is eliminated along `along`, then across the other axes
+    // in turn: in 2D, along its longer side, a band as wide as the shorter.
     let banded = |set: &mut [u32], along: usize| {
-        set.sort_unstable_by_key(|&n| (coords[n as usize][along], coords[n as usize][1 - along]));
+        set.sort_unstable_by(|&a, &b| {
+            let (a, b) = (&coords[a as usize], &coords[b as usize]);
+            (std::iter::once(along).chain((0..D).filter(|&d| d != along)))
+                .map(|d| a[d].cmp(&b[d]))
+                .find(|o| o.is_ne())
+                .unwrap_or(Ordering::Equal)
+        });
     };
     if set.len() <= LEAF {
         banded(set, axis);
@@ -94,8 +104,8 @@ fn dissect(set: &mut [u32], coords: &[[i64; 2]], reach: i64, order: &mut Vec<u32
     }
     dissect(&mut below, coords, reach, order);
     dissect(&mut above, coords, reach, order);
-    // The separator runs across `axis`: along it, line by line.
-    banded(&mut separator, 1 - axis);
+    // The separator runs across `axis`: along the next axis, line by line.
+    banded(&mut separator, (axis + 1) % D);
     order.extend_from_slice(&separator);
 }
 

@@ -21,6 +21,7 @@ use std::time::Instant;
 use nalgebra::Matrix2;
 
 use crate::assembly;
+use crate::assembly::averaging::{Carried, CellAverages};
 use crate::assembly::cell_mean::CellMean;
 use crate::assembly::{FbarCells, GhostFaces, LonePoints, SoftCells, StepTerm, lone_points};
 use crate::boundary::BoundaryLoop;
@@ -688,8 +689,13 @@ impl Simulation {
         } else {
             update::commit_in_place(&mut self.points, &states);
         }
-        self.points.fbar_pressure = converged.fbar_pressure.unwrap_or_default();
-        self.points.cell_mean_stress = converged.cell_mean_stress.unwrap_or_default();
+        self.points.fbar_pressure = Vec::new();
+        self.points.cell_mean_stress = Vec::new();
+        match converged.averaged {
+            Some(Carried::FbarPressure(pressure)) => self.points.fbar_pressure = pressure,
+            Some(Carried::CellMeanStress(stress)) => self.points.cell_mean_stress = stress,
+            None => {}
+        }
         if let Some(p) = self.points.first_non_finite() {
             return Err(non_finite(&format!("state of material point {p}")));
         }
@@ -849,12 +855,16 @@ impl Simulation {
                 );
                 (load_factor, rate)
             }),
-            fbar: (self.volumetric == Volumetric::Fbar)
-                .then(|| FbarCells::new(&start).carrying(&start, &self.points.fbar_pressure)),
-            cell_mean: (self.volumetric == Volumetric::CellMean).then(|| {
-                CellMean::new(&start, self.settings.hourglass)
-                    .carrying(&start, &self.points.cell_mean_stress)
-            }),
+            averaging: match self.volumetric {
+                Volumetric::Fbar => Some(CellAverages::Fbar(
+                    FbarCells::new(&start).carrying(&start, &self.points.fbar_pressure),
+                )),
+                Volumetric::CellMean => Some(CellAverages::CellMean(
+                    CellMean::new(&start, self.settings.hourglass)
+                        .carrying(&start, &self.points.cell_mean_stress),
+                )),
+                Volumetric::Standard => None,
+            },
             terms,
         };
         let pattern = terms.pattern(conn);

@@ -48,6 +48,57 @@ pub struct GridSupport {
     pub fix: Fix,
 }
 
+/// A support on grid nodes, in `D` dimensions.
+pub trait NodeHold<const D: usize> {
+    /// Its index among the case's supports (for reactions).
+    fn index(&self) -> usize;
+    /// The components it holds of a node at `x` (none, off the support),
+    /// `tol` the distance that counts as on it.
+    fn holds_at(&self, x: [f64; D], tol: f64) -> [bool; D];
+}
+
+impl NodeHold<2> for GridSupport {
+    fn index(&self) -> usize {
+        self.index
+    }
+
+    fn holds_at(&self, x: [f64; 2], tol: f64) -> [bool; 2] {
+        if self.on.contains(x, tol) {
+            [0, 1].map(|c| self.fix.holds(c))
+        } else {
+            [false; 2]
+        }
+    }
+}
+
+/// A support on the grid nodes of a plane normal to an axis (in 3D, the
+/// faces of a box; the B-spline surfaces' supports are the IBM's).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlaneSupport<const D: usize> {
+    /// Its index among the case's supports (for reactions).
+    pub index: usize,
+    /// The plane: `x[axis] = at`.
+    pub axis: usize,
+    pub at: f64,
+    /// The components held: all (fixed), or the one along `axis` (a
+    /// roller), or any others.
+    pub fix: [bool; D],
+}
+
+impl<const D: usize> NodeHold<D> for PlaneSupport<D> {
+    fn index(&self) -> usize {
+        self.index
+    }
+
+    fn holds_at(&self, x: [f64; D], tol: f64) -> [bool; D] {
+        if (x[self.axis] - self.at).abs() <= tol {
+            self.fix
+        } else {
+            [false; D]
+        }
+    }
+}
+
 /// The grid supports' hold on one load step's active nodes.
 #[derive(Debug, Clone, Default)]
 pub struct HeldDofs {
@@ -61,19 +112,22 @@ pub struct HeldDofs {
 impl HeldDofs {
     /// A node is on a support when the support's selector contains the
     /// node's position (tolerance 1e-9 h).
-    pub fn find(supports: &[GridSupport], grid: &Grid, conn: &Connectivity) -> Self {
+    pub fn find<const D: usize, S: NodeHold<D>>(
+        supports: &[S],
+        grid: &Grid<D>,
+        conn: &Connectivity<D>,
+    ) -> Self {
         let tol = 1e-9 * grid.h;
         let mut fixed = vec![false; conn.n_dofs()];
         let mut held: Vec<(usize, Vec<usize>)> =
-            supports.iter().map(|s| (s.index, Vec::new())).collect();
+            supports.iter().map(|s| (s.index(), Vec::new())).collect();
         for (a, &key) in conn.nodes.iter().enumerate() {
             let x = grid.node_position(key);
             for (s, (_, dofs)) in supports.iter().zip(&mut held) {
-                if s.on.contains(x, tol) {
-                    for c in (0..2).filter(|&c| s.fix.holds(c)) {
-                        fixed[2 * a + c] = true;
-                        dofs.push(2 * a + c);
-                    }
+                let holds = s.holds_at(x, tol);
+                for c in (0..D).filter(|&c| holds[c]) {
+                    fixed[D * a + c] = true;
+                    dofs.push(D * a + c);
                 }
             }
         }
@@ -96,10 +150,15 @@ impl HeldDofs {
     /// Adds to `reactions` (indexed like the case's supports) the force
     /// each grid support exerts on the body: `f_int - f_ext` summed over
     /// its DOFs.
-    pub fn add_reactions(&self, f_int: &[f64], f_ext: &[f64], reactions: &mut [[f64; 2]]) {
+    pub fn add_reactions<const D: usize>(
+        &self,
+        f_int: &[f64],
+        f_ext: &[f64],
+        reactions: &mut [[f64; D]],
+    ) {
         for (index, dofs) in &self.held {
             for &dof in dofs {
-                reactions[*index][dof % 2] += f_int[dof] - f_ext[dof];
+                reactions[*index][dof % D] += f_int[dof] - f_ext[dof];
             }
         }
     }

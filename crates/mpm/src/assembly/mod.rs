@@ -9,6 +9,7 @@
 //! entry `(2a + r, 2b + c)` sits at `col_ptr[2b + c] + 2k + r` where `k` is
 //! the position of `a` in `b`'s neighbour list.
 
+pub mod averaging;
 pub mod cell_mean;
 pub mod fbar;
 pub mod forces;

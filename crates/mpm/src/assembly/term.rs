@@ -28,9 +28,10 @@ pub enum Side {
     Support,
 }
 
-/// One kind of term in a load step's system. Its stiffness goes into the
-/// step's tangent in the step's pattern, which holds its coupling groups.
-pub trait StepTerm: Send + Sync {
+/// One kind of term in a load step's system, in `D` dimensions. Its
+/// stiffness goes into the step's tangent in the step's pattern, which
+/// holds its coupling groups.
+pub trait StepTerm<const D: usize = 2>: Send + Sync {
     /// Where its force enters the balance.
     fn side(&self) -> Side;
 
@@ -81,7 +82,7 @@ pub trait StepTerm: Send + Sync {
     /// body at the converged increment `u`, leaving the DOFs a grid support
     /// holds (`fixed`) to that support; `None` for a term that is no
     /// support.
-    fn reactions(&self, u: &[f64], fixed: &[bool], n: usize) -> Option<Vec<[f64; 2]>> {
+    fn reactions(&self, u: &[f64], fixed: &[bool], n: usize) -> Option<Vec<[f64; D]>> {
         let _ = (u, fixed, n);
         None
     }

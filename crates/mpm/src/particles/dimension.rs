@@ -1,14 +1,16 @@
 //! What a material point holds that differs between plane strain and 3D
-//! by more than its size: the types `MaterialPoints<D>` keeps per point.
-//! The rest of a point's state is `[f64; D]` or a `D x D` matrix.
+//! by more than its size: the types `MaterialPoints<D>` keeps per point,
+//! and its model's response to a trial increment. The rest of a point's
+//! state is `[f64; D]` or a `D x D` matrix.
 
 use std::fmt::Debug;
 use std::ops::Index;
 
-use nalgebra::{Matrix3, Matrix4};
+use nalgebra::{Matrix2, Matrix3, Matrix4, SMatrix};
 
+use super::admissible::TrialResponse;
 use super::seeding::Domain;
-use crate::material::{CauchyStress, History, History3, Tangent3};
+use crate::material::{CauchyStress, History, History3, Material, Response, Response3, Tangent3};
 
 /// The dimension `D` as a type, to hang [`Space`] on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -31,6 +33,28 @@ pub trait Space<const D: usize> {
     /// The model's tangent `dP / d(dF)`, `D^2 x D^2`, entry `(D i + I, D j
     /// + J)` for `dP_iI / d(dF)_jJ`.
     type Tangent: Copy + Debug + Send + Sync + Index<(usize, usize), Output = f64>;
+    /// A model's response to a trial increment ([`Material::respond`],
+    /// [`Material::respond_3d`]).
+    type Response: TrialResponse + Send;
+
+    /// The response of `material` from `history` to the step's
+    /// displacement gradient `grad_u`, `j_start` the volume ratio at the
+    /// step's start; without `want_tangent` the tangent may be left zero.
+    fn respond(
+        material: &Material,
+        history: &Self::History,
+        grad_u: &SMatrix<f64, D, D>,
+        j_start: f64,
+        want_tangent: bool,
+    ) -> Self::Response;
+    /// The stress a response pairs with `dF` per unit reference volume.
+    fn stress_of(response: &Self::Response) -> SMatrix<f64, D, D>;
+    fn tangent_of(response: &Self::Response) -> Self::Tangent;
+    /// What a point commits of a response: its history and Cauchy stress.
+    fn state_of(response: &Self::Response) -> (Self::History, Self::Stress);
+    /// The equivalent plastic strain a history holds.
+    fn plastic_strain(history: &Self::History) -> f64;
+    fn determinant(m: &SMatrix<f64, D, D>) -> f64;
 }
 
 impl Space<2> for Dim<2> {
@@ -39,6 +63,41 @@ impl Space<2> for Dim<2> {
     type Domain = Domain;
     type Slopes = [f64; 6];
     type Tangent = Matrix4<f64>;
+    type Response = Response;
+
+    fn respond(
+        material: &Material,
+        history: &History,
+        grad_u: &Matrix2<f64>,
+        j_start: f64,
+        want_tangent: bool,
+    ) -> Response {
+        if want_tangent {
+            material.respond(history, grad_u, j_start)
+        } else {
+            material.respond_without_tangent(history, grad_u, j_start)
+        }
+    }
+
+    fn stress_of(response: &Response) -> Matrix2<f64> {
+        response.p
+    }
+
+    fn tangent_of(response: &Response) -> Matrix4<f64> {
+        response.tangent
+    }
+
+    fn state_of(response: &Response) -> (History, CauchyStress) {
+        (response.history, response.cauchy)
+    }
+
+    fn plastic_strain(history: &History) -> f64 {
+        history.plastic_strain
+    }
+
+    fn determinant(m: &Matrix2<f64>) -> f64 {
+        m.determinant()
+    }
 }
 
 impl Space<3> for Dim<3> {
@@ -47,4 +106,36 @@ impl Space<3> for Dim<3> {
     type Domain = [f64; 3];
     type Slopes = ();
     type Tangent = Tangent3;
+    type Response = Response3;
+
+    /// The 3D models make their tangent whether wanted or not.
+    fn respond(
+        material: &Material,
+        history: &History3,
+        grad_u: &Matrix3<f64>,
+        j_start: f64,
+        _want_tangent: bool,
+    ) -> Response3 {
+        material.respond_3d(history, grad_u, j_start)
+    }
+
+    fn stress_of(response: &Response3) -> Matrix3<f64> {
+        response.p
+    }
+
+    fn tangent_of(response: &Response3) -> Tangent3 {
+        response.tangent
+    }
+
+    fn state_of(response: &Response3) -> (History3, Matrix3<f64>) {
+        (response.history, response.cauchy)
+    }
+
+    fn plastic_strain(history: &History3) -> f64 {
+        history.plastic_strain
+    }
+
+    fn determinant(m: &Matrix3<f64>) -> f64 {
+        m.determinant()
+    }
 }

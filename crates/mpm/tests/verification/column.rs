@@ -22,7 +22,7 @@ const RHO_G: f64 = 80.0 * 10.0;
 /// for a column of height `length` whose uniaxial-strain modulus is
 /// `modulus` (E at nu = 0; lambda + 2 mu with the sides on rollers), by
 /// bisection (the left side is increasing on (0, e)).
-fn stretch_under_weight(modulus: f64, rho_g: f64, length: f64, y: f64) -> f64 {
+pub fn stretch_under_weight(modulus: f64, rho_g: f64, length: f64, y: f64) -> f64 {
     let target = -rho_g * (length - y);
     let (mut lo, mut hi) = (1e-6f64, 1.0f64);
     for _ in 0..200 {

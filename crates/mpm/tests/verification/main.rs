@@ -8,6 +8,7 @@ mod arc_length;
 mod bodies;
 mod cantilever;
 mod column;
+mod column3d;
 mod footing;
 mod ghost;
 mod hard_cases;
