@@ -117,7 +117,7 @@ pub struct Peaks<'a> {
     pub reactions: Vec<Peak<'a>>,
 }
 
-#[derive(Serialize, Clone, Copy)]
+#[derive(Serialize, Clone)]
 pub struct Peak<'a> {
     pub step: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -126,14 +126,14 @@ pub struct Peak<'a> {
     /// The support's place among the case's (or its stage's) supports.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub support: Option<usize>,
-    /// The force (N per metre).
-    pub value: [f64; 2],
+    /// The force (N per metre), `D` components.
+    pub value: &'a [f64],
 }
 
 impl<'a> Peaks<'a> {
     pub fn of(steps: &'a [StepReport]) -> Self {
-        let magnitude = |v: &[f64; 2]| v[0].hypot(v[1]);
-        let peak = |s: &'a StepReport, support: Option<usize>, value: [f64; 2]| Peak {
+        let magnitude = |v: &[f64]| v.iter().fold(0.0, |m: f64, c| m.hypot(*c));
+        let peak = |s: &'a StepReport, support: Option<usize>, value: &'a [f64]| Peak {
             step: s.step,
             stage: s.stage.as_deref(),
             load_factor: s.load_factor,
@@ -146,18 +146,19 @@ impl<'a> Peaks<'a> {
         for s in steps.iter().filter(|s| s.step > 0) {
             if peaks
                 .applied_load
-                .is_none_or(|p| magnitude(&s.applied_load) > magnitude(&p.value))
+                .as_ref()
+                .is_none_or(|p| magnitude(&s.applied_load) > magnitude(p.value))
             {
-                peaks.applied_load = Some(peak(s, None, s.applied_load));
+                peaks.applied_load = Some(peak(s, None, &s.applied_load));
             }
             for (j, r) in s.reactions.iter().enumerate() {
                 let at = reactions
                     .iter()
                     .position(|p| p.stage == s.stage.as_deref() && p.support == Some(j));
                 match at {
-                    None => reactions.push(peak(s, Some(j), *r)),
-                    Some(i) if magnitude(r) > magnitude(&reactions[i].value) => {
-                        reactions[i] = peak(s, Some(j), *r);
+                    None => reactions.push(peak(s, Some(j), r)),
+                    Some(i) if magnitude(r) > magnitude(reactions[i].value) => {
+                        reactions[i] = peak(s, Some(j), r);
                     }
                     Some(_) => {}
                 }
@@ -185,19 +186,19 @@ pub struct StepSummary<'a> {
     pub wall_seconds: f64,
     pub active_dofs: usize,
     pub timings: &'a StepTimings,
-    pub probes: BTreeMap<&'a str, ProbeSummary>,
+    pub probes: BTreeMap<&'a str, ProbeSummary<'a>>,
     /// Force on each support (N/m, the order of the case's `supports`, or
     /// of the step's stage's).
-    pub reactions: &'a [[f64; 2]],
-    pub applied_load: [f64; 2],
+    pub reactions: &'a [Vec<f64>],
+    pub applied_load: &'a [f64],
     #[serde(skip_serializing_if = "Option::is_none")]
     pub strength_reduction: Option<&'a StrengthStep>,
 }
 
 #[derive(Serialize)]
-pub struct ProbeSummary {
-    pub position: [f64; 2],
-    pub displacement: [f64; 2],
+pub struct ProbeSummary<'a> {
+    pub position: &'a [f64],
+    pub displacement: &'a [f64],
 }
 
 impl<'a> Summary<'a> {
@@ -233,14 +234,14 @@ impl<'a> Summary<'a> {
                     .iter()
                     .map(|p| {
                         let probe = ProbeSummary {
-                            position: p.position,
-                            displacement: p.displacement,
+                            position: &p.position,
+                            displacement: &p.displacement,
                         };
                         (p.name.as_str(), probe)
                     })
                     .collect(),
                 reactions: &s.reactions,
-                applied_load: s.applied_load,
+                applied_load: &s.applied_load,
                 strength_reduction: s.strength_reduction.as_ref(),
             })
             .collect();

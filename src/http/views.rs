@@ -126,8 +126,8 @@ pub struct ProbeSample {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stage: Option<String>,
     pub load_factor: f64,
-    pub position: [f64; 2],
-    pub displacement: [f64; 2],
+    pub position: Vec<f64>,
+    pub displacement: Vec<f64>,
 }
 
 #[derive(Debug, Serialize)]
@@ -136,9 +136,9 @@ pub struct StepReactions {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stage: Option<String>,
     pub load_factor: f64,
-    pub supports: Vec<[f64; 2]>,
+    pub supports: Vec<Vec<f64>>,
     /// Resultant of the applied loads; the supports balance it.
-    pub applied_load: [f64; 2],
+    pub applied_load: Vec<f64>,
 }
 
 #[derive(Debug, Serialize)]
@@ -162,8 +162,8 @@ impl ResultView {
                     step: s.step,
                     stage: s.stage.clone(),
                     load_factor: s.load_factor,
-                    position: p.position,
-                    displacement: p.displacement,
+                    position: p.position.clone(),
+                    displacement: p.displacement.clone(),
                 });
             }
             timings += &s.timings;
@@ -178,7 +178,7 @@ impl ResultView {
                     stage: s.stage.clone(),
                     load_factor: s.load_factor,
                     supports: s.reactions.clone(),
-                    applied_load: s.applied_load,
+                    applied_load: s.applied_load.clone(),
                 })
                 .collect(),
             newton: steps

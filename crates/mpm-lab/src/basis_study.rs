@@ -174,7 +174,7 @@ fn measure(setting: Setting) -> Result<Run, LabError> {
         times.push(start.elapsed().as_secs_f64());
         outcome = report.map(|(report, points)| {
             let last = report.steps.last().expect("a run has steps");
-            let tip = last.probes[0].displacement;
+            let tip = &last.probes[0].displacement;
             let mean = last.probes[1..]
                 .iter()
                 .map(|p| p.displacement[1])

@@ -261,7 +261,7 @@ fn elastica_table() -> String {
                 let seconds = started.elapsed().as_secs_f64();
                 match run {
                     Ok((points, report)) => {
-                        let u = report.steps.last().expect("steps").probes[0].displacement;
+                        let u = &report.steps.last().expect("steps").probes[0].displacement;
                         let (ux, uy) = (u[0] / 10.0, u[1] / 10.0);
                         let error = |v: f64, r: f64| 100.0 * (v - r) / r.abs();
                         let _ = writeln!(

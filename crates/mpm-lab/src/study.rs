@@ -139,7 +139,7 @@ fn measure(
 
 fn summarise(report: &RunReport) -> Measured {
     let last = report.steps.last().expect("a run has steps");
-    let tip = last.probes[0].displacement;
+    let tip = [0, 1].map(|c| last.probes[0].displacement[c]);
     // Trapezoidal mean over the left edge's equally spaced probes.
     let left: Vec<f64> = last.probes[1..].iter().map(|p| p.displacement[1]).collect();
     let n = left.len() - 1;

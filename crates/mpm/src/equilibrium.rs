@@ -28,20 +28,24 @@ use crate::parallel;
 use crate::particles::admissible::{self, InadmissiblePoint};
 use crate::particles::{Dim, MaterialPoints, Space};
 use crate::report::{StepMemory, StepTimings};
-use crate::supports::HeldDofs;
+use crate::supports::{GridSupport, HeldDofs, NodeHold, PlaneSupport};
 
 /// What a step's equilibrium needs that differs by dimension beyond the
-/// points' types ([`Space`]): the averagings it may hold, and the grid
-/// coordinates its solver orders the nodes by.
+/// points' types ([`Space`]): the supports on grid nodes, the averagings
+/// it may hold, and the grid coordinates its solver orders the nodes by.
 pub trait StepSpace<const D: usize>: Space<D>
 where
     Dim<D>: Space<D>,
 {
+    /// A support on grid nodes (plane strain: on the selector's lines; 3D:
+    /// on a plane normal to an axis).
+    type Support: NodeHold<D> + Clone + std::fmt::Debug + PartialEq + Send + Sync;
     type Averages: Averaging<D>;
     fn grid_nodes(keys: &[NodeKey]) -> GridNodes;
 }
 
 impl StepSpace<2> for Dim<2> {
+    type Support = GridSupport;
     type Averages = CellAverages;
     fn grid_nodes(keys: &[NodeKey]) -> GridNodes {
         GridNodes::Plane(keys.iter().map(|&key| lattice_coordinates(key)).collect())
@@ -49,6 +53,7 @@ impl StepSpace<2> for Dim<2> {
 }
 
 impl StepSpace<3> for Dim<3> {
+    type Support = PlaneSupport<3>;
     type Averages = Unaveraged;
     fn grid_nodes(keys: &[NodeKey]) -> GridNodes {
         GridNodes::Solid(keys.iter().map(|&key| lattice_coordinates(key)).collect())

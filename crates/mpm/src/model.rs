@@ -16,6 +16,7 @@ use crate::boundary::{
 };
 use crate::case::{
     self, BasisKind, Body, Case, CaseError, GridSpec, Loads, MaterialSpec, SupportMethod,
+    Volumetric,
 };
 use crate::geometry::Geometry;
 use crate::geometry::Selector;
@@ -29,7 +30,7 @@ use crate::probes::Probes;
 use crate::report::{PointField, RunWarning, StepReport};
 use crate::stages::{Stage, StrengthReduction};
 use crate::stepper::{Simulation, StepSize, Substepping};
-use crate::supports::{Fix, GridSupport, HeldDofs, Rotation};
+use crate::supports::{Fix, GridSupport, HeldDofs, PlaneSupport, Rotation};
 
 /// What a case's bodies make before any load step: the material points
 /// and their boundary loops. Seeding is where reading a case costs time and
@@ -424,6 +425,83 @@ impl Simulation {
             }
         }
         Ok(())
+    }
+}
+
+/// A 3D run as the solver's parts make it, until the case schema reads 3D
+/// bodies (issue 38): one stage of `load_steps` equal steps, gravity and
+/// the point loads ramped with the load factor, supports on grid planes.
+pub struct SolidRun {
+    pub grid: Grid<3>,
+    pub basis: Basis,
+    /// The grid's extent `(min, max)`, if bounded.
+    pub extent: Option<([f64; 3], [f64; 3])>,
+    pub points: MaterialPoints<3>,
+    pub gravity: [f64; 3],
+    pub point_loads: Vec<PointLoad<3>>,
+    pub supports: Vec<PlaneSupport<3>>,
+    pub load_steps: usize,
+}
+
+impl Simulation<3> {
+    /// The run `run` describes, with the default Newton settings and
+    /// load-step cutting.
+    pub fn solid(run: SolidRun) -> Self {
+        let SolidRun {
+            grid,
+            basis,
+            extent,
+            points,
+            gravity,
+            point_loads,
+            supports,
+            load_steps,
+        } = run;
+        let stiffness = StiffnessScales::of(&points.materials);
+        let free_step_growth = (10.0 * stiffness.p_wave_to_shear).max(BENDING_FREE_GROWTH);
+        let stage = Stage {
+            name: None,
+            load_steps,
+            gravity: [[0.0; 3], gravity],
+            point_loads,
+            boundary_loads: Vec::new(),
+            n_supports: supports.len(),
+            grid_supports: supports,
+            ibm: Vec::new(),
+            geostatic: None,
+            arc_length: false,
+            strength_reduction: None,
+        };
+        Self {
+            grid,
+            basis,
+            extent,
+            points,
+            loops: Vec::new(),
+            probes: Probes::default(),
+            stages: vec![stage],
+            stage: 0,
+            anchors: Vec::new(),
+            first_stage_anchors: 0,
+            band_width: 0.0,
+            settings: NewtonSettings {
+                free_step_growth,
+                ..Default::default()
+            },
+            substepping: Substepping::default(),
+            step_size: StepSize::default(),
+            arc: None,
+            last_increment: None,
+            reduction: None,
+            settled: None,
+            volumetric: Volumetric::Standard,
+            load_steps,
+            steps_done: 0,
+            stiffness,
+            solver: SolverSettings::default(),
+            solve_tally: Default::default(),
+            analysed: None,
+        }
     }
 }
 

@@ -22,6 +22,14 @@ pub trait Monitor {
 
 pub use crate::particles::admissible::{Inadmissible, InadmissiblePoint};
 
+/// Coordinates to four places, comma-separated.
+fn four_places(x: &[f64]) -> String {
+    x.iter()
+        .map(|c| format!("{c:.4}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Why a solve stopped without an answer. Every variant says where.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolveError {
@@ -74,13 +82,14 @@ pub enum SolveError {
         residual: f64,
     },
     #[error(
-        "material point {point} left the grid extent at ({x:.4}, {y:.4}) after load step {step}"
+        "material point {point} left the grid extent at ({}) after load step {step}",
+        four_places(.at)
     )]
     LeftGrid {
         step: usize,
         point: usize,
-        x: f64,
-        y: f64,
+        /// Where it was (`D` coordinates).
+        at: Vec<f64>,
     },
     /// A converged step whose results are not finite numbers: never
     /// committed, never reported as a success.

@@ -56,6 +56,9 @@ pub trait Observer {
     fn newton_iteration(&mut self, _step: usize, _iteration: usize, _residual: f64) {}
     /// A load step converged; `state` holds the updated points.
     fn step_finished(&mut self, _report: &StepReport, _state: &StepState<'_>) {}
+    /// A load step of a 3D run converged; `points` are the updated
+    /// points (the 3D case's writers are still to come: issue 38).
+    fn solid_step_finished(&mut self, _report: &StepReport, _points: &MaterialPoints<3>) {}
     /// Polled at every Newton iteration; `true` stops the run with
     /// [`crate::SolveError::Cancelled`].
     fn should_cancel(&mut self) -> bool {

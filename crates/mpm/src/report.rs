@@ -93,8 +93,15 @@ impl StepMemory {
 #[derive(Debug, Clone, Serialize, serde::Deserialize, PartialEq)]
 pub struct ProbeReport {
     pub name: String,
-    pub position: [f64; 2],
-    pub displacement: [f64; 2],
+    /// Where the probe is now, and how far it moved (`D` components).
+    pub position: Vec<f64>,
+    pub displacement: Vec<f64>,
+}
+
+/// The zero load of a step stored before steps reported theirs (plane
+/// strain).
+fn plane_zero() -> Vec<f64> {
+    vec![0.0; 2]
 }
 
 /// Summary of one converged load step.
@@ -131,14 +138,14 @@ pub struct StepReport {
     pub probes: Vec<ProbeReport>,
     /// Force each support exerts on the body, in the order of the case's
     /// `supports`.
-    pub reactions: Vec<[f64; 2]>,
+    pub reactions: Vec<Vec<f64>>,
     /// Resultant of the loads applied to the grid in this step (gravity,
     /// point loads and boundary loads on the converged boundary): at
     /// equilibrium the reactions add up to minus this, unless two grid
     /// supports hold the same component of a node (both then report its
     /// force). Zero when absent from a stored step.
-    #[serde(default)]
-    pub applied_load: [f64; 2],
+    #[serde(default = "plane_zero")]
+    pub applied_load: Vec<f64>,
     /// How the implicit-boundary supports' reactions are spread along
     /// their stretches: one entry per constraint of the band (a quadrature
     /// point of a pointwise support, a piece of an averaged one), in the
@@ -160,8 +167,8 @@ pub struct StepReport {
 /// does not solve again.
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub(crate) struct Settled {
-    pub(crate) reactions: Vec<[f64; 2]>,
-    pub(crate) applied_load: [f64; 2],
+    pub(crate) reactions: Vec<Vec<f64>>,
+    pub(crate) applied_load: Vec<f64>,
     pub(crate) support_tractions: Vec<SupportTraction>,
     pub(crate) active_nodes: usize,
     pub(crate) active_dofs: usize,

@@ -9,20 +9,25 @@
 use crate::assembly::PointLoad;
 use crate::boundary::ibm::IbmMotion;
 use crate::boundary::loading::LoadedStretch;
-use crate::supports::GridSupport;
+use crate::equilibrium::StepSpace;
+use crate::particles::Dim;
 
-/// One stage of a run.
+/// One stage of a run, in `D` dimensions (the boundary's loads and IBM
+/// supports are plane strain's: empty in 3D until the B-spline surfaces).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Stage {
+pub struct Stage<const D: usize = 2>
+where
+    Dim<D>: StepSpace<D>,
+{
     /// The case's name for it (`stage k` if it gave none); `None` when the
     /// case has no stages.
     pub name: Option<String>,
     pub load_steps: usize,
     /// Gravity `[held, ramped]` (m/s^2).
-    pub gravity: [[f64; 2]; 2],
-    pub point_loads: Vec<PointLoad>,
+    pub gravity: [[f64; D]; 2],
+    pub point_loads: Vec<PointLoad<D>>,
     pub boundary_loads: Vec<LoadedStretch>,
-    pub grid_supports: Vec<GridSupport>,
+    pub grid_supports: Vec<<Dim<D> as StepSpace<D>>::Support>,
     /// Per implicit-boundary support of the run (in the first stage's
     /// order), its motion in this stage, or `None` once released. The
     /// first stage's are the anchors' own and are not read.
@@ -56,7 +61,10 @@ pub struct StrengthReduction {
 
 /// The stage that holds load step `step` (counted from 1 over the run),
 /// and the load steps of the stages before it.
-pub fn stage_of(stages: &[Stage], step: usize) -> (usize, usize) {
+pub fn stage_of<const D: usize>(stages: &[Stage<D>], step: usize) -> (usize, usize)
+where
+    Dim<D>: StepSpace<D>,
+{
     let mut before = 0;
     for (k, s) in stages.iter().enumerate() {
         if step <= before + s.load_steps || k + 1 == stages.len() {

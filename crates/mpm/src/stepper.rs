@@ -15,13 +15,14 @@
 //! An increment that fails in 3 commits nothing and is tried again in
 //! halves from the same state ([`Simulation::load_step`], [`Substepping`]).
 
+use std::any::Any;
 use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::Matrix2;
 
 use crate::assembly;
-use crate::assembly::averaging::{Carried, CellAverages};
+use crate::assembly::averaging::{Averaging, Carried, CellAverages, Unaveraged};
 use crate::assembly::cell_mean::CellMean;
 use crate::assembly::{FbarCells, GhostFaces, LonePoints, SoftCells, StepTerm, lone_points};
 use crate::boundary::BoundaryLoop;
@@ -29,15 +30,15 @@ use crate::boundary::ibm::{self, Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
 use crate::case::Volumetric;
 use crate::configuration::Configuration;
-use crate::equilibrium::{AnalysedPattern, StepEquilibrium, StepTerms};
+use crate::equilibrium::{AnalysedPattern, StepEquilibrium, StepSpace, StepTerms};
 use crate::grid::{Basis, Connectivity, Grid, NodeKey, increment};
 use crate::linsolve::{SolveCounts, SolveTally, SolverSettings};
 use crate::material::StiffnessScales;
 use crate::newton::{self, SolveError};
 use crate::observer::{self, Observer, StepState};
-use crate::particles::{MaterialPoints, geostatic};
+use crate::particles::{Dim, MaterialPoints, Space, geostatic};
 use crate::probes::Probes;
-use crate::report::{RunReport, Settled, StepReport, StepTimings, StrengthStep};
+use crate::report::{RunReport, Settled, StepReport, StepTimings, StrengthStep, SupportTraction};
 use crate::settings::NewtonSettings;
 pub use crate::settings::Substepping;
 use crate::stages::{self, Stage, StrengthReduction};
@@ -141,14 +142,13 @@ pub(crate) struct LastIncrement {
 }
 
 impl LastIncrement {
-    /// Its displacement on the DOFs of a step's `nodes` (sorted keys):
-    /// zero on a node it did not have.
-    fn on(&self, nodes: &[NodeKey]) -> Vec<f64> {
-        let mut out = vec![0.0; 2 * nodes.len()];
+    /// Its displacement on the DOFs of a step's `nodes` (sorted keys, `D`
+    /// DOFs each): zero on a node it did not have.
+    fn on<const D: usize>(&self, nodes: &[NodeKey]) -> Vec<f64> {
+        let mut out = vec![0.0; D * nodes.len()];
         for (i, key) in nodes.iter().enumerate() {
             if let Ok(j) = self.nodes.binary_search(key) {
-                out[2 * i] = self.u[2 * j];
-                out[2 * i + 1] = self.u[2 * j + 1];
+                out[D * i..D * i + D].copy_from_slice(&self.u[D * j..D * j + D]);
             }
         }
         out
@@ -171,20 +171,25 @@ enum Increment {
 }
 
 /// A case made ready to run: points, grid, loads and supports
-/// ([`crate::model`] builds it from a case).
-pub struct Simulation {
-    pub grid: Grid,
+/// ([`crate::model`] builds it from a case), in `D` dimensions. The
+/// boundary's loops and IBM anchors are plane strain's, and empty in 3D
+/// until the B-spline surfaces (issue 38, part 2).
+pub struct Simulation<const D: usize = 2>
+where
+    Dim<D>: StepSpace<D>,
+{
+    pub grid: Grid<D>,
     pub basis: Basis,
     /// The grid's extent `(min, max)`, if bounded: nodes outside it do not
     /// exist, and material must stay inside it.
-    pub extent: Option<([f64; 2], [f64; 2])>,
-    pub points: MaterialPoints,
+    pub extent: Option<([f64; D], [f64; D])>,
+    pub points: MaterialPoints<D>,
     /// Boundary loops of the material points, found once (Lagrangian).
     pub loops: Vec<BoundaryLoop>,
-    pub probes: Probes,
+    pub probes: Probes<D>,
     /// The run's stages (loads and supports; one unless the case lists
     /// stages), and the one the steps are in.
-    pub(crate) stages: Vec<Stage>,
+    pub(crate) stages: Vec<Stage<D>>,
     pub(crate) stage: usize,
     /// Quadrature points of the supports imposed on the boundary curves by
     /// the implicit boundary method, and the band width `delta` they use.
@@ -240,8 +245,8 @@ impl Simulation {
             active_dofs: 0,
             probes: self.probes.reports(),
             stage: self.stage_name(0),
-            reactions: vec![[0.0; 2]; self.stages[0].n_supports],
-            applied_load: [0.0; 2],
+            reactions: vec![vec![0.0; 2]; self.stages[0].n_supports],
+            applied_load: vec![0.0; 2],
             support_tractions: Vec::new(),
             strength_reduction: None,
             memory: Default::default(),
@@ -252,7 +257,12 @@ impl Simulation {
     fn step_state(&self) -> StepState<'_> {
         StepState::new(&self.points, &self.loops, self)
     }
+}
 
+impl<const D: usize> Simulation<D>
+where
+    Dim<D>: RunSpace<D>,
+{
     /// Runs the load steps not yet done (all of them, unless the run was
     /// restored from a [`crate::Checkpoint`]), reporting each to `observer`.
     pub fn run(&mut self, observer: &mut dyn Observer) -> Result<RunReport, SolveError> {
@@ -265,7 +275,7 @@ impl Simulation {
             observer.step_started(step, self.load_steps);
             let report = self.load_step(step, observer)?;
             self.steps_done = step;
-            observer.step_finished(&report, &self.step_state());
+            Dim::<D>::step_finished(self, observer, &report);
             steps.push(report);
         }
         // The last step's solver (and its factor) serves no later step.
@@ -296,8 +306,7 @@ impl Simulation {
         if let Some(k0) = self.stages[k].geostatic
             && self.steps_done == before
         {
-            let g = -self.stages[k].gravity[0][1];
-            geostatic::set_overburden_stresses(&mut self.points, g, k0);
+            Dim::<D>::start_geostatic(self, k, k0);
         }
         // The step within its stage.
         let (step_in_stage, n) = (step - before, self.stages[k].load_steps as f64);
@@ -604,7 +613,7 @@ impl Simulation {
                 let predicted = last.filter(|_| self.settings.predictor).and_then(|last| {
                     let scale = (to - from) / last.dlambda;
                     scale.is_finite().then(|| {
-                        let mut u = last.on(&conn.nodes);
+                        let mut u = last.on::<D>(&conn.nodes);
                         u.iter_mut().for_each(|x| *x *= scale);
                         u
                     })
@@ -618,7 +627,7 @@ impl Simulation {
                 load_factor,
             } => {
                 let last = (self.arc.as_ref().and_then(|a| a.last.as_ref()))
-                    .map(|l| (l.on(&conn.nodes), l.dlambda));
+                    .map(|l| (l.on::<D>(&conn.nodes), l.dlambda));
                 let arc = newton::ArcStep {
                     length,
                     load_factor,
@@ -668,50 +677,20 @@ impl Simulation {
         self.analysed = Some(converged.analysed);
         let states = converged.states;
         let moves = self.stages[self.stage].geostatic.is_none();
-        // The stress slopes of the points the one-point cells' term holds
-        // (seeded one a cell or fewer), taken before the points move; the
-        // others' are zero.
-        let mut slopes = Vec::new();
-        for carried in &converged.carried {
-            if let Some(lone) = carried.downcast_ref::<LonePoints>() {
-                slopes = lone.settled(&u, |p| {
-                    let grad_u = increment(conn.point_links(p), &u).1;
-                    lone_points::polar_rotation(&(Matrix2::identity() + grad_u))
-                });
-            }
-        }
-        self.points.stress_slopes.fill([0.0; 6]);
-        for (p, s) in slopes {
-            self.points.stress_slopes[p] = s;
-        }
+        Dim::<D>::before_commit(self, &conn, &u, &converged.carried);
         if moves {
             update::commit(&mut self.points, &conn, &u, &states);
         } else {
             update::commit_in_place(&mut self.points, &states);
         }
-        self.points.fbar_pressure = Vec::new();
-        self.points.cell_mean_stress = Vec::new();
-        match converged.averaged {
-            Some(Carried::FbarPressure(pressure)) => self.points.fbar_pressure = pressure,
-            Some(Carried::CellMeanStress(stress)) => self.points.cell_mean_stress = stress,
-            None => {}
-        }
-        if let Some(p) = self.points.first_non_finite() {
+        if let Some(p) = Dim::<D>::first_non_finite(&self.points) {
             return Err(non_finite(&format!("state of material point {p}")));
         }
         if moves {
             self.probes.advect(&self.grid, self.basis, &conn, &u);
         }
-        let mut support_tractions = Vec::new();
-        for carried in converged.carried {
-            if let Ok(band) = carried.downcast::<BandTerms>() {
-                support_tractions = band.tractions(&u);
-                // A geostatic stage's too: the band's stretch is how its
-                // penalty carries the reactions, which the next stage
-                // starts from.
-                self.advance_anchors(&band, &conn, &u);
-            }
-        }
+        let support_tractions =
+            Dim::<D>::after_commit(self, &conn, &u, converged.averaged, converged.carried);
         if !support_tractions
             .iter()
             .all(|t| t.at.iter().chain(&t.traction).all(|v| v.is_finite()))
@@ -741,15 +720,15 @@ impl Simulation {
             active_nodes: conn.n_nodes(),
             active_dofs,
             probes: self.probes.reports(),
-            reactions,
-            applied_load,
+            reactions: reactions.iter().map(|r| r.to_vec()).collect(),
+            applied_load: applied_load.to_vec(),
             support_tractions,
             strength_reduction: None,
             memory: converged.memory,
         };
         self.settled = Some(Settled {
             reactions: report.reactions.clone(),
-            applied_load: report.applied_load,
+            applied_load: report.applied_load.clone(),
             support_tractions: report.support_tractions.clone(),
             active_nodes: report.active_nodes,
             active_dofs: report.active_dofs,
@@ -775,19 +754,19 @@ impl Simulation {
 
     /// The grid reset: every point's shape functions at its current
     /// position, on the nodes inside the grid's extent.
-    pub(crate) fn reset_grid(&self) -> Connectivity {
+    pub(crate) fn reset_grid(&self) -> Connectivity<D> {
         let points = &self.points;
         Connectivity::build(
             &self.grid,
             self.basis,
             &points.position,
-            |p| points.support(p),
+            |p| Dim::<D>::support(points, p),
             |node| self.node_in_grid(node),
         )
     }
 
     /// The points and the grid on the grid reset `conn`: a step's start.
-    pub(crate) fn configuration<'a>(&'a self, conn: &'a Connectivity) -> Configuration<'a> {
+    pub(crate) fn configuration<'a>(&'a self, conn: &'a Connectivity<D>) -> Configuration<'a, D> {
         Configuration {
             grid: &self.grid,
             basis: self.basis,
@@ -802,41 +781,13 @@ impl Simulation {
     /// arc-length method).
     pub(crate) fn assemble<'a>(
         &'a self,
-        conn: &'a Connectivity,
+        conn: &'a Connectivity<D>,
         load_factor: f64,
         path: bool,
         previous: Option<AnalysedPattern>,
-    ) -> StepEquilibrium<'a> {
+    ) -> StepEquilibrium<'a, D> {
         let start = self.configuration(conn);
-        let loops = &self.loops;
-        // In the order their stiffness is added to the tangent.
-        let mut terms: Vec<Box<dyn StepTerm + 'a>> = Vec::new();
-        if let Some(soft) = self.soft_cells(&start) {
-            terms.push(Box::new(soft));
-        }
-        if let Some(ghost) = self.ghost_faces(&start) {
-            terms.push(Box::new(ghost));
-        }
-        if self.settings.lone_points {
-            let lone = LonePoints::new(&start);
-            if !lone.is_empty() {
-                terms.push(Box::new(lone));
-            }
-        }
-        // The band always: it moves the anchors, those without a band
-        // point this step with their material points.
-        terms.push(Box::new(BandTerms::new(
-            &start,
-            loops,
-            &self.anchors,
-            self.band_width,
-            load_factor,
-        )));
         let stage = &self.stages[self.stage];
-        let loading = BoundaryLoading::new(&start, loops, &stage.boundary_loads, load_factor);
-        if !loading.is_empty() {
-            terms.push(Box::new(loading));
-        }
         let terms = StepTerms {
             held: HeldDofs::find(&stage.grid_supports, &self.grid, conn),
             f_ext: assembly::external_force(
@@ -855,17 +806,8 @@ impl Simulation {
                 );
                 (load_factor, rate)
             }),
-            averaging: match self.volumetric {
-                Volumetric::Fbar => Some(CellAverages::Fbar(
-                    FbarCells::new(&start).carrying(&start, &self.points.fbar_pressure),
-                )),
-                Volumetric::CellMean => Some(CellAverages::CellMean(
-                    CellMean::new(&start, self.settings.hourglass)
-                        .carrying(&start, &self.points.cell_mean_stress),
-                )),
-                Volumetric::Standard => None,
-            },
-            terms,
+            averaging: Dim::<D>::averaging(self, &start),
+            terms: Dim::<D>::step_terms(self, &start, load_factor),
         };
         let pattern = terms.pattern(conn);
         let solving = (&self.solver, &self.solve_tally);
@@ -901,31 +843,233 @@ impl Simulation {
         };
         let x = self.grid.node_position(node);
         let tol = 1e-9 * self.grid.h;
-        (0..2).all(|d| x[d] >= lo[d] - tol && x[d] <= hi[d] + tol)
+        (0..D).all(|d| x[d] >= lo[d] - tol && x[d] <= hi[d] + tol)
     }
 
     /// Material must stay inside the extent, or, on an unbounded grid, within
     /// the range of node indices (2^30 cells from the origin).
     fn check_inside_extent(&self, step: usize) -> Result<(), SolveError> {
-        let reach = self.grid.h * crate::grid::REACH_CELLS;
+        let reach = self.grid.h * crate::grid::reach_cells(D);
         let o = self.grid.origin;
         let (lo, hi) = self
             .extent
-            .unwrap_or(([o[0] - reach, o[1] - reach], [o[0] + reach, o[1] + reach]));
+            .unwrap_or((o.map(|o| o - reach), o.map(|o| o + reach)));
         match self
             .points
             .position
             .iter()
-            .position(|x| !(x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1]))
+            .position(|x| !(0..D).all(|d| x[d] >= lo[d] && x[d] <= hi[d]))
         {
-            Some(point) => {
-                let [x, y] = self.points.position[point];
-                Err(SolveError::LeftGrid { step, point, x, y })
-            }
+            Some(point) => Err(SolveError::LeftGrid {
+                step,
+                point,
+                at: self.points.position[point].to_vec(),
+            }),
             None => Ok(()),
         }
     }
+}
 
+/// What a run's load step does that differs by dimension, beyond what its
+/// equilibrium does ([`StepSpace`]). In plane strain, the terms of the
+/// B-spline boundary (its loads, the IBM band and anchors), the soft
+/// background, the ghost penalty and the lone points' term, and the
+/// averagings against locking. In 3D, a step so far holds the points,
+/// gravity, point loads and grid supports on planes (issue 38): the
+/// boundary's terms are part 2's, and F-bar, the ghost faces and the
+/// geostatic stage wait for cells of eight corners.
+pub trait RunSpace<const D: usize>: StepSpace<D>
+where
+    Dim<D>: StepSpace<D>,
+{
+    /// The terms of a step at `load_factor` on `start` besides the points'
+    /// own, in the order their stiffness is added to the tangent.
+    fn step_terms<'a>(
+        sim: &'a Simulation<D>,
+        start: &Configuration<'a, D>,
+        load_factor: f64,
+    ) -> Vec<Box<dyn StepTerm<D> + 'a>>;
+
+    /// The averaging of the points' deformation the run asks for.
+    fn averaging(sim: &Simulation<D>, start: &Configuration<D>) -> Option<Averages<D>>;
+
+    /// What the points need of a converged step's terms (`carried`) before
+    /// they move with its increment `u`.
+    fn before_commit(
+        sim: &mut Simulation<D>,
+        conn: &Connectivity<D>,
+        u: &[f64],
+        carried: &[Box<dyn Any>],
+    );
+
+    /// What the next step carries once the points moved: the averaging's
+    /// part (`averaged`) and the terms' (`carried`). Returns the tractions
+    /// of the supports on the boundary.
+    fn after_commit(
+        sim: &mut Simulation<D>,
+        conn: &Connectivity<D>,
+        u: &[f64],
+        averaged: Option<<Averages<D> as Averaging<D>>::Carried>,
+        carried: Vec<Box<dyn Any>>,
+    ) -> Vec<SupportTraction>;
+
+    /// The start of geostatic stage `k`: the points in their overburden
+    /// stresses, with `k0` (or each material's).
+    fn start_geostatic(sim: &mut Simulation<D>, k: usize, k0: Option<f64>);
+
+    /// Shows `observer` the converged step `report` and the run's state.
+    fn step_finished(sim: &Simulation<D>, observer: &mut dyn Observer, report: &StepReport);
+}
+
+type Averages<const D: usize> = <Dim<D> as StepSpace<D>>::Averages;
+
+impl RunSpace<2> for Dim<2> {
+    fn step_terms<'a>(
+        sim: &'a Simulation,
+        start: &Configuration<'a>,
+        load_factor: f64,
+    ) -> Vec<Box<dyn StepTerm + 'a>> {
+        let loops = &sim.loops;
+        let mut terms: Vec<Box<dyn StepTerm + 'a>> = Vec::new();
+        if let Some(soft) = sim.soft_cells(start) {
+            terms.push(Box::new(soft));
+        }
+        if let Some(ghost) = sim.ghost_faces(start) {
+            terms.push(Box::new(ghost));
+        }
+        if sim.settings.lone_points {
+            let lone = LonePoints::new(start);
+            if !lone.is_empty() {
+                terms.push(Box::new(lone));
+            }
+        }
+        // The band always: it moves the anchors, those without a band
+        // point this step with their material points.
+        terms.push(Box::new(BandTerms::new(
+            start,
+            loops,
+            &sim.anchors,
+            sim.band_width,
+            load_factor,
+        )));
+        let stage = &sim.stages[sim.stage];
+        let loading = BoundaryLoading::new(start, loops, &stage.boundary_loads, load_factor);
+        if !loading.is_empty() {
+            terms.push(Box::new(loading));
+        }
+        terms
+    }
+
+    fn averaging(sim: &Simulation, start: &Configuration) -> Option<CellAverages> {
+        match sim.volumetric {
+            Volumetric::Fbar => Some(CellAverages::Fbar(
+                FbarCells::new(start).carrying(start, &sim.points.fbar_pressure),
+            )),
+            Volumetric::CellMean => Some(CellAverages::CellMean(
+                CellMean::new(start, sim.settings.hourglass)
+                    .carrying(start, &sim.points.cell_mean_stress),
+            )),
+            Volumetric::Standard => None,
+        }
+    }
+
+    /// The stress slopes of the points the one-point cells' term holds
+    /// (seeded one a cell or fewer), taken before the points move; the
+    /// others' are zero.
+    fn before_commit(
+        sim: &mut Simulation,
+        conn: &Connectivity,
+        u: &[f64],
+        carried: &[Box<dyn Any>],
+    ) {
+        let mut slopes = Vec::new();
+        for carried in carried {
+            if let Some(lone) = carried.downcast_ref::<LonePoints>() {
+                slopes = lone.settled(u, |p| {
+                    let grad_u = increment(conn.point_links(p), u).1;
+                    lone_points::polar_rotation(&(Matrix2::identity() + grad_u))
+                });
+            }
+        }
+        sim.points.stress_slopes.fill([0.0; 6]);
+        for (p, s) in slopes {
+            sim.points.stress_slopes[p] = s;
+        }
+    }
+
+    fn after_commit(
+        sim: &mut Simulation,
+        conn: &Connectivity,
+        u: &[f64],
+        averaged: Option<Carried>,
+        carried: Vec<Box<dyn Any>>,
+    ) -> Vec<SupportTraction> {
+        sim.points.fbar_pressure = Vec::new();
+        sim.points.cell_mean_stress = Vec::new();
+        match averaged {
+            Some(Carried::FbarPressure(pressure)) => sim.points.fbar_pressure = pressure,
+            Some(Carried::CellMeanStress(stress)) => sim.points.cell_mean_stress = stress,
+            None => {}
+        }
+        let mut support_tractions = Vec::new();
+        for carried in carried {
+            if let Ok(band) = carried.downcast::<BandTerms>() {
+                support_tractions = band.tractions(u);
+                // A geostatic stage's too: the band's stretch is how its
+                // penalty carries the reactions, which the next stage
+                // starts from.
+                sim.advance_anchors(&band, conn, u);
+            }
+        }
+        support_tractions
+    }
+
+    fn start_geostatic(sim: &mut Simulation, k: usize, k0: Option<f64>) {
+        let g = -sim.stages[k].gravity[0][1];
+        geostatic::set_overburden_stresses(&mut sim.points, g, k0);
+    }
+
+    fn step_finished(sim: &Simulation, observer: &mut dyn Observer, report: &StepReport) {
+        observer.step_finished(report, &sim.step_state());
+    }
+}
+
+impl RunSpace<3> for Dim<3> {
+    fn step_terms<'a>(
+        _: &'a Simulation<3>,
+        _: &Configuration<'a, 3>,
+        _: f64,
+    ) -> Vec<Box<dyn StepTerm<3> + 'a>> {
+        Vec::new()
+    }
+
+    fn averaging(_: &Simulation<3>, _: &Configuration<3>) -> Option<Unaveraged> {
+        None
+    }
+
+    fn before_commit(_: &mut Simulation<3>, _: &Connectivity<3>, _: &[f64], _: &[Box<dyn Any>]) {}
+
+    fn after_commit(
+        _: &mut Simulation<3>,
+        _: &Connectivity<3>,
+        _: &[f64],
+        _: Option<Unaveraged>,
+        _: Vec<Box<dyn Any>>,
+    ) -> Vec<SupportTraction> {
+        Vec::new()
+    }
+
+    /// No 3D stage is geostatic: [`Simulation::solid`] makes none.
+    fn start_geostatic(_: &mut Simulation<3>, _: usize, _: Option<f64>) {
+        unreachable!("a 3D run has no geostatic stage")
+    }
+
+    fn step_finished(sim: &Simulation<3>, observer: &mut dyn Observer, report: &StepReport) {
+        observer.solid_step_finished(report, &sim.points);
+    }
+}
+
+impl Simulation {
     /// The soft background of the tangent, with the stiffest material's
     /// constants scaled by the regularisation ratio.
     fn soft_cells(&self, start: &Configuration) -> Option<SoftCells> {

@@ -114,14 +114,14 @@ impl FlowLimit {
 /// How far a trial moved the points, each by `displacement`: the root
 /// mean square over their reference `volume` (a weightless body has no
 /// mass to weigh by), and the largest (m).
-pub(crate) fn trial_movement(
+pub(crate) fn trial_movement<const D: usize>(
     volume: &[f64],
-    displacement: impl Fn(usize) -> [f64; 2],
+    displacement: impl Fn(usize) -> [f64; D],
 ) -> (f64, f64) {
     let (mut sum, mut total, mut largest) = (0.0, 0.0, 0.0f64);
     for (p, v) in volume.iter().enumerate() {
         let d = displacement(p);
-        let squared = d[0] * d[0] + d[1] * d[1];
+        let squared = (1..D).fold(d[0] * d[0], |s, c| s + d[c] * d[c]);
         sum += v * squared;
         total += v;
         largest = largest.max(squared.sqrt());

@@ -54,11 +54,14 @@ fn gmres_preconditioned_by_the_symmetric_part_gives_lus_answer() {
         assert_eq!(a.newton.factorisation, Some(Factorisation::Lu));
         assert_eq!(b.newton.factorisation, Some(Factorisation::Gmres));
         assert_eq!(a.newton.iterations, b.newton.iterations, "step {}", a.step);
-        let (ta, tb) = (a.probes[0].displacement, b.probes[0].displacement);
+        let (ta, tb) = (
+            a.probes[0].displacement.clone(),
+            b.probes[0].displacement.clone(),
+        );
         let gap = (ta[0] - tb[0]).hypot(ta[1] - tb[1]);
         assert!(gap < 1e-6, "step {}: {ta:?} against {tb:?}", a.step);
     }
-    let tip = direct.steps.last().unwrap().probes[0].displacement;
+    let tip = direct.steps.last().unwrap().probes[0].displacement.clone();
     assert!(tip[1] < -2.0, "the tip came down by metres: {tip:?}");
 }
 
@@ -86,7 +89,10 @@ fn gmres_preconditioned_by_multigrid_gives_lus_answer() {
     for (a, b) in direct.steps.iter().zip(&gmres.steps) {
         assert_eq!(b.newton.factorisation, Some(Factorisation::Gmres));
         assert_eq!(a.newton.iterations, b.newton.iterations, "step {}", a.step);
-        let (ta, tb) = (a.probes[0].displacement, b.probes[0].displacement);
+        let (ta, tb) = (
+            a.probes[0].displacement.clone(),
+            b.probes[0].displacement.clone(),
+        );
         let gap = (ta[0] - tb[0]).hypot(ta[1] - tb[1]);
         assert!(gap < 1e-6, "step {}: {ta:?} against {tb:?}", a.step);
     }
@@ -120,7 +126,10 @@ fn an_elastic_bodys_gmres_takes_multigrid_by_default() {
     for (a, b) in a.steps.iter().zip(&b.steps) {
         assert_eq!(a.newton.factorisation, Some(Factorisation::Gmres));
         assert_eq!(b.newton.factorisation, Some(Factorisation::Gmres));
-        let (ta, tb) = (a.probes[0].displacement, b.probes[0].displacement);
+        let (ta, tb) = (
+            a.probes[0].displacement.clone(),
+            b.probes[0].displacement.clone(),
+        );
         let gap = (ta[0] - tb[0]).hypot(ta[1] - tb[1]);
         assert!(gap < 1e-6, "step {}: {ta:?} against {tb:?}", a.step);
     }

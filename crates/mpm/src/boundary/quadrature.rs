@@ -38,16 +38,16 @@ fn boundary_basis(basis: Basis) -> Basis {
 /// Appends to `shares` the active nodes' boundary shape functions at `x`
 /// as `(active node index, N)` and returns their sum, which is below one
 /// where some of their nodes are inactive. `weights` is scratch space.
-pub fn active_hats(
+pub fn active_hats<const D: usize>(
     basis: Basis,
-    grid: &Grid,
-    x: Point,
+    grid: &Grid<D>,
+    x: [f64; D],
     nodes: &[NodeKey],
-    weights: &mut Vec<NodeWeight>,
+    weights: &mut Vec<NodeWeight<D>>,
     shares: &mut Vec<(usize, f64)>,
 ) -> f64 {
     weights.clear();
-    boundary_basis(basis).eval(grid, x, Support::Rectangle([0.0, 0.0]), weights);
+    boundary_basis(basis).eval(grid, x, Support::Rectangle([0.0; D]), weights);
     let before = shares.len();
     shares.extend(
         weights

@@ -8,8 +8,10 @@ use std::ops::Index;
 
 use nalgebra::{Matrix2, Matrix3, Matrix4, SMatrix};
 
+use super::MaterialPoints;
 use super::admissible::TrialResponse;
 use super::seeding::Domain;
+use crate::grid::Support;
 use crate::material::{CauchyStress, History, History3, Material, Response, Response3, Tangent3};
 
 /// The dimension `D` as a type, to hang [`Space`] on.
@@ -55,6 +57,15 @@ pub trait Space<const D: usize> {
     /// The equivalent plastic strain a history holds.
     fn plastic_strain(history: &Self::History) -> f64;
     fn determinant(m: &SMatrix<f64, D, D>) -> f64;
+    /// Point `p`'s domain now, for the basis ([`MaterialPoints::support`]).
+    fn support(points: &MaterialPoints<D>, p: usize) -> Support<D>
+    where
+        Dim<D>: Space<D>;
+    /// The first point whose position, deformation or stress is not a
+    /// finite number ([`MaterialPoints::first_non_finite`]).
+    fn first_non_finite(points: &MaterialPoints<D>) -> Option<usize>
+    where
+        Dim<D>: Space<D>;
 }
 
 impl Space<2> for Dim<2> {
@@ -98,6 +109,14 @@ impl Space<2> for Dim<2> {
     fn determinant(m: &Matrix2<f64>) -> f64 {
         m.determinant()
     }
+
+    fn support(points: &MaterialPoints, p: usize) -> Support {
+        points.support(p)
+    }
+
+    fn first_non_finite(points: &MaterialPoints) -> Option<usize> {
+        points.first_non_finite()
+    }
 }
 
 impl Space<3> for Dim<3> {
@@ -137,5 +156,13 @@ impl Space<3> for Dim<3> {
 
     fn determinant(m: &Matrix3<f64>) -> f64 {
         m.determinant()
+    }
+
+    fn support(points: &MaterialPoints<3>, p: usize) -> Support<3> {
+        points.support(p)
+    }
+
+    fn first_non_finite(points: &MaterialPoints<3>) -> Option<usize> {
+        points.first_non_finite()
     }
 }

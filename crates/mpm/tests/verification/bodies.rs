@@ -43,7 +43,7 @@ fn turned_column_as(angle: f64, h: f64, polygon_on: Option<&str>) -> (f64, f64) 
         case["bodies"][0]["points"]["lattice"] = lattice.into();
     }
     let (_, report) = run(&case);
-    let d = report.steps.last().unwrap().probes[0].displacement;
+    let d = report.steps.last().unwrap().probes[0].displacement.clone();
     (
         d[0] * axis[0] + d[1] * axis[1],
         d[0] * across[0] + d[1] * across[1],
@@ -457,7 +457,7 @@ fn plate_with_hole(h: f64, polar: bool) -> (f64, [f64; 4]) {
         top += hoop / kirsch_hoop(1e3, 1.0, r, t) * mp.volume0[p];
         volume += mp.volume0[p];
     }
-    let probe = |k: usize| report.steps[0].probes[k].displacement;
+    let probe = |k: usize| report.steps[0].probes[k].displacement.clone();
     (
         top / volume,
         [probe(0)[1], probe(1)[0], probe(2)[0], probe(2)[1]],

@@ -146,7 +146,7 @@ fn measure_case(mut case: serde_json::Value, h: f64, shift: [f64; 2]) -> (f64, f
     case["grid"]["origin"] = json!([shift[0] * h, shift[1] * h]);
     let (_, report) = run(&case);
     let probes = &report.steps[0].probes;
-    let tip = probes[0].displacement;
+    let tip = probes[0].displacement.clone();
     // Trapezoidal mean of the left edge's vertical displacement.
     let left: Vec<f64> = probes[1..].iter().map(|p| p.displacement[1]).collect();
     let mean = (left[1..8].iter().sum::<f64>() + 0.5 * (left[0] + left[8])) / 8.0;
@@ -242,7 +242,7 @@ fn papers_cantilever_converges_quadratically_and_its_reactions_balance() {
         let r = &s.newton.residuals;
         let n = r.len();
         let order = observed_order([r[n - 3], r[n - 2], r[n - 1]]);
-        let applied = s.applied_load;
+        let applied = s.applied_load.clone();
         let total = [0, 1].map(|c| s.reactions.iter().map(|f| f[c]).sum::<f64>() + applied[c]);
         let size = applied[0].hypot(applied[1]);
         eprintln!(

@@ -88,7 +88,7 @@ fn stress_error(cells: usize) -> (f64, f64) {
 }
 
 /// `stress_error` of any column case, with the last step's reactions.
-fn stress_error_of(case: &serde_json::Value) -> (f64, f64, Vec<[f64; 2]>) {
+fn stress_error_of(case: &serde_json::Value) -> (f64, f64, Vec<Vec<f64>>) {
     let (sim, report) = run(case);
     let mp = &sim.points;
     let v0: f64 = mp.volume0.iter().sum();

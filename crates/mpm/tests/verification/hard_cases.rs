@@ -98,7 +98,7 @@ fn the_papers_cantilever_in_one_load_step_finishes() {
         let case = Case::from_json(&case.to_string()).unwrap();
         let mut sim = Simulation::new(&case).unwrap();
         let report = sim.run(&mut NoObserver).expect("finishes");
-        report.steps.last().unwrap().probes[0].displacement
+        report.steps.last().unwrap().probes[0].displacement.clone()
     };
     let (one, five) = (tip(1), tip(5));
     assert!(
@@ -186,7 +186,7 @@ fn a_body_carried_across_twenty_cells_stays_unstressed() {
         let case = Case::from_json(&case.to_string()).unwrap();
         let mut sim = Simulation::new(&case).unwrap();
         let report = sim.run(&mut NoObserver).expect("converges");
-        let moved = report.steps.last().unwrap().probes[0].displacement;
+        let moved = report.steps.last().unwrap().probes[0].displacement.clone();
         assert!(
             (moved[0] - 5.0).abs() < 1e-9 && moved[1].abs() < 1e-9,
             "{basis}: {moved:?}"
@@ -255,7 +255,7 @@ fn the_elastica_under_a_dead_end_load() {
         let case = Case::from_json(&case.to_string()).unwrap();
         let mut sim = Simulation::new(&case).unwrap();
         let report = sim.run(&mut NoObserver).expect("the elastica finishes");
-        let u = report.steps.last().unwrap().probes[0].displacement;
+        let u = report.steps.last().unwrap().probes[0].displacement.clone();
         let (u_l, v_l) = (-u[0] / length, -u[1] / length);
         (
             ((u_l - 0.55500) / 0.55500).abs(),

@@ -201,7 +201,7 @@ fn prescribed_rigid_rotation_leaves_the_block_unstressed() {
             (mp.position[p][0] - expected[0]).hypot(mp.position[p][1] - expected[1])
         })
         .fold(0.0, f64::max);
-    let reaction = report.steps.last().unwrap().reactions[0];
+    let reaction = report.steps.last().unwrap().reactions[0].clone();
     eprintln!(
         "max |stress| / E {:.3e}, max position error {position:.3e} m, reaction {reaction:?}",
         stress / E
@@ -274,12 +274,12 @@ fn cylinder_case(turn: f64, h: f64, outer_roller: bool) -> (f64, f64) {
         }
     };
     let u_r = |i: usize, r: f64| {
-        let u = report.steps[0].probes[i].displacement;
+        let u = report.steps[0].probes[i].displacement.clone();
         (u[0] * c + u[1] * s - exact(r)) / exact(r)
     };
     if outer_roller {
         // u_r(b) is zero: report it relative to u_r(a).
-        let u = report.steps[0].probes[1].displacement;
+        let u = report.steps[0].probes[1].displacement.clone();
         return (u_r(0, a), (u[0] * c + u[1] * s) / exact(a));
     }
     (u_r(0, a), u_r(1, b))
@@ -388,7 +388,7 @@ fn block_squeezed_to_half_its_height_on_a_cut_grid() {
         shear = shear.max(s.plane[0].abs()).max(s.plane[2].abs());
         normal = normal.max((s.plane[1] - syy).abs());
     }
-    let corner = report.steps.last().unwrap().probes[0].displacement;
+    let corner = report.steps.last().unwrap().probes[0].displacement.clone();
     let ux = e_x.exp() - 1.0;
     eprintln!(
         "sigma_xx, sigma_xy {:.2e}, sigma_yy {:.2e} of |sigma_yy|; corner {corner:?} (exact u_x {ux:.5})",

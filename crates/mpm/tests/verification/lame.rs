@@ -66,7 +66,7 @@ fn errors_of(case: &serde_json::Value, nu: f64) -> (f64, f64, f64) {
     let (sim, report) = run(case);
     let d = std::f64::consts::FRAC_1_SQRT_2;
     let u_r = |i: usize| {
-        let u = report.steps[0].probes[i].displacement;
+        let u = report.steps[0].probes[i].displacement.clone();
         (u[0] + u[1]) * d
     };
     let e_in = (u_r(0) - exact_u_r(A, nu)) / exact_u_r(A, nu);

@@ -128,7 +128,7 @@ fn the_line_search_keeps_newtons_path_near_incompressibility() {
             let last = report.steps.last().unwrap();
             let cutbacks: usize = report.steps.iter().map(|s| s.cutbacks).sum();
             let iterations: usize = report.steps.iter().map(|s| s.newton.iterations).sum();
-            (last.probes[0].displacement, iterations, cutbacks)
+            (last.probes[0].displacement.clone(), iterations, cutbacks)
         };
         let (searched, plain) = (run_with(true), run_with(false));
         assert_eq!(searched.2, 0, "{volumetric}: {searched:?}");

@@ -88,7 +88,7 @@ fn the_elastica_one_point_a_cell_finishes_near_the_continuum() {
             "probes": [ { "name": "tip", "at": [10.0, 0.5] } ]
         });
         let (_, report) = run(&case);
-        let u = report.steps.last().unwrap().probes[0].displacement;
+        let u = report.steps.last().unwrap().probes[0].displacement.clone();
         [u[0] / 10.0 / -0.554028 - 1.0, u[1] / 10.0 / -0.825415 - 1.0]
     };
     let b = tip("bspline2");

@@ -52,7 +52,7 @@ fn block_under_follower_pressure_compresses_homogeneously() {
     let l = exact_stretch(p);
     for basis in ["linear", "gimp"] {
         let (sim, report) = run(&block(p, 1, basis));
-        let corner = report.steps[0].probes[0].displacement;
+        let corner = report.steps[0].probes[0].displacement.clone();
         eprintln!("{basis}: corner {corner:?}, exact {}", l - 1.0);
         // One load step from the grid-aligned layout: the points integrate
         // the homogeneous state exactly and the pressure acts on the
