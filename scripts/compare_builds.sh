@@ -2,7 +2,8 @@
 # Runs the standard comparison set with two mpm binaries and compares the
 # results (scripts/compare_runs.py): the paper's cantilever study (quick)
 # for every basis the new binary's case schema names, every built-in
-# example it lists, and the footing study (quick: its first two cells).
+# example both binaries list, and the footing study (quick: its first two
+# cells).
 #
 #   scripts/compare_builds.sh OLD_MPM NEW_MPM [WORK_DIR]
 set -euo pipefail
@@ -27,7 +28,10 @@ def find(o):
         if (found := find(v)):
             return found
 print(" ".join(find(json.load(sys.stdin))))')
-examples=$("$new" example)
+# The built-in examples both builds have (a new one has no "before").
+old_examples=$("$old" example)
+examples=$(for e in $("$new" example); do
+  if grep -qx "$e" <<<"$old_examples"; then echo "$e"; fi; done)
 for side in before after; do
   bin=$old; [ "$side" = after ] && bin=$new
   dir=$work/$side

@@ -541,3 +541,51 @@ fn a_staged_run_names_its_stages_and_its_peaks() {
     assert_eq!(peak["value"][1].as_f64().unwrap().abs(), largest);
     assert!(largest > top_force(&steps[1]));
 }
+
+/// The built-in 3D column runs from the command line: a step a line, the
+/// points of every step as VTU files in a series, and a summary whose base
+/// reaction carries the column's weight, rho0 g L h^2 = 390625 N, in z.
+#[test]
+fn a_3d_case_runs_and_its_base_carries_the_weight() {
+    let out = temp_dir("run3d");
+    run_ok(&["run", "--example", "column3d", "--out"], &out);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let steps = summary["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 40);
+    let base = steps[39]["reactions"][4].as_array().unwrap();
+    assert_eq!(base.len(), 3);
+    let weight = 80.0 * 10.0 * 50.0 * 3.125 * 3.125;
+    assert!(
+        (base[2].as_f64().unwrap() - weight).abs() < 1e-6 * weight,
+        "{base:?}"
+    );
+    let vtus = std::fs::read_dir(out.join("steps")).unwrap().count();
+    assert_eq!(vtus, 41);
+    let series = std::fs::read_to_string(out.join("points.pvd")).unwrap();
+    assert!(series.contains("steps/step_0040.vtu"), "{series}");
+}
+
+/// A 3D case with a field of the plane-strain case, or a vector of two
+/// components, is refused with its path named (exit 2).
+#[test]
+fn a_2d_field_in_a_3d_case_is_refused_by_name() {
+    let column = example("column3d");
+    let mut probes = column.clone();
+    probes["probes"] = serde_json::json!([{ "name": "top", "at": [1.0, 1.0, 50.0] }]);
+    let mut gravity = column.clone();
+    gravity["loads"]["gravity"] = serde_json::json!([0.0, -10.0]);
+    let mut rectangle = column.clone();
+    rectangle["bodies"][0]["geometry"] =
+        serde_json::json!({ "rectangle": { "min": [0.0, 0.0], "max": [1.0, 1.0] } });
+    for (name, case, path) in [
+        ("probes", probes, "probes"),
+        ("gravity", gravity, "loads.gravity"),
+        ("rectangle", rectangle, "bodies[0].geometry"),
+    ] {
+        let out = run_case(&format!("solid-{name}"), &case);
+        assert_eq!(out.status.code(), Some(2), "{name}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(path), "{name}: {err}");
+    }
+}

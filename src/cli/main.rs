@@ -11,6 +11,7 @@
 mod bench_queue;
 mod run;
 mod serve;
+mod solid;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -230,13 +231,17 @@ fn example(name: Option<String>) -> Result<(), CliError> {
             for n in mpm::case::builtin::NAMES {
                 println!("{n}");
             }
+            for n in mpm::case::builtin::SOLID_NAMES {
+                println!("{n}");
+            }
             Ok(())
         }
         Some(n) => {
             let text = mpm::case::builtin::get(&n).ok_or_else(|| {
                 CliError::input(format!(
-                    "no built-in example {n:?}; available: {}",
-                    mpm::case::builtin::NAMES.join(", ")
+                    "no built-in example {n:?}; available: {}, {}",
+                    mpm::case::builtin::NAMES.join(", "),
+                    mpm::case::builtin::SOLID_NAMES.join(", ")
                 ))
             })?;
             print!("{text}");

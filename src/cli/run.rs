@@ -62,6 +62,9 @@ pub fn run(
             (format!("built-in example {name}"), text.to_string())
         }
     };
+    if mpm::case::solid::is_solid(&text) {
+        return crate::solid::run(&text, &source, out, point_files, force, max_points);
+    }
     let (case, sim) = build(&text, &source, max_points)?;
     prepare_output(out, force)?;
     fs::write(out.join(CASE_FILE), &text)?;
@@ -154,7 +157,7 @@ fn build(text: &str, source: &str, max_points: usize) -> Result<(Case, Simulatio
 
 /// Refuses a non-empty output directory, unless `force`: then removes the
 /// files an earlier run wrote there (and nothing else).
-fn prepare_output(out: &Path, force: bool) -> Result<(), CliError> {
+pub(crate) fn prepare_output(out: &Path, force: bool) -> Result<(), CliError> {
     let occupied = fs::read_dir(out).is_ok_and(|mut entries| entries.next().is_some());
     if occupied && !force {
         return Err(CliError::input(format!(
@@ -371,26 +374,7 @@ impl Observer for ResultWriter {
 
     fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
         self.progress.clear();
-        let probes: Vec<String> = report
-            .probes
-            .iter()
-            .map(|p| {
-                format!(
-                    "{} ({:+.6e}, {:+.6e})",
-                    p.name, p.displacement[0], p.displacement[1]
-                )
-            })
-            .collect();
-        println!(
-            "step {:>4}  load {:.4}  iterations {:>2}  residual {:.2e}  dofs {:>8}  {:.3} s  {}",
-            report.step,
-            report.load_factor,
-            report.newton.iterations,
-            report.newton.residuals.last().copied().unwrap_or(0.0),
-            report.active_dofs,
-            report.timings.total,
-            probes.join("  ")
-        );
+        print_step(report);
         if self.point_files
             && self.io_error.is_none()
             && let Err(e) = self.write_step(report, state)
@@ -410,15 +394,38 @@ impl Observer for ResultWriter {
     }
 }
 
+/// A converged step's line on stdout.
+pub(crate) fn print_step(report: &StepReport) {
+    let probes: Vec<String> = report
+        .probes
+        .iter()
+        .map(|p| {
+            let components: Vec<String> =
+                p.displacement.iter().map(|u| format!("{u:+.6e}")).collect();
+            format!("{} ({})", p.name, components.join(", "))
+        })
+        .collect();
+    println!(
+        "step {:>4}  load {:.4}  iterations {:>2}  residual {:.2e}  dofs {:>8}  {:.3} s  {}",
+        report.step,
+        report.load_factor,
+        report.newton.iterations,
+        report.newton.residuals.last().copied().unwrap_or(0.0),
+        report.active_dofs,
+        report.timings.total,
+        probes.join("  ")
+    );
+}
+
 /// A one-line progress bar on stderr (only when stderr is a terminal).
-struct Progress {
+pub(crate) struct Progress {
     live: bool,
     step: usize,
     n_steps: usize,
 }
 
 impl Progress {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self {
             live: std::io::stderr().is_terminal(),
             step: 0,
@@ -426,13 +433,13 @@ impl Progress {
         }
     }
 
-    fn start_step(&mut self, step: usize, n_steps: usize) {
+    pub(crate) fn start_step(&mut self, step: usize, n_steps: usize) {
         self.step = step;
         self.n_steps = n_steps;
         self.draw("");
     }
 
-    fn iteration(&mut self, iteration: usize, residual: f64) {
+    pub(crate) fn iteration(&mut self, iteration: usize, residual: f64) {
         self.draw(&format!("iteration {iteration} residual {residual:.2e}"));
     }
 
@@ -451,7 +458,7 @@ impl Progress {
         );
     }
 
-    fn clear(&self) {
+    pub(crate) fn clear(&self) {
         if self.live {
             eprint!("\r\x1b[2K");
         }

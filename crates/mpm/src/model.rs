@@ -7,6 +7,7 @@
 use crate::assembly::PointLoad;
 use crate::assembly::lone_points::LONE_VOLUME;
 use crate::boundary::edge_detection::loops_on_edge;
+use crate::boundary::face_loads::FaceLoad;
 use crate::boundary::ibm::{self, IbmMotion, IbmSupport};
 use crate::boundary::loading::LoadedStretch;
 use crate::boundary::traction::Traction;
@@ -14,6 +15,7 @@ use crate::boundary::{
     BoundaryLoop, Piece, Representation, find_loops, selected_pieces, selected_segments,
     set_offsets, snap_to_edge,
 };
+use crate::case::solid::SolidCase;
 use crate::case::{
     self, BasisKind, Body, Case, CaseError, GridSpec, Loads, MaterialSpec, SupportMethod,
     Volumetric,
@@ -24,8 +26,9 @@ use crate::grid::{Basis, Grid};
 use crate::linsolve::SolverSettings;
 use crate::material::{DruckerPrager, Elastic, Material, MohrCoulomb, StiffnessScales, VonMises};
 use crate::newton::NewtonSettings;
-use crate::particles::MaterialPoints;
 use crate::particles::seeding::{self, Density, FillSize, Lattice};
+use crate::particles::solid_seeding::fill;
+use crate::particles::{Dim, MaterialPoints, Space};
 use crate::probes::Probes;
 use crate::report::{PointField, RunWarning, StepReport};
 use crate::stages::{Stage, StrengthReduction};
@@ -311,6 +314,7 @@ fn stages(case: &Case, seeded: &Seeded) -> Result<(Vec<Stage>, Vec<IbmSupport>),
             load_steps: view.load_steps as usize,
             gravity,
             point_loads,
+            face_loads: Vec::new(),
             boundary_loads,
             grid_supports,
             ibm,
@@ -439,11 +443,109 @@ pub struct SolidRun {
     pub points: MaterialPoints<3>,
     pub gravity: [f64; 3],
     pub point_loads: Vec<PointLoad<3>>,
+    /// Tractions on faces of boxes ([`face_loads`]).
+    pub face_loads: Vec<FaceLoad<3>>,
     pub supports: Vec<PlaneSupport<3>>,
     pub load_steps: usize,
 }
 
 impl Simulation<3> {
+    /// Builds the initial state of a validated 3D case. Fails, naming the
+    /// field, when a body holds no point or a support no node the material
+    /// reaches, or a point lies outside the grid's extent.
+    pub fn from_solid_case(case: &SolidCase) -> Result<Self, CaseError> {
+        let mut points = MaterialPoints::<3>::default();
+        for (i, body) in case.bodies.iter().enumerate() {
+            let seeds = fill(&body.geometry.solid(), case.spacing(i));
+            if seeds.is_empty() {
+                return Err(CaseError::new(
+                    format!("bodies[{i}].points"),
+                    "the body holds no point at this spacing",
+                ));
+            }
+            let (_, _, rho) = body.material.constants();
+            points.add_solid(material(&body.material), rho, &seeds);
+        }
+        let extent = case.grid.extent.map(|b| (b.min, b.max));
+        if let Some((lo, hi)) = extent {
+            let tol = 1e-9 * case.grid.cell_size;
+            if let Some(p) = (0..points.len()).find(|&p| {
+                let x = points.position[p];
+                !(0..3).all(|d| x[d] >= lo[d] - tol && x[d] <= hi[d] + tol)
+            }) {
+                return Err(CaseError::new(
+                    "grid.extent",
+                    format!(
+                        "material point {p} at {:?} lies outside the extent",
+                        points.position[p]
+                    ),
+                ));
+            }
+        }
+        let point_loads = (case.loads.point_loads.iter())
+            .map(|load| PointLoad {
+                point: nearest_point(&points, load.at),
+                force: load.force,
+                held: false,
+            })
+            .collect();
+        let mut tractions = Vec::new();
+        for (i, t) in case.loads.tractions.iter().enumerate() {
+            let (axis, at) = t.on.plane().expect("validated: one plane");
+            let tol = 1e-9 * case.grid.cell_size;
+            let loads = face_loads(&points, (axis, at, tol), t.traction, false);
+            if loads.is_empty() {
+                return Err(CaseError::new(
+                    format!("loads.tractions[{i}].on"),
+                    "no body has a face on this plane",
+                ));
+            }
+            tractions.extend(loads);
+        }
+        let supports = (case.supports.iter().enumerate())
+            .map(|(index, s)| {
+                let (axis, at) = s.on.plane().expect("validated: one plane");
+                PlaneSupport {
+                    index,
+                    axis,
+                    at,
+                    fix: s.fix.components(),
+                }
+            })
+            .collect();
+        let newton = &case.analysis.newton;
+        let mut sim = Simulation::solid(SolidRun {
+            grid: Grid {
+                h: case.grid.cell_size,
+                origin: case.grid.origin,
+            },
+            basis: basis(case.basis),
+            extent,
+            points,
+            gravity: case.loads.gravity.unwrap_or_default(),
+            point_loads,
+            face_loads: tractions,
+            supports,
+            load_steps: case.analysis.load_steps as usize,
+        });
+        sim.settings.tolerance = newton.tolerance;
+        sim.settings.max_iterations = newton.max_iterations as usize;
+        sim.settings.line_search = newton.line_search;
+        sim.settings.predictor = newton.predictor;
+        sim.substepping = Substepping {
+            min_fraction: case.analysis.substepping.min_fraction,
+            max_cutbacks: case.analysis.substepping.max_cutbacks as usize,
+        };
+        let held = HeldDofs::find(&sim.stages[0].grid_supports, &sim.grid, &sim.reset_grid());
+        if let Some(idle) = held.first_idle() {
+            return Err(CaseError::new(
+                format!("supports[{idle}].on"),
+                "holds no grid node the material reaches: put the plane on a grid plane at the body",
+            ));
+        }
+        Ok(sim)
+    }
+
     /// The run `run` describes, with the default Newton settings and
     /// load-step cutting.
     pub fn solid(run: SolidRun) -> Self {
@@ -454,6 +556,7 @@ impl Simulation<3> {
             points,
             gravity,
             point_loads,
+            face_loads,
             supports,
             load_steps,
         } = run;
@@ -464,6 +567,7 @@ impl Simulation<3> {
             load_steps,
             gravity: [[0.0; 3], gravity],
             point_loads,
+            face_loads,
             boundary_loads: Vec::new(),
             n_supports: supports.len(),
             grid_supports: supports,
@@ -856,9 +960,46 @@ fn basis(kind: BasisKind) -> Basis {
     }
 }
 
+/// A traction `t` on the faces of the points' box domains that lie on the
+/// plane `x[axis] = at` (to `tol`) in the reference configuration: one
+/// dead [`FaceLoad`] a face, `t` times its area, `held` or ramped with the
+/// load factor (a stopgap for boxes until the B-spline surfaces).
+pub fn face_loads(
+    points: &MaterialPoints<3>,
+    (axis, at, tol): (usize, f64, f64),
+    t: [f64; 3],
+    held: bool,
+) -> Vec<FaceLoad<3>> {
+    (0..points.len())
+        .filter_map(|p| {
+            let (x, h) = (points.reference[p][axis], points.domain[p][axis]);
+            let side = if (x + h - at).abs() <= tol {
+                h
+            } else if (x - h - at).abs() <= tol {
+                -h
+            } else {
+                return None;
+            };
+            let area: f64 = (0..3)
+                .filter(|&d| d != axis)
+                .map(|d| 2.0 * points.domain[p][d])
+                .product();
+            Some(FaceLoad {
+                point: p,
+                offset: std::array::from_fn(|d| if d == axis { side } else { 0.0 }),
+                force: t.map(|c| c * area),
+                held,
+            })
+        })
+        .collect()
+}
+
 /// Index of the point nearest to `x`.
-fn nearest_point(points: &MaterialPoints, x: [f64; 2]) -> usize {
-    let d2 = |p: &[f64; 2]| (p[0] - x[0]).powi(2) + (p[1] - x[1]).powi(2);
+fn nearest_point<const D: usize>(points: &MaterialPoints<D>, x: [f64; D]) -> usize
+where
+    Dim<D>: Space<D>,
+{
+    let d2 = |p: &[f64; D]| (1..D).fold((p[0] - x[0]).powi(2), |s, d| s + (p[d] - x[d]).powi(2));
     (0..points.len())
         .min_by(|&a, &b| d2(&points.position[a]).total_cmp(&d2(&points.position[b])))
         .unwrap_or(0)

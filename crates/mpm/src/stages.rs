@@ -7,6 +7,7 @@
 //! ramped part (its change over the stage, factor `t`).
 
 use crate::assembly::PointLoad;
+use crate::boundary::face_loads::FaceLoad;
 use crate::boundary::ibm::IbmMotion;
 use crate::boundary::loading::LoadedStretch;
 use crate::equilibrium::StepSpace;
@@ -26,6 +27,8 @@ where
     /// Gravity `[held, ramped]` (m/s^2).
     pub gravity: [[f64; D]; 2],
     pub point_loads: Vec<PointLoad<D>>,
+    /// Tractions on faces of boxes (3D, until the B-spline surfaces).
+    pub face_loads: Vec<FaceLoad<D>>,
     pub boundary_loads: Vec<LoadedStretch>,
     pub grid_supports: Vec<<Dim<D> as StepSpace<D>>::Support>,
     /// Per implicit-boundary support of the run (in the first stage's
@@ -85,6 +88,7 @@ mod tests {
             load_steps,
             gravity: [[0.0; 2]; 2],
             point_loads: Vec::new(),
+            face_loads: Vec::new(),
             boundary_loads: Vec::new(),
             grid_supports: Vec::new(),
             ibm: Vec::new(),

@@ -26,6 +26,7 @@ use crate::assembly::averaging::{Averaging, Carried, CellAverages, Unaveraged};
 use crate::assembly::cell_mean::CellMean;
 use crate::assembly::{FbarCells, GhostFaces, LonePoints, SoftCells, StepTerm, lone_points};
 use crate::boundary::BoundaryLoop;
+use crate::boundary::face_loads::FaceLoading;
 use crate::boundary::ibm::{self, Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
 use crate::case::Volumetric;
@@ -1036,11 +1037,15 @@ impl RunSpace<2> for Dim<2> {
 
 impl RunSpace<3> for Dim<3> {
     fn step_terms<'a>(
-        _: &'a Simulation<3>,
-        _: &Configuration<'a, 3>,
-        _: f64,
+        sim: &'a Simulation<3>,
+        start: &Configuration<'a, 3>,
+        load_factor: f64,
     ) -> Vec<Box<dyn StepTerm<3> + 'a>> {
-        Vec::new()
+        let faces = &sim.stages[sim.stage].face_loads;
+        if faces.is_empty() {
+            return Vec::new();
+        }
+        vec![Box::new(FaceLoading::new(start, faces, load_factor))]
     }
 
     fn averaging(_: &Simulation<3>, _: &Configuration<3>) -> Option<Unaveraged> {

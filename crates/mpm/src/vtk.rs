@@ -4,12 +4,12 @@
 
 use std::io::{self, Write};
 
+use crate::particles::MaterialPoints;
 use crate::report::PointColumns;
 
 /// Writes the points as a VTK XML unstructured grid of vertex cells, with
 /// raw appended binary data (little-endian, 64-bit block headers).
-pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
-    let n = cols.position.len();
+pub fn write_vtu(out: impl Write, cols: &PointColumns) -> io::Result<()> {
     let positions: Vec<f64> = cols
         .position
         .iter()
@@ -32,6 +32,81 @@ pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
         .iter()
         .map(|&y| if y { 1.0 } else { 0.0 })
         .collect();
+    write_columns(
+        out,
+        &VtuColumns {
+            n: cols.position.len(),
+            positions: &positions,
+            displacement: &displacement,
+            stress: &stress,
+            volume: &cols.volume,
+            jacobian: &cols.jacobian,
+            body: &body,
+            plastic_strain: &cols.plastic_strain,
+            yielding: &yielding,
+        },
+    )
+}
+
+/// Writes a 3D run's points as [`write_vtu`] writes a plane-strain run's:
+/// every column, the stress as the full symmetric tensor.
+pub fn write_solid_vtu(out: impl Write, points: &MaterialPoints<3>) -> io::Result<()> {
+    let n = points.len();
+    let positions: Vec<f64> = points.position.iter().flatten().copied().collect();
+    let displacement: Vec<f64> = (0..n).flat_map(|p| points.displacement(p)).collect();
+    // VTK's symmetric-tensor order: XX, YY, ZZ, XY, YZ, XZ.
+    let stress: Vec<f64> = (points.stress.iter())
+        .flat_map(|s| {
+            [
+                s[(0, 0)],
+                s[(1, 1)],
+                s[(2, 2)],
+                s[(0, 1)],
+                s[(1, 2)],
+                s[(0, 2)],
+            ]
+        })
+        .collect();
+    let volume: Vec<f64> = (0..n).map(|p| points.volume(p)).collect();
+    let jacobian: Vec<f64> = (0..n).map(|p| points.jacobian(p)).collect();
+    let body: Vec<f64> = points.material.iter().map(|&b| b as f64).collect();
+    let plastic_strain: Vec<f64> = points.history.iter().map(|h| h.plastic_strain).collect();
+    let yielding: Vec<f64> = (points.yielding.iter())
+        .map(|&y| if y { 1.0 } else { 0.0 })
+        .collect();
+    write_columns(
+        out,
+        &VtuColumns {
+            n,
+            positions: &positions,
+            displacement: &displacement,
+            stress: &stress,
+            volume: &volume,
+            jacobian: &jacobian,
+            body: &body,
+            plastic_strain: &plastic_strain,
+            yielding: &yielding,
+        },
+    )
+}
+
+/// The points' columns as a VTU file holds them: vectors of three
+/// components, the stress of six (VTK's order), the rest one; an empty
+/// column is left out.
+struct VtuColumns<'a> {
+    n: usize,
+    positions: &'a [f64],
+    displacement: &'a [f64],
+    stress: &'a [f64],
+    volume: &'a [f64],
+    jacobian: &'a [f64],
+    body: &'a [f64],
+    plastic_strain: &'a [f64],
+    yielding: &'a [f64],
+}
+
+fn write_columns(mut out: impl Write, cols: &VtuColumns<'_>) -> io::Result<()> {
+    let n = cols.n;
     let connectivity: Vec<i64> = (0..n as i64).collect();
     let offsets: Vec<i64> = (1..=n as i64).collect();
     let types = vec![1u8; n]; // VTK_VERTEX
@@ -70,21 +145,27 @@ pub fn write_vtu(mut out: impl Write, cols: &PointColumns) -> io::Result<()> {
         " Tensors=\"stress\""
     };
     xml.push_str(&format!("      <PointData{vectors}{tensors}>\n"));
-    array(&mut xml, "displacement", "Float64", 3, f64s(&displacement));
-    array(&mut xml, "stress", "Float64", 6, f64s(&stress));
-    array(&mut xml, "volume", "Float64", 1, f64s(&cols.volume));
-    array(&mut xml, "jacobian", "Float64", 1, f64s(&cols.jacobian));
-    array(&mut xml, "body", "Float64", 1, f64s(&body));
+    array(
+        &mut xml,
+        "displacement",
+        "Float64",
+        3,
+        f64s(cols.displacement),
+    );
+    array(&mut xml, "stress", "Float64", 6, f64s(cols.stress));
+    array(&mut xml, "volume", "Float64", 1, f64s(cols.volume));
+    array(&mut xml, "jacobian", "Float64", 1, f64s(cols.jacobian));
+    array(&mut xml, "body", "Float64", 1, f64s(cols.body));
     array(
         &mut xml,
         "plastic_strain",
         "Float64",
         1,
-        f64s(&cols.plastic_strain),
+        f64s(cols.plastic_strain),
     );
-    array(&mut xml, "yielding", "Float64", 1, f64s(&yielding));
+    array(&mut xml, "yielding", "Float64", 1, f64s(cols.yielding));
     xml.push_str("      </PointData>\n      <Points>\n");
-    array(&mut xml, "position", "Float64", 3, f64s(&positions));
+    array(&mut xml, "position", "Float64", 3, f64s(cols.positions));
     xml.push_str("      </Points>\n      <Cells>\n");
     array(&mut xml, "connectivity", "Int64", 1, i64s(&connectivity));
     array(&mut xml, "offsets", "Int64", 1, i64s(&offsets));

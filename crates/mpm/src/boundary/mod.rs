@@ -5,6 +5,7 @@
 pub mod curve;
 pub mod detection;
 pub mod edge_detection;
+pub mod face_loads;
 pub mod ibm;
 pub mod loading;
 pub mod quadrature;

@@ -60,12 +60,12 @@ pub fn active_hats<const D: usize>(
 /// [`active_hats`] normalised to sum to one (a point on the edge of the
 /// active cells may touch an inactive node with a zero or round-off share).
 /// Returns false, appending nothing, when no active node has a share.
-pub fn hat_shares(
+pub fn hat_shares<const D: usize>(
     basis: Basis,
-    grid: &Grid,
-    x: Point,
+    grid: &Grid<D>,
+    x: [f64; D],
     nodes: &[NodeKey],
-    weights: &mut Vec<NodeWeight>,
+    weights: &mut Vec<NodeWeight<D>>,
     shares: &mut Vec<(usize, f64)>,
 ) -> bool {
     let before = shares.len();

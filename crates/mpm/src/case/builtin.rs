@@ -1,6 +1,6 @@
 //! Built-in cases, shipped in `crates/mpm/cases/` and compiled in.
 
-/// Names accepted by [`get`].
+/// The built-in plane-strain cases' names, accepted by [`get`].
 pub const NAMES: [&str; 6] = [
     "column",
     "cantilever-grid",
@@ -10,9 +10,14 @@ pub const NAMES: [&str; 6] = [
     "slope",
 ];
 
+/// The built-in 3D cases (`analysis.type: "3d"`, read by
+/// [`super::solid::SolidCase`]).
+pub const SOLID_NAMES: [&str; 1] = ["column3d"];
+
 /// The JSON text of a built-in case.
 pub fn get(name: &str) -> Option<&'static str> {
     match name {
+        "column3d" => Some(include_str!("../../cases/column3d.json")),
         "column" => Some(include_str!("../../cases/column.json")),
         "cantilever-grid" => Some(include_str!("../../cases/cantilever-grid.json")),
         "cantilever" => Some(include_str!("../../cases/cantilever.json")),

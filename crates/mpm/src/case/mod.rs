@@ -11,6 +11,7 @@
 //! out-of-plane thickness (plane strain).
 
 pub mod builtin;
+pub mod solid;
 mod validate;
 
 use serde::{Deserialize, Serialize};

@@ -98,67 +98,102 @@ fn reject_unfit(value: &Value, path: &mut String) -> Result<(), CaseError> {
     }
 }
 
-impl Case {
-    /// Parses and validates a case from JSON text. Text that is not JSON
-    /// (text after the case included) is a [`CaseErrorKind::Syntax`] error.
-    pub fn from_json(text: &str) -> Result<Case, CaseError> {
-        let mut de = serde_json::Deserializer::from_str(text);
-        let case: Case = serde_path_to_error::deserialize(&mut de).map_err(|e| {
-            // A number beyond f64 is JSON the case cannot hold: name its
-            // field. A wrong field can come before a fault that makes the
-            // text not JSON at all: such text is malformed, whatever its
-            // start says.
-            let out_of_range = e.inner().to_string().starts_with("number out of range");
-            // Not what serde says of the case: `"geometry": {}` is JSON, whose
-            // error serde classifies as syntax ("expected value").
-            let syntax = !out_of_range && serde_json::from_str::<Value>(text).is_err();
-            let path = match e.path().to_string() {
-                p if p.is_empty() || p == "." => "$".to_string(),
-                p => p,
-            };
-            CaseError {
-                kind: if syntax {
-                    CaseErrorKind::Syntax
-                } else {
-                    CaseErrorKind::Invalid
-                },
-                ..CaseError::new(path, e.into_inner().to_string())
-            }
-        })?;
-        de.end().map_err(|e| CaseError {
-            kind: CaseErrorKind::Syntax,
-            ..CaseError::new("$", e.to_string())
-        })?;
-        if let Ok(value) = serde_json::from_str::<Value>(text) {
-            reject_unfit(&value, &mut String::new())?;
-            given_once(&value)?;
+/// The case format's version: the one this build reads.
+pub(crate) fn check_version(version: u32) -> Result<(), CaseError> {
+    if version != CASE_VERSION {
+        return Err(CaseError::new(
+            "version",
+            format!("unsupported case version {version}, this build reads {CASE_VERSION}"),
+        ));
+    }
+    Ok(())
+}
+
+/// `analysis.newton`'s tolerance and iterations.
+pub(crate) fn check_newton(newton: &NewtonSpec) -> Result<(), CaseError> {
+    positive("analysis.newton.tolerance", newton.tolerance)?;
+    if newton.max_iterations == 0 {
+        return Err(CaseError::new(
+            "analysis.newton.max_iterations",
+            "must be at least 1",
+        ));
+    }
+    Ok(())
+}
+
+/// `analysis.substepping`.
+pub(crate) fn check_substepping(sub: &SubsteppingSpec) -> Result<(), CaseError> {
+    if !(sub.min_fraction > 0.0 && sub.min_fraction <= 1.0) {
+        return Err(CaseError::new(
+            "analysis.substepping.min_fraction",
+            "must be in (0, 1]",
+        ));
+    }
+    if sub.max_cutbacks > MAX_CUTBACKS {
+        return Err(CaseError::new(
+            "analysis.substepping.max_cutbacks",
+            format!("must be at most {MAX_CUTBACKS}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Reads a case of type `T` from JSON text, its shape and what serde cannot
+/// refuse (`reject_unfit`), naming the field of the first fault; the values
+/// are the type's own `validate`'s. Text that is not JSON (text after the
+/// case included) is a [`CaseErrorKind::Syntax`] error.
+pub(crate) fn parse<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, CaseError> {
+    let mut de = serde_json::Deserializer::from_str(text);
+    let case: T = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        // A number beyond f64 is JSON the case cannot hold: name its
+        // field. A wrong field can come before a fault that makes the
+        // text not JSON at all: such text is malformed, whatever its
+        // start says.
+        let out_of_range = e.inner().to_string().starts_with("number out of range");
+        // Not what serde says of the case: `"geometry": {}` is JSON, whose
+        // error serde classifies as syntax ("expected value").
+        let syntax = !out_of_range && serde_json::from_str::<Value>(text).is_err();
+        let path = match e.path().to_string() {
+            p if p.is_empty() || p == "." => "$".to_string(),
+            p => p,
+        };
+        CaseError {
+            kind: if syntax {
+                CaseErrorKind::Syntax
+            } else {
+                CaseErrorKind::Invalid
+            },
+            ..CaseError::new(path, e.into_inner().to_string())
         }
+    })?;
+    de.end().map_err(|e| CaseError {
+        kind: CaseErrorKind::Syntax,
+        ..CaseError::new("$", e.to_string())
+    })?;
+    if let Ok(value) = serde_json::from_str::<Value>(text) {
+        reject_unfit(&value, &mut String::new())?;
+        given_once(&value)?;
+    }
+    Ok(case)
+}
+
+impl Case {
+    /// Parses and validates a case from JSON text ([`parse`], then
+    /// [`Case::validate`]).
+    pub fn from_json(text: &str) -> Result<Case, CaseError> {
+        let case: Case = parse(text)?;
         case.validate()?;
         Ok(case)
     }
 
     /// Checks values that the types cannot: signs, ranges, consistency.
     pub fn validate(&self) -> Result<(), CaseError> {
-        if self.version != CASE_VERSION {
-            return Err(CaseError::new(
-                "version",
-                format!(
-                    "unsupported case version {}, this build reads {CASE_VERSION}",
-                    self.version
-                ),
-            ));
-        }
+        check_version(self.version)?;
         let a = &self.analysis;
         if self.output.every == 0 {
             return Err(CaseError::new("output.every", "must be at least 1"));
         }
-        positive("analysis.newton.tolerance", a.newton.tolerance)?;
-        if a.newton.max_iterations == 0 {
-            return Err(CaseError::new(
-                "analysis.newton.max_iterations",
-                "must be at least 1",
-            ));
-        }
+        check_newton(&a.newton)?;
         for (key, moved, value) in [
             (
                 "ghost_penalty",
@@ -186,19 +221,7 @@ impl Case {
                 "must be a finite number, 0 or more",
             ));
         }
-        let sub = &a.substepping;
-        if !(sub.min_fraction > 0.0 && sub.min_fraction <= 1.0) {
-            return Err(CaseError::new(
-                "analysis.substepping.min_fraction",
-                "must be in (0, 1]",
-            ));
-        }
-        if sub.max_cutbacks > MAX_CUTBACKS {
-            return Err(CaseError::new(
-                "analysis.substepping.max_cutbacks",
-                format!("must be at most {MAX_CUTBACKS}"),
-            ));
-        }
+        check_substepping(&a.substepping)?;
         positive("grid.cell_size", self.grid.cell_size)?;
         finite_pair("grid.origin", self.grid.origin)?;
         if let Some(b) = &self.grid.extent {
@@ -421,7 +444,7 @@ impl Case {
 }
 
 impl Body {
-    fn validate(&self, path: &str) -> Result<(), CaseError> {
+    pub(crate) fn validate(&self, path: &str) -> Result<(), CaseError> {
         let g = format!("{path}.geometry");
         match &self.geometry {
             Geometry::Rectangle {
@@ -542,8 +565,14 @@ impl Body {
                 ));
             }
         }
-        let m = format!("{path}.material");
-        let (e, nu, rho) = self.material.constants();
+        self.material.validate(&format!("{path}.material"))
+    }
+}
+
+impl MaterialSpec {
+    /// Checks the constants of the material at `m`.
+    pub(crate) fn validate(&self, m: &str) -> Result<(), CaseError> {
+        let (e, nu, rho) = self.constants();
         positive(&format!("{m}.youngs_modulus"), e)?;
         if !(0.0..0.5).contains(&nu) {
             return Err(CaseError::new(
@@ -558,7 +587,7 @@ impl Body {
             ));
         }
         // Every model named, so that a new one asks here for its checks.
-        match self.material {
+        match *self {
             MaterialSpec::Hencky { .. } | MaterialSpec::LinearElastic { .. } => {}
             MaterialSpec::VonMises {
                 yield_stress,
@@ -584,7 +613,7 @@ impl Body {
                 friction_angle,
                 dilation_angle,
                 ..
-            } => check_friction(&m, cohesion, friction_angle, dilation_angle)?,
+            } => check_friction(m, cohesion, friction_angle, dilation_angle)?,
         }
         Ok(())
     }
@@ -890,7 +919,7 @@ fn continues_supports(before: &StageView<'_>, stage: &StageView<'_>) -> Result<(
     Ok(())
 }
 
-fn positive(path: &str, v: f64) -> Result<(), CaseError> {
+pub(crate) fn positive(path: &str, v: f64) -> Result<(), CaseError> {
     if v > 0.0 && v.is_finite() {
         Ok(())
     } else {

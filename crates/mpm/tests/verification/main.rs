@@ -22,3 +22,4 @@ mod plasticity;
 mod pressure;
 mod stages;
 mod strength_reduction;
+mod triaxial3d;

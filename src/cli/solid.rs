@@ -1,0 +1,174 @@
+//! `mpm run` on a 3D case (`analysis.type: "3d"`): a line a step on
+//! stdout, and in the output directory the case, `reports.jsonl`,
+//! `summary.json`, and the points of the stored steps as `steps/*.vtu`
+//! with their `points.pvd` series. No checkpoints yet (`--resume` is
+//! for plane-strain runs), no boundary files (the B-spline surfaces are
+//! issue 38's part 2).
+
+use std::fs::{self, File};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use mpm::case::solid::SolidCase;
+use mpm::vtk::write_solid_vtu;
+use mpm::{MaterialPoints, Observer, Simulation, StepReport};
+use mpm_service::jobs::admission::{PointLimit, Rejection, check_points};
+use mpm_service::results::{
+    CASE_FILE, POINTS_SERIES, STEPS_DIR, SUMMARY_FILE, Series, StepFiles, Summary,
+};
+
+use crate::CliError;
+use crate::run::{Progress, prepare_output, print_step};
+
+/// One step report (JSON) a line, as a plane-strain run writes them.
+const REPORTS_FILE: &str = "reports.jsonl";
+
+/// Solves the 3D case `text` (from `source`) into `out`.
+pub fn run(
+    text: &str,
+    source: &str,
+    out: &Path,
+    point_files: bool,
+    force: bool,
+    max_points: usize,
+) -> Result<(), CliError> {
+    let case = SolidCase::from_json(text).map_err(|e| CliError::input(format!("{source}: {e}")))?;
+    let limit = PointLimit {
+        max: max_points,
+        name: "the point limit (--max-points)",
+    };
+    let refused = |r: Rejection| match r {
+        Rejection::LimitExceeded { path, message } | Rejection::InvalidCase { path, message } => {
+            CliError::input(format!("{source}: {path}: {message}"))
+        }
+        Rejection::MalformedJson(message) => CliError::input(format!("{source}: $: {message}")),
+    };
+    // Bounded before seeding: the bodies' boxes at their spacings.
+    let bound = case.points_bound();
+    if bound > 2.0 * max_points as f64 {
+        return Err(CliError::input(format!(
+            "{source}: bodies: about {bound:.3e} points at these spacings, over {} ({max_points})",
+            limit.name
+        )));
+    }
+    let mut sim = Simulation::from_solid_case(&case)
+        .map_err(|e| CliError::input(format!("{source}: {e}")))?;
+    check_points(sim.points.len(), limit).map_err(refused)?;
+    prepare_output(out, force)?;
+    fs::write(out.join(CASE_FILE), text)?;
+    eprintln!(
+        "{}: {} material points in 3D, {} load steps, {:?} basis, cells of {} m",
+        case.title.as_deref().unwrap_or(source),
+        sim.points.len(),
+        sim.load_steps,
+        sim.basis,
+        sim.grid.h
+    );
+    let n = sim.load_steps;
+    let mut writer = SolidWriter {
+        out: out.to_path_buf(),
+        point_files,
+        every: case.output.every as usize,
+        load_steps: n,
+        reports: File::create(out.join(REPORTS_FILE))?,
+        series: Series::default(),
+        progress: Progress::new(),
+        io_error: None,
+    };
+    if point_files {
+        fs::create_dir_all(out.join(STEPS_DIR))?;
+        writer.write_points(0, 0.0, &sim.points)?;
+    }
+    let result = sim.run(&mut writer);
+    writer.progress.clear();
+    if let Some(e) = writer.io_error {
+        return Err(e.into());
+    }
+    let report = result.map_err(|e| CliError::failed(format!("solve failed: {e}")))?;
+    if point_files {
+        let series = &writer.series;
+        series.write_points(BufWriter::new(File::create(out.join(POINTS_SERIES))?))?;
+    }
+    let summary = Summary::new(
+        source,
+        case.title.as_deref(),
+        report.points,
+        report.load_steps,
+        report.wall_seconds,
+        &report.steps,
+    );
+    let mut f = BufWriter::new(File::create(out.join(SUMMARY_FILE))?);
+    serde_json::to_writer_pretty(&mut f, &summary).map_err(|e| CliError::failed(e.to_string()))?;
+    f.flush()?;
+    eprintln!(
+        "done in {:.3} s; results in {}",
+        report.wall_seconds,
+        out.display()
+    );
+    Ok(())
+}
+
+/// Writes a 3D run's steps as they converge.
+struct SolidWriter {
+    out: PathBuf,
+    point_files: bool,
+    /// The points are stored every this many steps, and at the last.
+    every: usize,
+    load_steps: usize,
+    reports: File,
+    series: Series,
+    progress: Progress,
+    io_error: Option<std::io::Error>,
+}
+
+impl SolidWriter {
+    /// Step `step`'s points (at series time `time`) as its VTU file.
+    fn write_points(
+        &mut self,
+        step: usize,
+        time: f64,
+        points: &MaterialPoints<3>,
+    ) -> std::io::Result<()> {
+        let files = StepFiles::new(step);
+        let mut vtu = BufWriter::new(File::create(self.out.join(&files.points))?);
+        write_solid_vtu(&mut vtu, points)?;
+        vtu.flush()?;
+        self.series.add(time, files);
+        Ok(())
+    }
+
+    fn record(&mut self, report: &StepReport, points: &MaterialPoints<3>) -> std::io::Result<()> {
+        let mut line = serde_json::to_string(report)?;
+        line.push('\n');
+        self.reports.write_all(line.as_bytes())?;
+        let stored = report.step == self.load_steps || report.step.is_multiple_of(self.every);
+        if self.point_files && stored {
+            self.write_points(report.step, report.series_time(), points)?;
+        }
+        Ok(())
+    }
+}
+
+impl Observer for SolidWriter {
+    fn step_started(&mut self, step: usize, n_steps: usize) {
+        self.progress.start_step(step, n_steps);
+    }
+
+    fn newton_iteration(&mut self, _step: usize, iteration: usize, residual: f64) {
+        self.progress.iteration(iteration, residual);
+    }
+
+    fn solid_step_finished(&mut self, report: &StepReport, points: &MaterialPoints<3>) {
+        self.progress.clear();
+        print_step(report);
+        if self.io_error.is_none()
+            && let Err(e) = self.record(report, points)
+        {
+            self.io_error = Some(e);
+        }
+    }
+
+    fn should_cancel(&mut self) -> bool {
+        self.io_error.is_some()
+    }
+}
