@@ -24,6 +24,7 @@ use nalgebra::Matrix2;
 use crate::assembly;
 use crate::assembly::averaging::{Averaging, Carried, CellAverages, Unaveraged};
 use crate::assembly::cell_mean::CellMean;
+use crate::assembly::solid_ghost_faces::SolidGhostFaces;
 use crate::assembly::{FbarCells, GhostFaces, LonePoints, SoftCells, StepTerm, lone_points};
 use crate::boundary::BoundaryLoop;
 use crate::boundary::face_loads::FaceLoading;
@@ -877,7 +878,8 @@ where
 /// background, the ghost penalty and the lone points' term, and the
 /// averagings against locking. In 3D, a step so far holds the points,
 /// gravity, point loads and grid supports on planes (issue 38): the
-/// boundary's terms are part 2's, and F-bar, the ghost faces and the
+/// ghost penalty on the cells' faces, and tractions on box faces; the
+/// boundary's terms are part 2's, and F-bar, the cell mean and the
 /// geostatic stage wait for cells of eight corners.
 pub trait RunSpace<const D: usize>: StepSpace<D>
 where
@@ -1041,11 +1043,16 @@ impl RunSpace<3> for Dim<3> {
         start: &Configuration<'a, 3>,
         load_factor: f64,
     ) -> Vec<Box<dyn StepTerm<3> + 'a>> {
-        let faces = &sim.stages[sim.stage].face_loads;
-        if faces.is_empty() {
-            return Vec::new();
+        let mut terms: Vec<Box<dyn StepTerm<3> + 'a>> = Vec::new();
+        let gamma = sim.settings.ghost_penalty;
+        if gamma > 0.0 {
+            terms.push(Box::new(SolidGhostFaces::new(start, sim.basis, gamma)));
         }
-        vec![Box::new(FaceLoading::new(start, faces, load_factor))]
+        let faces = &sim.stages[sim.stage].face_loads;
+        if !faces.is_empty() {
+            terms.push(Box::new(FaceLoading::new(start, faces, load_factor)));
+        }
+        terms
     }
 
     fn averaging(_: &Simulation<3>, _: &Configuration<3>) -> Option<Unaveraged> {

@@ -38,7 +38,7 @@ use rayon::prelude::*;
 
 use crate::grid::{Basis, LatticeIndex, node_coordinates};
 use crate::parallel;
-use crate::particles::MaterialPoints;
+use crate::particles::{Dim, MaterialPoints, Space};
 
 /// The faces to stabilise and the penalty's weight on each.
 pub struct GhostFaces {
@@ -109,14 +109,8 @@ impl GhostFaces {
         // A face's weight from its two cells' points (the stiffest
         // material's when neither holds a point's centre).
         let weight = |a: (i64, i64), b: (i64, i64)| {
-            let (sa, na) = reached.get([a.0, a.1]).map_or((0.0, 0), |c| census[c]);
-            let (sb, nb) = reached.get([b.0, b.1]).map_or((0.0, 0), |c| census[c]);
-            let share = if na + nb == 0 {
-                1.0
-            } else {
-                (sa + sb) / f64::from(na + nb)
-            };
-            gamma * (stiffest * share) / 3.0
+            let of = |c: (i64, i64)| reached.get([c.0, c.1]).map_or((0.0, 0), |c| census[c]);
+            gamma * (stiffest * face_share(of(a), of(b))) / 3.0
         };
         let (faces, weights) = cells
             .par_iter()
@@ -144,9 +138,24 @@ impl GhostFaces {
     }
 }
 
+/// A face's share of the stiffest modulus from its two cells' census (the
+/// sum of their points' moduli relative to the stiffest, and their count):
+/// the points' mean, or the stiffest's when neither cell holds a point's
+/// centre.
+pub(super) fn face_share((sa, na): (f64, u32), (sb, nb): (f64, u32)) -> f64 {
+    if na + nb == 0 {
+        1.0
+    } else {
+        (sa + sb) / f64::from(na + nb)
+    }
+}
+
 /// What point `p` lends the penalty: its material's `2 mu`, times
 /// [`YIELDED_SHARE`] when it flowed plastically in the last step.
-fn point_modulus(points: &MaterialPoints, p: usize) -> f64 {
+pub(super) fn point_modulus<const D: usize>(points: &MaterialPoints<D>, p: usize) -> f64
+where
+    Dim<D>: Space<D>,
+{
     let m = 2.0 * points.materials[points.material[p] as usize].elastic().mu;
     if points.yielding[p] {
         YIELDED_SHARE * m

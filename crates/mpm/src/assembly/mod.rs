@@ -17,6 +17,7 @@ pub mod ghost_faces;
 pub mod lone_points;
 pub mod pattern;
 pub mod soft_cells;
+pub mod solid_ghost_faces;
 pub mod stiffness;
 pub mod term;
 

@@ -488,7 +488,7 @@ fn default_max_iterations() -> u32 {
 fn default_tangent_regularisation() -> f64 {
     NewtonSettings::default().tangent_regularisation
 }
-fn default_ghost_penalty() -> f64 {
+pub(crate) fn default_ghost_penalty() -> f64 {
     NewtonSettings::default().ghost_penalty
 }
 fn default_hourglass() -> f64 {

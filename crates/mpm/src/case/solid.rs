@@ -61,6 +61,27 @@ pub struct SolidAnalysis {
     pub newton: NewtonSpec,
     #[serde(default)]
     pub substepping: SubsteppingSpec,
+    #[serde(default)]
+    pub stabilisation: SolidStabilisation,
+}
+
+/// The stabilisation a 3D step has so far.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SolidStabilisation {
+    /// The ghost penalty's `gamma` on the faces of the cells at the
+    /// material's edge (`assembly/solid_ghost_faces.rs`), as the plane
+    /// strain case's `analysis.stabilisation.ghost_penalty`; 0 turns it off.
+    #[serde(default = "super::default_ghost_penalty")]
+    pub ghost_penalty: f64,
+}
+
+impl Default for SolidStabilisation {
+    fn default() -> Self {
+        Self {
+            ghost_penalty: super::default_ghost_penalty(),
+        }
+    }
 }
 
 /// The background grid: cubes of side `cell_size`, one node at `origin`.
@@ -281,6 +302,13 @@ impl SolidCase {
         }
         check_newton(&a.newton)?;
         check_substepping(&a.substepping)?;
+        let gamma = a.stabilisation.ghost_penalty;
+        if !(gamma >= 0.0 && gamma.is_finite()) {
+            return Err(CaseError::new(
+                "analysis.stabilisation.ghost_penalty",
+                "must be a finite number, 0 or more",
+            ));
+        }
         if self.output.every == 0 {
             return Err(CaseError::new("output.every", "must be at least 1"));
         }
