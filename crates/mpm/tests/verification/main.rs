@@ -20,6 +20,7 @@ mod newton_convergence;
 mod one_point_cells;
 mod plasticity;
 mod pressure;
+mod slab3d;
 mod stages;
 mod strength_reduction;
 mod triaxial3d;
