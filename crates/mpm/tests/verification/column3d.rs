@@ -1,8 +1,8 @@
 //! The self-weight column in 3D: AMPLE's column of column.rs (L = 50 m,
 //! Hencky, E = 10 kPa, nu = 0, rho0 = 80 kg/m^3, g = 10 m/s^2, 52%
 //! compression) as a square prism one cell wide, on rollers on its four
-//! sides and fixed at its base, solved in one load step through the 3D
-//! step (`StepEquilibrium<3>`, Newton with its line search). With nu = 0
+//! sides and fixed at its base, run by `Simulation<3>` (in one load step,
+//! or AMPLE's 40, where the points cross cells). With nu = 0
 //! and the sides on rollers the deformation is the uniaxial stretch of
 //! column.rs, whatever the dimension: Cauchy sigma_zz(Z) = -rho0 g (L - Z)
 //! at every reference height Z.
