@@ -564,6 +564,11 @@ fn a_3d_case_runs_and_its_base_carries_the_weight() {
     assert_eq!(vtus, 41);
     let series = std::fs::read_to_string(out.join("points.pvd")).unwrap();
     assert!(series.contains("steps/step_0040.vtu"), "{series}");
+    // It keeps no checkpoint, and says so when asked to resume.
+    let resumed = mpm().args(["run", "--resume"]).arg(&*out).output().unwrap();
+    assert_eq!(resumed.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&resumed.stderr);
+    assert!(err.contains("cannot be resumed"), "{err}");
 }
 
 /// A 3D case with a field of the plane-strain case, or a vector of two

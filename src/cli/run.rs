@@ -83,6 +83,11 @@ pub fn resume(dir: &Path, point_files: bool, max_points: usize) -> Result<(), Cl
         ))
     })?;
     let source = source.display().to_string();
+    if mpm::case::solid::is_solid(&text) {
+        return Err(CliError::input(format!(
+            "{source}: a 3D run keeps no checkpoints yet, so it cannot be resumed: run it again"
+        )));
+    }
     let (case, mut sim) = build(&text, &source, max_points)?;
     let bytes = fs::read(dir.join(CHECKPOINT_FILE)).map_err(|e| {
         CliError::input(format!(
