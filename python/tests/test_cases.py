@@ -23,7 +23,17 @@ def test_cantilever_defaults_are_the_built_in_example(binary: Path) -> None:
 
 def test_every_bundled_example_is_the_built_in_one_and_valid(binary: Path) -> None:
     listed = subprocess.run([str(binary), "example"], check=True, capture_output=True, text=True).stdout
-    assert tuple(listed.split()) == cases.EXAMPLES
+    # The client bundles the plane-strain examples, in the binary's order;
+    # the binary's 3D examples (`analysis.type: "3d"`) the service does not
+    # run yet.
+    plane = []
+    for name in listed.split():
+        printed = subprocess.run(
+            [str(binary), "example", name], check=True, capture_output=True, text=True
+        ).stdout
+        if json.loads(printed)["analysis"].get("type") != "3d":
+            plane.append(name)
+    assert tuple(plane) == cases.EXAMPLES
     for name in cases.EXAMPLES:
         printed = subprocess.run(
             [str(binary), "example", name], check=True, capture_output=True, text=True
