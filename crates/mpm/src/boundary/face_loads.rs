@@ -94,3 +94,52 @@ impl StepTerm<3> for FaceLoading {
     /// A dead load: no stiffness.
     fn add_stiffness(&self, _u: &[f64], _pattern: &Pattern, _values: &mut [f64]) {}
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{Basis, lattice_coordinates};
+
+    /// A uniform traction on a box's face gives the consistent nodal forces
+    /// of the bilinear face elements: a unit traction on the unit square
+    /// face z = 1 of 2 x 2 cells of 0.5 m puts h^2 / 4 on its corner nodes,
+    /// twice that on its edges' middles and four times on its centre,
+    /// nothing below the face, and the traction times the area in all.
+    #[test]
+    fn a_uniform_traction_gives_the_consistent_nodal_forces() {
+        let (points, mut grid) = crate::fixtures::solid_box([0.0; 3], [1.0; 3], 0.25, 0.5);
+        // The face on the grid plane z = 1.
+        grid.origin = [0.0; 3];
+        let conn = crate::fixtures::solid_links(&points, &grid, Basis::Linear);
+        let start = Configuration {
+            grid: &grid,
+            basis: Basis::Linear,
+            conn: &conn,
+            points: &points,
+        };
+        let loads = crate::model::face_loads(&points, (2, 1.0, 1e-9), [0.0, 0.0, -1.0], false);
+        assert_eq!(loads.len(), 16);
+        let term = FaceLoading::new(&start, &loads, 1.0);
+        let mut f = vec![0.0; conn.n_dofs()];
+        term.add_force(&[], &mut f);
+        let mut total = 0.0;
+        for (a, &key) in conn.nodes.iter().enumerate() {
+            let [i, j, k] = lattice_coordinates::<3>(key);
+            let on_face = k == 2;
+            let interior = |c: i64| usize::from(c == 1);
+            let expected = if on_face {
+                -0.0625 * (1 << (interior(i) + interior(j))) as f64
+            } else {
+                0.0
+            };
+            assert!(
+                (f[3 * a + 2] - expected).abs() < 1e-15,
+                "node {i} {j} {k}: {}",
+                f[3 * a + 2]
+            );
+            assert_eq!((f[3 * a], f[3 * a + 1]), (0.0, 0.0));
+            total += f[3 * a + 2];
+        }
+        assert!((total + 1.0).abs() < 1e-14, "{total}");
+    }
+}
