@@ -280,11 +280,6 @@ pub fn is_solid(text: &str) -> bool {
     })
 }
 
-/// The 3D case format's JSON Schema.
-pub fn json_schema() -> serde_json::Value {
-    schemars::schema_for!(SolidCase).to_value()
-}
-
 impl SolidCase {
     /// Parses and validates a 3D case from JSON text.
     pub fn from_json(text: &str) -> Result<SolidCase, CaseError> {
