@@ -467,14 +467,16 @@ fn memory_by_component(largest: &[(&str, Row)]) -> String {
 /// The 3D scenes from 1e4 points up: the cost of a step, its split, the
 /// memory a point, and how the linear solves' time grows with the DOFs.
 fn solid_scenes(max_points: usize) -> Result<String, LabError> {
-    let mut text = String::from(
+    let mut text = format!(
         "\n## In 3D\n\n\
          The 3D scenes (issue 38), 2x2x2 points a cell, first two load steps, the default solvers: the \
-         tangents are symmetric, solved directly below 40,000 DOFs and by CG with a kept factor from there \
-         (the multigrid coarsens 2D grids only so far). Split as in the size table; bytes a point are the \
+         tangents are symmetric, solved directly below {kept} DOFs, by CG with a kept factor from there and \
+         by CG with multigrid from {multigrid} (`linsolve.rs`). Split as in the size table; bytes a point are the \
          peak resident set's.\n\n\
          | scene | points | active DOFs | s / step | s / iteration | iterations / step | point loop | assembly | factorisation | solve | other | bytes / point | peak MiB |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        kept = mpm::linsolve::SOLID_KEPT_FACTOR_FROM_DOFS,
+        multigrid = mpm::linsolve::SOLID_MULTIGRID_FROM_DOFS,
     );
     for index in SOLID_SCENES {
         let scene = &SCENES[index];

@@ -278,12 +278,14 @@ pub enum GridNodes {
     Solid(Vec<[i64; 3]>),
 }
 
-/// The nodes' coordinates when they lie in a plane: the multigrid
-/// coarsens a 2D grid only, and a 3D pattern takes the kept factor.
-fn plane_nodes(nodes: &Option<GridNodes>) -> Option<&[[i64; 2]]> {
-    match nodes {
-        Some(GridNodes::Plane(nodes)) => Some(nodes),
-        _ => None,
+impl GridNodes {
+    /// The multigrid hierarchy of `a` over these nodes.
+    fn hierarchy(&self, a: multigrid::Operator<'_>, wide: bool) -> Option<Hierarchy> {
+        match self {
+            GridNodes::Plane(nodes) => Hierarchy::new(a, nodes, wide),
+            GridNodes::Solid(nodes) => Hierarchy::new(a, nodes, wide),
+        }
+        .ok()
     }
 }
 
@@ -298,9 +300,9 @@ pub enum SymmetricMethod {
     /// CG preconditioned by a smoothed-aggregation multigrid V-cycle
     /// ([`crate::multigrid`]) built on an earlier tangent of the pattern,
     /// rebuilt when CG slows down: no factor, memory linear in the
-    /// unknowns. It needs the nodes' grid coordinates in a plane
-    /// ([`SparseSolver::with_grid`]); without them (in 3D too, for now), or
-    /// when its hierarchy fails, the solver takes the kept factor.
+    /// unknowns. It needs the nodes' grid coordinates
+    /// ([`SparseSolver::with_grid`]); without them, or when its hierarchy
+    /// fails, the solver takes the kept factor.
     Multigrid,
 }
 
@@ -322,13 +324,36 @@ pub const MULTIGRID_FROM_DOFS: usize = 150_000;
 
 /// The method a solver of `n` unknowns uses by default.
 pub fn symmetric_method(n: usize) -> SymmetricMethod {
-    if n >= MULTIGRID_FROM_DOFS {
+    method_by_size(n, KEPT_FACTOR_FROM_DOFS, MULTIGRID_FROM_DOFS)
+}
+
+/// Direct below `kept_from` unknowns, multigrid from `multigrid_from`,
+/// the kept factor between.
+fn method_by_size(n: usize, kept_from: usize, multigrid_from: usize) -> SymmetricMethod {
+    if n >= multigrid_from {
         SymmetricMethod::Multigrid
-    } else if n >= KEPT_FACTOR_FROM_DOFS {
+    } else if n >= kept_from {
         SymmetricMethod::KeptFactorCg
     } else {
         SymmetricMethod::Direct
     }
+}
+
+/// In 3D, from this many unknowns up, symmetric tangents are solved by
+/// [`SymmetricMethod::KeptFactorCg`], and from
+/// [`SOLID_MULTIGRID_FROM_DOFS`] by [`SymmetricMethod::Multigrid`]: a 3D
+/// factor fills faster than a plane one, so both come earlier. Measured on
+/// the 3D GIMP column (`mpm bench-row 6`, two load steps, seconds a step
+/// for direct, kept factor, multigrid): 0.28, 0.18, 0.22 at 3,451 DOFs;
+/// 1.46, 0.75, 0.81 at 11,180; 9.7, 3.6, 3.0 at 41,205 (peak 987, 659 and
+/// 441 MiB). Below it the built-in example and small cases keep exact
+/// solves, at under 0.3 s a step.
+pub const SOLID_KEPT_FACTOR_FROM_DOFS: usize = 5_000;
+pub const SOLID_MULTIGRID_FROM_DOFS: usize = 20_000;
+
+/// The method a solver of `n` unknowns in 3D uses by default.
+pub fn solid_symmetric_method(n: usize) -> SymmetricMethod {
+    method_by_size(n, SOLID_KEPT_FACTOR_FROM_DOFS, SOLID_MULTIGRID_FROM_DOFS)
 }
 
 /// How tangents that are not symmetric are solved.
@@ -569,11 +594,19 @@ impl SparseSolver {
     }
 
     /// This solver, told the grid coordinates of the nodes: the
-    /// multigrid's aggregates are blocks of them (in 2D), and Cholesky's
+    /// multigrid's aggregates are blocks of them, and Cholesky's
     /// nested-dissection order, when the solver was given none, is made
     /// from them when first needed. `wide_stencil` for the B-splines, whose
-    /// multigrid smooths more.
+    /// multigrid smooths more. On a 3D grid the default method is
+    /// [`solid_symmetric_method`]'s (unless the settings chose one).
     pub fn with_grid(mut self, nodes: GridNodes, wide_stencil: bool) -> Self {
+        if !self.forced && matches!(nodes, GridNodes::Solid(_)) {
+            let method = solid_symmetric_method(self.n);
+            self.method = method;
+            self.method_choice = method;
+            self.gmres_method = method;
+            self.gmres_method_choice = method;
+        }
         self.nodes = Some(nodes);
         self.wide_stencil = wide_stencil;
         self
@@ -597,7 +630,7 @@ impl SparseSolver {
     pub fn with_elastic_tangents(mut self) -> Self {
         if !self.forced
             && !self.wide_stencil
-            && plane_nodes(&self.nodes).is_some()
+            && self.nodes.is_some()
             && self.n >= ELASTIC_GMRES_MULTIGRID_FROM_DOFS
         {
             self.gmres_method = SymmetricMethod::Multigrid;
@@ -802,7 +835,7 @@ impl SparseSolver {
             let hierarchy = fitted_hierarchy(
                 &mut self.hierarchy,
                 op,
-                (plane_nodes(&self.nodes), self.wide_stencil),
+                (self.nodes.as_ref(), self.wide_stencil),
                 fresh,
                 (&self.tally, &mut self.factorisations),
                 &mut timing,
@@ -1291,7 +1324,7 @@ fn gmres_on(
 fn fitted_hierarchy<'h>(
     slot: &'h mut Option<Hierarchy>,
     op: multigrid::Operator<'_>,
-    (nodes, wide_stencil): (Option<&[[i64; 2]]>, bool),
+    (nodes, wide_stencil): (Option<&GridNodes>, bool),
     fresh: bool,
     (tally, factorisations): (&SolveTally, &mut usize),
     timing: &mut Timing,
@@ -1299,7 +1332,7 @@ fn fitted_hierarchy<'h>(
     if fresh {
         let t = std::time::Instant::now();
         *slot = None;
-        *slot = Some(Hierarchy::new(op, nodes?, wide_stencil).ok()?);
+        *slot = Some(nodes?.hierarchy(op, wide_stencil)?);
         *factorisations += 1;
         tally.fresh_factor(None);
         timing.factorise += t.elapsed().as_secs_f64();
