@@ -3,8 +3,9 @@
 //! the service stores its parts and serves it at `GET /jobs/{id}/steps/{k}`.
 
 use mpm::case::OutputSpec;
-use mpm::report::PointColumns;
-use mpm::{StepReport, StepState};
+use mpm::case::solid::SolidOutput;
+use mpm::report::{PointColumns, SolidPointColumns};
+use mpm::{MaterialPoints, StepReport, StepState};
 use serde::Serialize;
 use serde_json::value::{RawValue, to_raw_value};
 
@@ -50,6 +51,33 @@ impl StoredStep {
             report,
             points: to_raw_value(&columns).expect("points serialise"),
             boundaries: to_raw_value(&state.boundaries()).expect("boundaries serialise"),
+        }
+    }
+
+    /// The stored form of a 3D run's step: its points (every column) if
+    /// `output` stores them at this step of `load_steps`, else `null`; no
+    /// boundary curves (`[]`) until part 2 of issue 38 gives 3D bodies
+    /// their surfaces.
+    pub fn solid(
+        report: &StepReport,
+        points: &MaterialPoints<3>,
+        output: &SolidOutput,
+        load_steps: usize,
+    ) -> Self {
+        let raw = |text: &str| RawValue::from_string(text.into()).expect("JSON");
+        let stores_points = output.stores_points(report.step, load_steps);
+        let report = to_raw_value(report).expect("reports serialise");
+        if !stores_points {
+            return Self {
+                report,
+                points: raw("null"),
+                boundaries: raw("null"),
+            };
+        }
+        Self {
+            report,
+            points: to_raw_value(&SolidPointColumns::new(points)).expect("points serialise"),
+            boundaries: raw("[]"),
         }
     }
 

@@ -14,7 +14,10 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use mpm::case::OutputSpec;
-use mpm::{Case, Checkpoint, Observer, Simulation, StepReport, StepState};
+use mpm::case::solid::{SolidCase, SolidOutput};
+use mpm::{
+    Case, Checkpoint, MaterialPoints, Observer, RunReport, Simulation, StepReport, StepState,
+};
 use tokio::runtime::Handle;
 use tokio::sync::Notify;
 
@@ -201,43 +204,17 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) -> Ran {
         deadline: started + shared.config.limits.job_time_limit,
         checkpoints: crate::config::CheckpointSchedule::with_wait(1, Duration::MAX),
         output: OutputSpec::default(),
+        solid: None,
         timed_out: false,
         store_error: None,
         out_of_storage: false,
     };
     let outcome = catch_unwind(AssertUnwindSafe(|| {
-        // The case was validated on submission; a failure here means the
-        // stored text was altered or the format changed under it.
-        let case = Case::from_json(&job.case_json)
-            .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
-        let mut sim = Simulation::new(&case)
-            .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
-        observer.checkpoints = crate::config::CheckpointSchedule::new(
-            shared.config.checkpoint_every,
-            sim.points.len(),
-        );
-        observer.output = case.output.clone();
-        if let Some((step, state)) = &job.checkpoint
-            && !resume(&mut sim, job.id, *step, state)
-        {
-            let reset = shared
-                .runtime
-                .block_on(shared.store.start_over(job.id, owner));
-            if let Err(e) = reset {
-                observer.store_error = Some(e.to_string());
-            }
+        if mpm::case::solid::is_solid(&job.case_json) {
+            run_solid(&job, &mut observer)
+        } else {
+            run_plane(shared, owner, &job, &mut observer)
         }
-        if sim.steps_done() == 0 {
-            // Step 0, the undeformed state, so a viewer shows the start.
-            let (report, state) = sim.initial_step();
-            observer.step_finished(&report, &state);
-        }
-        sim.run(&mut observer).map_err(|e| {
-            let hint = crate::jobs::failure::units_hint(&case, &e);
-            let mut failure = Failure::from(e);
-            failure.message.push_str(&hint.unwrap_or_default());
-            failure
-        })
     }));
     renewal.abort();
     shared.running.remove(job.id);
@@ -296,6 +273,60 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) -> Ran {
     } else {
         Ran::Done
     }
+}
+
+/// Runs a claimed plane-strain job, from its checkpoint if it has one.
+fn run_plane(
+    shared: &Shared,
+    owner: &str,
+    job: &Claimed,
+    observer: &mut JobObserver<'_>,
+) -> Result<RunReport, Failure> {
+    // The case was validated on submission; a failure here means the
+    // stored text was altered or the format changed under it.
+    let case = Case::from_json(&job.case_json)
+        .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
+    let mut sim = Simulation::new(&case)
+        .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
+    observer.checkpoints =
+        crate::config::CheckpointSchedule::new(shared.config.checkpoint_every, sim.points.len());
+    observer.output = case.output.clone();
+    if let Some((step, state)) = &job.checkpoint
+        && !resume(&mut sim, job.id, *step, state)
+    {
+        let reset = shared
+            .runtime
+            .block_on(shared.store.start_over(job.id, owner));
+        if let Err(e) = reset {
+            observer.store_error = Some(e.to_string());
+        }
+    }
+    if sim.steps_done() == 0 {
+        // Step 0, the undeformed state, so a viewer shows the start.
+        let (report, state) = sim.initial_step();
+        observer.step_finished(&report, &state);
+    }
+    sim.run(observer).map_err(|e| {
+        let hint = crate::jobs::failure::units_hint(&case, &e);
+        let mut failure = Failure::from(e);
+        failure.message.push_str(&hint.unwrap_or_default());
+        failure
+    })
+}
+
+/// Runs a claimed 3D job (`analysis.type: "3d"`). A 3D run keeps no
+/// checkpoints yet, so a job claimed again starts over from step 1 (its
+/// stored steps are written again as it goes).
+fn run_solid(job: &Claimed, observer: &mut JobObserver<'_>) -> Result<RunReport, Failure> {
+    // Validated on submission, as a plane-strain case is.
+    let case = SolidCase::from_json(&job.case_json)
+        .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
+    let mut sim = Simulation::from_solid_case(&case)
+        .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
+    observer.solid = Some((case.output.clone(), sim.load_steps));
+    // Step 0, the undeformed state, so a viewer shows the start.
+    observer.solid_step_finished(&sim.initial_report(), &sim.points);
+    sim.run(observer).map_err(Failure::from)
 }
 
 /// Restores a claimed job's checkpoint; whether it could. One that does not
@@ -393,26 +424,25 @@ struct JobObserver<'a> {
     checkpoints: crate::config::CheckpointSchedule,
     /// Which steps store their points, and which columns.
     output: OutputSpec,
+    /// A 3D run's: which steps store their points, of how many.
+    solid: Option<(SolidOutput, usize)>,
     timed_out: bool,
     store_error: Option<String>,
     /// The store error was the database's storage failing (a full disk).
     out_of_storage: bool,
 }
 
-impl Observer for JobObserver<'_> {
-    fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
-        let document = StoredStep::new(report, state, &self.output, state.load_steps());
-        let checkpoint = self
-            .checkpoints
-            .due(report.step)
-            .then(|| state.checkpoint().to_bytes());
+impl JobObserver<'_> {
+    /// Stores a finished step's document, with the solver's state when a
+    /// checkpoint is due.
+    fn save(&mut self, report: &StepReport, document: &StoredStep, checkpoint: Option<&[u8]>) {
         let saved = self.shared.runtime.block_on(self.shared.store.save_step(
             self.job,
             self.owner,
             report.step as i64,
             report.newton.iterations as i64,
-            &document,
-            checkpoint.as_deref(),
+            document,
+            checkpoint,
         ));
         match saved {
             Ok(true) => {}
@@ -422,6 +452,25 @@ impl Observer for JobObserver<'_> {
                 self.store_error = Some(e.to_string());
             }
         }
+    }
+}
+
+impl Observer for JobObserver<'_> {
+    fn step_finished(&mut self, report: &StepReport, state: &StepState<'_>) {
+        let document = StoredStep::new(report, state, &self.output, state.load_steps());
+        let checkpoint = self
+            .checkpoints
+            .due(report.step)
+            .then(|| state.checkpoint().to_bytes());
+        self.save(report, &document, checkpoint.as_deref());
+    }
+
+    fn solid_step_finished(&mut self, report: &StepReport, points: &MaterialPoints<3>) {
+        let Some((output, load_steps)) = &self.solid else {
+            return;
+        };
+        let document = StoredStep::solid(report, points, output, *load_steps);
+        self.save(report, &document, None);
     }
 
     fn should_cancel(&mut self) -> bool {

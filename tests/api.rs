@@ -32,16 +32,7 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
     assert_eq!(start["points"]["displacement"][0], json!([0.0, 0.0]));
 
     // The CLI on the same case writes the same step file.
-    let out = common::TempDir::new("cli");
-    let status = std::process::Command::new(env!("CARGO_BIN_EXE_mpm"))
-        .args(["run", "--example", "cantilever-grid", "--out"])
-        .arg(&out.0)
-        .output()
-        .unwrap();
-    assert!(status.status.success());
-    let cli: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.0.join("steps/step_0005.json")).unwrap())
-            .unwrap();
+    let (out, cli) = cli_run("cantilever-grid", 5);
     let api = app.get_json(&format!("/jobs/{id}/steps/5"));
     for field in ["position", "displacement", "stress", "volume", "jacobian"] {
         let a = api["points"][field].to_string();
@@ -82,11 +73,6 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
     let (status, vtp) = app.get(&format!("/jobs/{id}/steps/5?format=vtp"));
     assert_eq!(status, 200);
     let cli_vtp = std::fs::read_to_string(out.0.join("steps/step_0005_boundary.vtp")).unwrap();
-    let piece = |text: &str| {
-        text.lines()
-            .find(|l| l.contains("<Piece"))
-            .map(str::to_owned)
-    };
     assert_eq!(piece(&vtp), piece(&cli_vtp));
     assert!(piece(&vtp).unwrap().contains("NumberOfLines=\"1\""));
 
@@ -95,28 +81,8 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
 
     // The job's archive: the files `mpm run` wrote, by the same names (the
     // run's own bookkeeping aside), with the same step documents' points.
-    let mut response = app
-        .agent
-        .get(format!("{}/jobs/{id}/archive", app.base))
-        .call()
-        .unwrap();
-    assert_eq!(response.status().as_u16(), 200);
-    let bytes = response.body_mut().read_to_vec().unwrap();
-    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).unwrap();
+    let mut zip = archive_like_the_cli(&app, id, &out);
     let archived: BTreeSet<String> = zip.file_names().map(|n| n.unwrap().into_owned()).collect();
-    let mut written = BTreeSet::new();
-    for entry in walkdir(&out.0) {
-        let name = entry
-            .strip_prefix(&out.0)
-            .unwrap()
-            .to_str()
-            .unwrap()
-            .to_owned();
-        if name != "reports.jsonl" {
-            written.insert(name);
-        }
-    }
-    assert_eq!(archived, written);
     assert_eq!(archived.len(), 4 + 3 * 6, "{archived:?}");
     // Dated when the job ended, not zip's 1980: the job's finished_at, to
     // the two seconds a zip's time holds.
@@ -162,6 +128,117 @@ fn a_job_runs_to_success_and_its_steps_match_the_cli() {
         read("boundary.pvd").lines().count()
     );
     assert!(read("points.pvd").contains("file=\"steps/step_0005.vtu\""));
+}
+
+/// A 3D case (`mpm example column3d`, 40 load steps) runs as a job, and
+/// its steps, VTU files and archive are what `mpm run` writes for it;
+/// 3D cases are refused as plane-strain ones are, naming the field.
+fn a_3d_job_runs_and_its_steps_match_the_cli() {
+    let app = spawn_app_with(|c| c.limits.max_points = 1000);
+    let case = example("column3d");
+    let id = app.submit(&case);
+    let job = app.wait_for(id, LONG, is_final);
+    assert_eq!(job["status"], "succeeded", "{job}");
+    assert_eq!(job["progress"], json!({"step": 40, "of": 40}));
+    assert_eq!(job["points"], 128);
+    let steps = app.get_json(&format!("/jobs/{id}/steps"));
+    assert_eq!(steps["steps"].as_array().unwrap().len(), 41);
+    let start = app.get_json(&format!("/jobs/{id}/steps/0"));
+    assert_eq!(start["points"]["displacement"][0], json!([0.0, 0.0, 0.0]));
+
+    let (out, cli) = cli_run("column3d", 40);
+    let api = app.get_json(&format!("/jobs/{id}/steps/40"));
+    assert_eq!(api["points"].to_string(), cli["points"].to_string());
+    assert_eq!(api["boundaries"], json!([]));
+    assert_eq!(api["report"]["reactions"], cli["report"]["reactions"]);
+    // The column's top has come down by about 26 m of its 50 (AMPLE's
+    // -25.940 m exactly, `tests/verification/column3d.rs`).
+    let top = (api["points"]["position"].as_array().unwrap().iter())
+        .map(|x| x[2].as_f64().unwrap())
+        .fold(f64::MIN, f64::max);
+    assert!((20.0..26.0).contains(&top), "{top}");
+
+    let (status, vtu) = app.get(&format!("/jobs/{id}/steps/40?format=vtu"));
+    assert_eq!(status, 200);
+    // Raw appended binary after the XML head.
+    let cli_vtu = std::fs::read(out.0.join("steps/step_0040.vtu")).unwrap();
+    let cli_vtu = String::from_utf8_lossy(&cli_vtu);
+    assert_eq!(piece(&vtu), piece(&cli_vtu));
+    assert!(piece(&vtu).unwrap().contains("NumberOfPoints=\"128\""));
+
+    // The archive holds the files `mpm run` wrote (no boundary files in
+    // 3D), by the same names.
+    let zip = archive_like_the_cli(&app, id, &out);
+    assert_eq!(zip.len(), 3 + 2 * 41);
+
+    // A plane-strain field in a 3D case, a vector of two components where
+    // three are needed, and bodies over the point limit.
+    let with = |f: &dyn Fn(&mut Value)| {
+        let mut c = example("column3d");
+        f(&mut c);
+        c.to_string()
+    };
+    for (body, path) in [
+        (with(&|c| c["probes"] = json!([])), "probes"),
+        (
+            with(&|c| c["loads"]["gravity"] = json!([0.0, -10.0])),
+            "loads.gravity",
+        ),
+        (
+            with(&|c| c["bodies"][0]["points"]["per_cell"] = 4.into()),
+            "bodies",
+        ),
+    ] {
+        let (status, _, at) = rejection(&app, &body);
+        assert_eq!((status, at.as_deref()), (422, Some(path)), "{body}");
+    }
+}
+
+/// `mpm run --example NAME` into a new directory, and the step document
+/// it wrote for `step`.
+fn cli_run(name: &str, step: usize) -> (common::TempDir, Value) {
+    let out = common::TempDir::new("cli");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_mpm"))
+        .args(["run", "--example", name, "--out"])
+        .arg(&out.0)
+        .output()
+        .unwrap();
+    assert!(status.status.success());
+    let document = out.0.join(format!("steps/step_{step:04}.json"));
+    let cli = serde_json::from_str(&std::fs::read_to_string(document).unwrap()).unwrap();
+    (out, cli)
+}
+
+/// The `<Piece ...>` line of a VTK file: its counts.
+fn piece(text: &str) -> Option<String> {
+    text.lines()
+        .find(|l| l.contains("<Piece"))
+        .map(str::to_owned)
+}
+
+/// Job `id`'s archive, checked to hold the files `mpm run` wrote in
+/// `out`, by the same names (the run's own bookkeeping aside).
+fn archive_like_the_cli(
+    app: &common::TestApp,
+    id: i64,
+    out: &common::TempDir,
+) -> zip::ZipArchive<std::io::Cursor<Vec<u8>>> {
+    let mut response = app
+        .agent
+        .get(format!("{}/jobs/{id}/archive", app.base))
+        .call()
+        .unwrap();
+    assert_eq!(response.status().as_u16(), 200);
+    let bytes = response.body_mut().read_to_vec().unwrap();
+    let zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).unwrap();
+    let archived: BTreeSet<String> = zip.file_names().map(|n| n.unwrap().into_owned()).collect();
+    let written: BTreeSet<String> = walkdir(&out.0)
+        .iter()
+        .map(|p| p.strip_prefix(&out.0).unwrap().to_str().unwrap().to_owned())
+        .filter(|name| name != "reports.jsonl")
+        .collect();
+    assert_eq!(archived, written);
+    zip
 }
 
 /// Every file under `dir`, recursively.
@@ -1130,6 +1207,7 @@ common::on_both_databases!(
     output_every_and_fields_thin_what_a_job_stores,
     delete_removes_an_ended_job_and_refuses_a_running_one,
     a_job_runs_to_success_and_its_steps_match_the_cli,
+    a_3d_job_runs_and_its_steps_match_the_cli,
     invalid_submissions_are_4xx_naming_the_field_and_create_nothing,
     cancel_stops_a_running_job_keeping_its_steps_and_cancels_a_queued_one,
     a_failed_solve_says_where_and_the_service_keeps_serving,

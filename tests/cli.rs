@@ -542,9 +542,10 @@ fn a_staged_run_names_its_stages_and_its_peaks() {
     assert!(largest > top_force(&steps[1]));
 }
 
-/// The built-in 3D column runs from the command line: a step a line, the
-/// points of every step as VTU files in a series, and a summary whose base
-/// reaction carries the column's weight, rho0 g L h^2 = 390625 N, in z.
+/// The built-in 3D column runs from the command line: a step a line, every
+/// step's document (JSON) and points (VTU, in a series), and a summary
+/// whose base reaction carries the column's weight, rho0 g L h^2 = 390625
+/// N, in z.
 #[test]
 fn a_3d_case_runs_and_its_base_carries_the_weight() {
     let out = temp_dir("run3d");
@@ -560,8 +561,13 @@ fn a_3d_case_runs_and_its_base_carries_the_weight() {
         (base[2].as_f64().unwrap() - weight).abs() < 1e-6 * weight,
         "{base:?}"
     );
-    let vtus = std::fs::read_dir(out.join("steps")).unwrap().count();
-    assert_eq!(vtus, 41);
+    let files = std::fs::read_dir(out.join("steps")).unwrap().count();
+    assert_eq!(files, 2 * 41);
+    let last: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("steps/step_0040.json")).unwrap())
+            .unwrap();
+    assert_eq!(last["report"]["reactions"], steps[39]["reactions"]);
+    assert_eq!(last["points"]["stress"][0].as_array().unwrap().len(), 6);
     let series = std::fs::read_to_string(out.join("points.pvd")).unwrap();
     assert!(series.contains("steps/step_0040.vtu"), "{series}");
     // It keeps no checkpoint, and says so when asked to resume.

@@ -1,21 +1,24 @@
 //! `mpm run` on a 3D case (`analysis.type: "3d"`): a line a step on
 //! stdout, and in the output directory the case, `reports.jsonl`,
-//! `summary.json`, and the points of the stored steps as `steps/*.vtu`
-//! with their `points.pvd` series. No checkpoints yet (`--resume` is
-//! for plane-strain runs), no boundary files (the B-spline surfaces are
-//! issue 38's part 2).
+//! `summary.json`, and the stored steps as `steps/*.json` (the report
+//! and the points' columns, as the service serves a step) and
+//! `steps/*.vtu` with their `points.pvd` series. No checkpoints yet
+//! (`--resume` is for plane-strain runs), no boundary files (the B-spline
+//! surfaces are issue 38's part 2).
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use mpm::case::solid::SolidCase;
+use mpm::case::solid::{SolidCase, SolidOutput};
+use mpm::report::SolidPointColumns;
 use mpm::vtk::write_solid_vtu;
 use mpm::{MaterialPoints, Observer, Simulation, StepReport};
 use mpm_service::jobs::admission::{PointLimit, Rejection, check_points};
 use mpm_service::results::{
     CASE_FILE, POINTS_SERIES, STEPS_DIR, SUMMARY_FILE, Series, StepFiles, Summary,
 };
+use mpm_service::step::StepDocument;
 
 use crate::CliError;
 use crate::run::{Progress, prepare_output, print_step};
@@ -68,7 +71,7 @@ pub fn run(
     let mut writer = SolidWriter {
         out: out.to_path_buf(),
         point_files,
-        every: case.output.every as usize,
+        output: case.output.clone(),
         load_steps: n,
         reports: File::create(out.join(REPORTS_FILE))?,
         series: Series::default(),
@@ -77,7 +80,7 @@ pub fn run(
     };
     if point_files {
         fs::create_dir_all(out.join(STEPS_DIR))?;
-        writer.write_points(0, 0.0, &sim.points)?;
+        writer.write_step(&sim.initial_report(), &sim.points)?;
     }
     let result = sim.run(&mut writer);
     writer.progress.clear();
@@ -112,8 +115,8 @@ pub fn run(
 struct SolidWriter {
     out: PathBuf,
     point_files: bool,
-    /// The points are stored every this many steps, and at the last.
-    every: usize,
+    /// Which steps store their points.
+    output: SolidOutput,
     load_steps: usize,
     reports: File,
     series: Series,
@@ -122,18 +125,31 @@ struct SolidWriter {
 }
 
 impl SolidWriter {
-    /// Step `step`'s points (at series time `time`) as its VTU file.
-    fn write_points(
+    /// A stored step's document (the report and the points' columns, as
+    /// the service stores it) and its VTU file, when the case stores this
+    /// step's points.
+    fn write_step(
         &mut self,
-        step: usize,
-        time: f64,
+        report: &StepReport,
         points: &MaterialPoints<3>,
     ) -> std::io::Result<()> {
-        let files = StepFiles::new(step);
+        if !self.output.stores_points(report.step, self.load_steps) {
+            return Ok(());
+        }
+        let files = StepFiles::new(report.step);
+        let columns = SolidPointColumns::new(points);
+        let document = StepDocument {
+            report,
+            points: &columns,
+            boundaries: &[(); 0],
+        };
+        let mut w = BufWriter::new(File::create(self.out.join(&files.document))?);
+        serde_json::to_writer(&mut w, &document)?;
+        w.flush()?;
         let mut vtu = BufWriter::new(File::create(self.out.join(&files.points))?);
-        write_solid_vtu(&mut vtu, points)?;
+        write_solid_vtu(&mut vtu, &columns)?;
         vtu.flush()?;
-        self.series.add(time, files);
+        self.series.add(report.series_time(), files);
         Ok(())
     }
 
@@ -141,9 +157,8 @@ impl SolidWriter {
         let mut line = serde_json::to_string(report)?;
         line.push('\n');
         self.reports.write_all(line.as_bytes())?;
-        let stored = report.step == self.load_steps || report.step.is_multiple_of(self.every);
-        if self.point_files && stored {
-            self.write_points(report.step, report.series_time(), points)?;
+        if self.point_files {
+            self.write_step(report, points)?;
         }
         Ok(())
     }

@@ -99,9 +99,9 @@ async fn queue(state: &AppState, body: Bytes, key: Option<&str>) -> Result<Respo
         .insert(
             &NewJob {
                 case_json: text,
-                title: admitted.case.title.as_deref(),
+                title: admitted.case.title(),
                 points: admitted.points as i64,
-                load_steps: admitted.case.total_load_steps() as i64,
+                load_steps: admitted.case.load_steps() as i64,
                 idempotency_key: key,
             },
             limits.max_queued as i64,

@@ -8,8 +8,9 @@ use super::extract::{IdPath, Params};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use mpm::boundary::BoundaryOutput;
-use mpm::report::PointColumns;
-use mpm::vtk::{write_vtp, write_vtu};
+use mpm::case::solid::is_solid;
+use mpm::report::{PointColumns, SolidPointColumns};
+use mpm::vtk::{write_solid_vtu, write_vtp, write_vtu};
 use serde::Deserialize;
 use serde_json::value::RawValue;
 use std::io::{BufWriter, Write};
@@ -77,6 +78,7 @@ pub async fn step(
     let converting = CONVERTING.try_acquire().map_err(|_| {
         ApiError::Unavailable("other steps are being converted; try again shortly".into())
     })?;
+    let solid = (state.store.case_json(id).await?).is_some_and(|case| is_solid(&case));
     let step = state
         .store
         .step(id, k)
@@ -84,7 +86,7 @@ pub async fn step(
         .ok_or_else(|| ApiError::NotFound(format!("step {k} of job {id}")))?;
     let mut bytes = Vec::new();
     let name = if format == "vtu" {
-        write_points(&step, &mut bytes)?;
+        write_points(&step, solid, &mut bytes)?;
         format!("job-{id}-step-{k:04}.vtu")
     } else {
         write_boundaries(&step, &mut bytes)?;
@@ -183,14 +185,24 @@ async fn send_part(
     }
 }
 
-/// A stored step's points as VTU, written to `out`.
-pub(super) fn write_points(step: &StoredStep, out: impl Write) -> Result<(), ApiError> {
-    let columns: PointColumns = serde_json::from_str(step.points.get())
-        .map_err(|e| ApiError::Internal(format!("stored points: {e}")))?;
+/// A stored step's points as VTU, written to `out`: a 3D run's when
+/// `solid`.
+pub(super) fn write_points(
+    step: &StoredStep,
+    solid: bool,
+    out: impl Write,
+) -> Result<(), ApiError> {
+    let stored = |e: serde_json::Error| ApiError::Internal(format!("stored points: {e}"));
     let mut out = BufWriter::new(out);
-    write_vtu(&mut out, &columns)
-        .and_then(|()| out.flush())
-        .map_err(|e| ApiError::Internal(e.to_string()))
+    if solid {
+        let columns: SolidPointColumns = serde_json::from_str(step.points.get()).map_err(stored)?;
+        write_solid_vtu(&mut out, &columns)
+    } else {
+        let columns: PointColumns = serde_json::from_str(step.points.get()).map_err(stored)?;
+        write_vtu(&mut out, &columns)
+    }
+    .and_then(|()| out.flush())
+    .map_err(|e| ApiError::Internal(e.to_string()))
 }
 
 /// A stored step's boundary curves as VTP, written to `out`.

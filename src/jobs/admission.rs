@@ -1,7 +1,8 @@
 //! What a submission must be to be queued: JSON, a valid case, and within
 //! the service's limits. Each check names the field that fails it.
 
-use mpm::{Case, CaseErrorKind, Simulation};
+use mpm::case::solid::{SolidCase, is_solid};
+use mpm::{Case, CaseError, CaseErrorKind, Simulation};
 
 use crate::config::Limits;
 
@@ -16,19 +17,44 @@ pub enum Rejection {
     LimitExceeded { path: String, message: String },
 }
 
+/// A submitted case: plane strain, or 3D (`analysis.type: "3d"`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Submitted {
+    Plane(Case),
+    Solid(SolidCase),
+}
+
+impl Submitted {
+    pub fn title(&self) -> Option<&str> {
+        match self {
+            Submitted::Plane(case) => case.title.as_deref(),
+            Submitted::Solid(case) => case.title.as_deref(),
+        }
+    }
+
+    /// Load steps over all stages.
+    pub fn load_steps(&self) -> u64 {
+        match self {
+            Submitted::Plane(case) => Steps::load_steps(case),
+            Submitted::Solid(case) => case.load_steps(),
+        }
+    }
+}
+
 /// A case that may be queued, and the material points it makes.
 #[derive(Debug)]
 pub struct Admitted {
-    pub case: Case,
+    pub case: Submitted,
     pub points: usize,
 }
 
-/// Reads a body as a case: the text and the case it holds. A body that is
-/// not JSON (text after the case included) is `MalformedJson`; JSON that is
-/// not a valid case is `InvalidCase` with the field path.
-pub fn read(body: &[u8]) -> Result<(&str, Case), Rejection> {
+/// Reads a body as a case: the text and the case it holds, 3D when its
+/// `analysis.type` is `"3d"`. A body that is not JSON (text after the case
+/// included) is `MalformedJson`; JSON that is not a valid case is
+/// `InvalidCase` with the field path.
+pub fn read(body: &[u8]) -> Result<(&str, Submitted), Rejection> {
     let text = std::str::from_utf8(body).map_err(|e| Rejection::MalformedJson(e.to_string()))?;
-    let case = Case::from_json(text).map_err(|e| match e.kind {
+    let refused = |e: CaseError| match e.kind {
         // The JSON parser's own word on where the text stops being JSON
         // (a case error may come first in the text).
         CaseErrorKind::Syntax => Rejection::MalformedJson(
@@ -40,7 +66,12 @@ pub fn read(body: &[u8]) -> Result<(&str, Case), Rejection> {
             path: e.path,
             message: e.message,
         },
-    })?;
+    };
+    let case = if is_solid(text) {
+        Submitted::Solid(SolidCase::from_json(text).map_err(refused)?)
+    } else {
+        Submitted::Plane(Case::from_json(text).map_err(refused)?)
+    };
     Ok((text, case))
 }
 
@@ -51,7 +82,14 @@ pub fn read(body: &[u8]) -> Result<(&str, Case), Rejection> {
 /// node, a probe outside every body. The checks that cost microseconds
 /// come first: the counts of every body's lattice, and the stored size
 /// they imply (a lower bound, without the boundary curves).
-pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
+pub fn admit(case: Submitted, limits: &Limits) -> Result<Admitted, Rejection> {
+    match case {
+        Submitted::Plane(case) => admit_plane(case, limits),
+        Submitted::Solid(case) => admit_solid(case, limits),
+    }
+}
+
+fn admit_plane(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
     check_load_steps(&case, limits)?;
     let point_limit = PointLimit::service(limits.max_points);
     if let Some(points) = check_fill_sizes(&case, point_limit)? {
@@ -60,7 +98,12 @@ pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
             boundary_points: 0,
             loops: 0,
         };
-        check_stored_bytes(at_least, &case, limits)?;
+        check_stored_bytes(
+            stored_bytes(&case, at_least),
+            &case,
+            at_least.points,
+            limits,
+        )?;
     }
     let sim = Simulation::new(&case).map_err(|e| Rejection::InvalidCase {
         path: e.path,
@@ -73,8 +116,52 @@ pub fn admit(case: Case, limits: &Limits) -> Result<Admitted, Rejection> {
         boundary_points: sim.loops.iter().map(|l| l.points.len()).sum(),
         loops: sim.loops.len(),
     };
-    check_stored_bytes(footprint, &case, limits)?;
-    Ok(Admitted { case, points })
+    check_stored_bytes(stored_bytes(&case, footprint), &case, points, limits)?;
+    Ok(Admitted {
+        case: Submitted::Plane(case),
+        points,
+    })
+}
+
+/// [`admit`] for a 3D case: the load steps, the points' bound from the
+/// bodies' boxes (the lattice sites seeding scans), the points seeding
+/// makes, and what the job would store.
+fn admit_solid(case: SolidCase, limits: &Limits) -> Result<Admitted, Rejection> {
+    let steps = case.load_steps();
+    if steps > limits.max_load_steps as u64 {
+        return Err(Rejection::LimitExceeded {
+            path: "analysis.load_steps".into(),
+            message: format!(
+                "{steps} load steps exceed this service's limit of {}",
+                limits.max_load_steps
+            ),
+        });
+    }
+    let limit = PointLimit::service(limits.max_points);
+    let sites = case.points_bound();
+    if sites > SITES_PER_POINT * limit.max as f64 {
+        return Err(Rejection::LimitExceeded {
+            path: "bodies".into(),
+            message: format!(
+                "seeding the bodies scans {sites:.3e} lattice sites (their bounding boxes at \
+                 their spacings), over the limit of {:.3e} ({SITES_PER_POINT} per point of {})",
+                SITES_PER_POINT * limit.max as f64,
+                limit.name
+            ),
+        });
+    }
+    let sim = Simulation::from_solid_case(&case).map_err(|e| Rejection::InvalidCase {
+        path: e.path,
+        message: e.message,
+    })?;
+    let points = sim.points.len();
+    check_points(points, limit)?;
+    let bytes = solid_stored_bytes(&case, points);
+    check_stored_bytes(bytes, &case, points, limits)?;
+    Ok(Admitted {
+        case: Submitted::Solid(case),
+        points,
+    })
 }
 
 /// Where a case gives its load steps: `analysis.load_steps`, or its stages.
@@ -83,6 +170,32 @@ fn load_steps_field(case: &Case) -> &'static str {
         "analysis.load_steps"
     } else {
         "stages"
+    }
+}
+
+/// A case's load steps, and the field that gives them.
+trait Steps {
+    fn load_steps(&self) -> u64;
+    fn load_steps_field(&self) -> &'static str;
+}
+
+impl Steps for Case {
+    fn load_steps(&self) -> u64 {
+        self.total_load_steps()
+    }
+
+    fn load_steps_field(&self) -> &'static str {
+        load_steps_field(self)
+    }
+}
+
+impl Steps for SolidCase {
+    fn load_steps(&self) -> u64 {
+        u64::from(self.analysis.load_steps)
+    }
+
+    fn load_steps_field(&self) -> &'static str {
+        "analysis.load_steps"
     }
 }
 
@@ -188,6 +301,10 @@ pub fn check_points(points: usize, limit: PointLimit) -> Result<(), Rejection> {
 /// characters (`-1.2345678901234567e-100`), the commas and brackets around
 /// them, a body index and a yield flag (a test serialises the worst case).
 pub const STORED_BYTES_PER_POINT: f64 = 305.0;
+/// Bytes one point of a 3D run takes in a stored step, at most
+/// (`mpm::report::SolidPointColumns`: fifteen numbers, a body index and a
+/// yield flag, as [`STORED_BYTES_PER_POINT`]).
+pub const STORED_BYTES_PER_SOLID_POINT: f64 = 420.0;
 /// Bytes one boundary point (a data point of a boundary curve) takes in a
 /// stored step, at most: eight polyline samples (8 x 52), up to three knots
 /// and three control points (at a corner; 3 x 25 + 3 x 52) and its index.
@@ -227,19 +344,34 @@ pub fn stored_bytes(case: &Case, seeded: Footprint) -> f64 {
     points * case.output.point_steps(load_steps) as f64 + report * (load_steps + 1) as f64
 }
 
-/// Refuses a job whose stored steps would pass the limit, naming the field
-/// with the larger share of its own limit: the load steps or the bodies'
-/// points.
-fn check_stored_bytes(seeded: Footprint, case: &Case, limits: &Limits) -> Result<(), Rejection> {
-    let (points, steps) = (seeded.points, case.total_load_steps());
-    let bytes = stored_bytes(case, seeded);
+/// What a 3D job will store: its points at the steps its `output` keeps
+/// (step 0 included), and every step's report (as [`stored_bytes`]).
+pub fn solid_stored_bytes(case: &SolidCase, points: usize) -> f64 {
+    let report = 1024.0
+        + 60.0 * case.supports.len() as f64
+        + 50.0 * f64::from(case.analysis.newton.max_iterations + 1);
+    let load_steps = case.analysis.load_steps as usize;
+    points as f64 * STORED_BYTES_PER_SOLID_POINT * case.output.point_steps(load_steps) as f64
+        + report * (load_steps + 1) as f64
+}
+
+/// Refuses a job whose stored steps would take `bytes`, past the limit,
+/// naming the field with the larger share of its own limit: the load
+/// steps or the bodies' `points`.
+fn check_stored_bytes(
+    bytes: f64,
+    case: &impl Steps,
+    points: usize,
+    limits: &Limits,
+) -> Result<(), Rejection> {
+    let steps = case.load_steps();
     if bytes <= limits.max_job_bytes as f64 {
         return Ok(());
     }
     let steps_share = steps as f64 / limits.max_load_steps as f64;
     let points_share = points as f64 / limits.max_points as f64;
     let path = if steps_share >= points_share {
-        load_steps_field(case)
+        case.load_steps_field()
     } else {
         "bodies"
     };
@@ -271,7 +403,7 @@ mod tests {
         let text = example().to_string();
         let (read_text, case) = read(text.as_bytes()).unwrap();
         assert_eq!(read_text, text);
-        assert_eq!(case, Case::from_json(&text).unwrap());
+        assert_eq!(case, Submitted::Plane(Case::from_json(&text).unwrap()));
     }
 
     #[test]
@@ -343,22 +475,73 @@ mod tests {
             plastic_strain: vec![worst; n],
             yielding: vec![false; n],
         };
-        let per_point = |n| serde_json::to_string(&one(n)).unwrap().len();
+        holds_tightly(one, STORED_BYTES_PER_POINT);
+    }
+
+    /// The same for a 3D run's point (`SolidPointColumns`).
+    #[test]
+    fn a_stored_3d_point_takes_at_most_its_bound() {
+        let worst = -1.2345678901234567e-100;
+        let one = |n: usize| mpm::report::SolidPointColumns {
+            position: vec![[worst; 3]; n],
+            displacement: vec![[worst; 3]; n],
+            stress: vec![[worst; 6]; n],
+            volume: vec![worst; n],
+            jacobian: vec![worst; n],
+            body: vec![u32::MAX; n],
+            plastic_strain: vec![worst; n],
+            yielding: vec![false; n],
+        };
+        holds_tightly(one, STORED_BYTES_PER_SOLID_POINT);
+    }
+
+    /// The bytes a point adds to the JSON of `columns(n)` (of `n` points)
+    /// are at most `bound`, and over 0.9 of it.
+    fn holds_tightly<T: serde::Serialize>(columns: impl Fn(usize) -> T, bound: f64) {
+        let per_point = |n| serde_json::to_string(&columns(n)).unwrap().len();
         let marginal = (per_point(1001) - per_point(1)) as f64 / 1000.0;
+        assert!(marginal <= bound, "{marginal} bytes a point");
+        assert!(marginal > 0.9 * bound, "{marginal}: a loose bound");
+    }
+
+    /// A case whose `analysis.type` is `"3d"` reads as a 3D case, and is
+    /// refused at its load steps and stored size as a plane-strain one.
+    #[test]
+    fn a_3d_case_reads_and_is_limited_as_a_plane_one() {
+        let text = mpm::case::builtin::get("column3d").unwrap();
+        let (_, case) = read(text.as_bytes()).unwrap();
+        assert_eq!(case, Submitted::Solid(SolidCase::from_json(text).unwrap()));
+        assert_eq!((case.title().is_some(), case.load_steps()), (true, 40));
+        let mut limits = Config::new("unused").limits;
+        let admitted = admit(case.clone(), &limits).unwrap();
+        assert_eq!(admitted.points, 128);
+        limits.max_load_steps = 39;
+        assert!(matches!(
+            admit(case.clone(), &limits),
+            Err(Rejection::LimitExceeded { path, .. }) if path == "analysis.load_steps"
+        ));
+        limits.max_load_steps = 40;
+        let Submitted::Solid(solid) = &case else {
+            unreachable!()
+        };
+        // 128 points stored at 41 steps, and 41 reports.
+        let bytes = solid_stored_bytes(solid, 128);
         assert!(
-            marginal <= STORED_BYTES_PER_POINT,
-            "{marginal} bytes a point"
+            bytes > 128.0 * 41.0 * STORED_BYTES_PER_SOLID_POINT,
+            "{bytes}"
         );
-        assert!(
-            marginal > 0.9 * STORED_BYTES_PER_POINT,
-            "{marginal}: a loose bound"
-        );
+        limits.max_job_bytes = bytes as u64 - 1;
+        assert!(matches!(
+            admit(case, &limits),
+            Err(Rejection::LimitExceeded { path, .. }) if path == "analysis.load_steps"
+        ));
     }
 
     #[test]
     fn limits_name_the_field() {
         let mut limits = Config::new("unused").limits;
         let case = Case::from_json(&example().to_string()).unwrap();
+        let submitted = Submitted::Plane(case.clone());
         limits.max_load_steps = 4;
         assert!(matches!(
             check_load_steps(&case, &limits),
@@ -367,7 +550,7 @@ mod tests {
         limits.max_load_steps = 5;
         limits.max_points = 10;
         assert!(matches!(
-            admit(case.clone(), &limits),
+            admit(submitted, &limits),
             Err(Rejection::LimitExceeded { path, .. }) if path == "bodies"
         ));
         limits.max_points = 1000;
@@ -378,16 +561,17 @@ mod tests {
         };
         let stored = stored_bytes(&case, seeded);
         limits.max_job_bytes = stored as u64;
-        assert!(check_stored_bytes(seeded, &case, &limits).is_ok());
+        let check = |limits: &Limits| check_stored_bytes(stored, &case, seeded.points, limits);
+        assert!(check(&limits).is_ok());
         limits.max_job_bytes = stored as u64 - 1;
         // 5 of 5 load steps against 400 of 1000 points: the steps drive it.
         assert!(matches!(
-            check_stored_bytes(seeded, &case, &limits),
+            check(&limits),
             Err(Rejection::LimitExceeded { path, .. }) if path == "analysis.load_steps"
         ));
         limits.max_load_steps = 10_000;
         assert!(matches!(
-            check_stored_bytes(seeded, &case, &limits),
+            check(&limits),
             Err(Rejection::LimitExceeded { path, .. }) if path == "bodies"
         ));
         assert!(matches!(

@@ -339,6 +339,48 @@ impl PointColumns {
     }
 }
 
+/// A 3D run's material points as columns, for JSON: every column of
+/// [`PointColumns`], vectors of three components, and the Cauchy stress
+/// as the full symmetric tensor `[xx, yy, zz, xy, yz, xz]` (VTK's order).
+#[derive(Debug, Clone, Default, Serialize, serde::Deserialize, PartialEq)]
+pub struct SolidPointColumns {
+    pub position: Vec<[f64; 3]>,
+    pub displacement: Vec<[f64; 3]>,
+    pub stress: Vec<[f64; 6]>,
+    pub volume: Vec<f64>,
+    pub jacobian: Vec<f64>,
+    pub body: Vec<u32>,
+    pub plastic_strain: Vec<f64>,
+    pub yielding: Vec<bool>,
+}
+
+impl SolidPointColumns {
+    pub fn new(mp: &MaterialPoints<3>) -> Self {
+        let n = mp.len();
+        Self {
+            position: mp.position.clone(),
+            displacement: (0..n).map(|p| mp.displacement(p)).collect(),
+            stress: (mp.stress.iter())
+                .map(|s| {
+                    [
+                        s[(0, 0)],
+                        s[(1, 1)],
+                        s[(2, 2)],
+                        s[(0, 1)],
+                        s[(1, 2)],
+                        s[(0, 2)],
+                    ]
+                })
+                .collect(),
+            volume: (0..n).map(|p| mp.volume(p)).collect(),
+            jacobian: (0..n).map(|p| mp.jacobian(p)).collect(),
+            body: mp.material.clone(),
+            plastic_strain: mp.history.iter().map(|h| h.plastic_strain).collect(),
+            yielding: mp.yielding.clone(),
+        }
+    }
+}
+
 impl StepReport {
     /// What a series of steps runs along (a `.pvd`'s times): the load
     /// factor, or the step when the case has stages, whose load factor

@@ -234,7 +234,22 @@ impl Simulation {
     /// Step 0: the state before any load, as a report (no Newton solve, no
     /// reactions) and the points, for writers that show the start.
     pub fn initial_step(&self) -> (StepReport, StepState<'_>) {
-        let report = StepReport {
+        (self.initial_report(), self.step_state())
+    }
+
+    fn step_state(&self) -> StepState<'_> {
+        StepState::new(&self.points, &self.loops, self)
+    }
+}
+
+impl<const D: usize> Simulation<D>
+where
+    Dim<D>: RunSpace<D>,
+{
+    /// Step 0's report: the state before any load (no Newton solve, no
+    /// reactions), for writers that show the start.
+    pub fn initial_report(&self) -> StepReport {
+        StepReport {
             step: 0,
             load_factor: 0.0,
             newton: Default::default(),
@@ -247,24 +262,14 @@ impl Simulation {
             active_dofs: 0,
             probes: self.probes.reports(),
             stage: self.stage_name(0),
-            reactions: vec![vec![0.0; 2]; self.stages[0].n_supports],
-            applied_load: vec![0.0; 2],
+            reactions: vec![vec![0.0; D]; self.stages[0].n_supports],
+            applied_load: vec![0.0; D],
             support_tractions: Vec::new(),
             strength_reduction: None,
             memory: Default::default(),
-        };
-        (report, self.step_state())
+        }
     }
 
-    fn step_state(&self) -> StepState<'_> {
-        StepState::new(&self.points, &self.loops, self)
-    }
-}
-
-impl<const D: usize> Simulation<D>
-where
-    Dim<D>: RunSpace<D>,
-{
     /// Runs the load steps not yet done (all of them, unless the run was
     /// restored from a [`crate::Checkpoint`]), reporting each to `observer`.
     pub fn run(&mut self, observer: &mut dyn Observer) -> Result<RunReport, SolveError> {

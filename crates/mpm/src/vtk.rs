@@ -4,8 +4,7 @@
 
 use std::io::{self, Write};
 
-use crate::particles::MaterialPoints;
-use crate::report::PointColumns;
+use crate::report::{PointColumns, SolidPointColumns};
 
 /// Writes the points as a VTK XML unstructured grid of vertex cells, with
 /// raw appended binary data (little-endian, 64-bit block headers).
@@ -48,43 +47,23 @@ pub fn write_vtu(out: impl Write, cols: &PointColumns) -> io::Result<()> {
     )
 }
 
-/// Writes a 3D run's points as [`write_vtu`] writes a plane-strain run's:
-/// every column, the stress as the full symmetric tensor.
-pub fn write_solid_vtu(out: impl Write, points: &MaterialPoints<3>) -> io::Result<()> {
-    let n = points.len();
-    let positions: Vec<f64> = points.position.iter().flatten().copied().collect();
-    let displacement: Vec<f64> = (0..n).flat_map(|p| points.displacement(p)).collect();
-    // VTK's symmetric-tensor order: XX, YY, ZZ, XY, YZ, XZ.
-    let stress: Vec<f64> = (points.stress.iter())
-        .flat_map(|s| {
-            [
-                s[(0, 0)],
-                s[(1, 1)],
-                s[(2, 2)],
-                s[(0, 1)],
-                s[(1, 2)],
-                s[(0, 2)],
-            ]
-        })
-        .collect();
-    let volume: Vec<f64> = (0..n).map(|p| points.volume(p)).collect();
-    let jacobian: Vec<f64> = (0..n).map(|p| points.jacobian(p)).collect();
-    let body: Vec<f64> = points.material.iter().map(|&b| b as f64).collect();
-    let plastic_strain: Vec<f64> = points.history.iter().map(|h| h.plastic_strain).collect();
-    let yielding: Vec<f64> = (points.yielding.iter())
+/// Writes a 3D run's points as [`write_vtu`] writes a plane-strain run's.
+pub fn write_solid_vtu(out: impl Write, cols: &SolidPointColumns) -> io::Result<()> {
+    let body: Vec<f64> = cols.body.iter().map(|&b| b as f64).collect();
+    let yielding: Vec<f64> = (cols.yielding.iter())
         .map(|&y| if y { 1.0 } else { 0.0 })
         .collect();
     write_columns(
         out,
         &VtuColumns {
-            n,
-            positions: &positions,
-            displacement: &displacement,
-            stress: &stress,
-            volume: &volume,
-            jacobian: &jacobian,
+            n: cols.position.len(),
+            positions: cols.position.as_flattened(),
+            displacement: cols.displacement.as_flattened(),
+            stress: cols.stress.as_flattened(),
+            volume: &cols.volume,
+            jacobian: &cols.jacobian,
             body: &body,
-            plastic_strain: &plastic_strain,
+            plastic_strain: &cols.plastic_strain,
             yielding: &yielding,
         },
     )

@@ -204,15 +204,26 @@ impl Default for OutputSpec {
 impl OutputSpec {
     /// Whether step `step` of `load_steps` stores its points.
     pub fn stores_points(&self, step: usize, load_steps: usize) -> bool {
-        step == 0 || step == load_steps || step.is_multiple_of(self.every.max(1) as usize)
+        stores_points_every(self.every, step, load_steps)
     }
 
     /// How many of the steps 0..=load_steps store their points.
     pub fn point_steps(&self, load_steps: usize) -> usize {
-        let every = self.every.max(1) as usize;
-        // Step 0, the multiples of `every`, and the last if it is not one.
-        1 + load_steps / every + usize::from(!load_steps.is_multiple_of(every))
+        point_steps_every(self.every, load_steps)
     }
+}
+
+/// Whether step `step` of `load_steps` stores its points when they are
+/// stored `every` steps: step 0, the multiples of `every`, and the last.
+pub(crate) fn stores_points_every(every: u32, step: usize, load_steps: usize) -> bool {
+    step == 0 || step == load_steps || step.is_multiple_of(every.max(1) as usize)
+}
+
+/// How many of the steps 0..=load_steps store their points, every `every`.
+pub(crate) fn point_steps_every(every: u32, load_steps: usize) -> usize {
+    let every = every.max(1) as usize;
+    // Step 0, the multiples of `every`, and the last if it is not one.
+    1 + load_steps / every + usize::from(!load_steps.is_multiple_of(every))
 }
 
 /// Where the boundary curve's data points are.

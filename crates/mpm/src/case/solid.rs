@@ -271,6 +271,18 @@ impl Default for SolidOutput {
     }
 }
 
+impl SolidOutput {
+    /// Whether step `step` of `load_steps` stores its points.
+    pub fn stores_points(&self, step: usize, load_steps: usize) -> bool {
+        super::stores_points_every(self.every, step, load_steps)
+    }
+
+    /// How many of the steps 0..=load_steps store their points.
+    pub fn point_steps(&self, load_steps: usize) -> usize {
+        super::point_steps_every(self.every, load_steps)
+    }
+}
+
 /// Whether a case's JSON text asks for a 3D analysis (`analysis.type` is
 /// `"3d"`); text that is not JSON is not.
 pub fn is_solid(text: &str) -> bool {
