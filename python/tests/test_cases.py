@@ -23,17 +23,9 @@ def test_cantilever_defaults_are_the_built_in_example(binary: Path) -> None:
 
 def test_every_bundled_example_is_the_built_in_one_and_valid(binary: Path) -> None:
     listed = subprocess.run([str(binary), "example"], check=True, capture_output=True, text=True).stdout
-    # The client bundles the plane-strain examples, in the binary's order;
-    # the binary's 3D examples (`analysis.type: "3d"`) the service does not
-    # run yet.
-    plane = []
-    for name in listed.split():
-        printed = subprocess.run(
-            [str(binary), "example", name], check=True, capture_output=True, text=True
-        ).stdout
-        if json.loads(printed)["analysis"].get("type") != "3d":
-            plane.append(name)
-    assert tuple(plane) == cases.EXAMPLES
+    # The client bundles every example, plane strain and 3D, in the
+    # binary's order.
+    assert tuple(listed.split()) == cases.EXAMPLES
     for name in cases.EXAMPLES:
         printed = subprocess.run(
             [str(binary), "example", name], check=True, capture_output=True, text=True
@@ -91,4 +83,20 @@ def test_json_path_is_written_as_the_service_writes_it() -> None:
 def test_schema_is_package_data() -> None:
     schema = cases.schema()
     assert schema["type"] == "object"
-    assert {"version", "bodies"} <= set(schema["required"])
+    for format in ("Case", "SolidCase"):
+        assert {"version", "bodies"} <= set(schema["$defs"][format]["required"])
+
+
+def test_a_3d_case_is_validated_as_one() -> None:
+    # `analysis.type: "3d"` selects the 3D format (the schema's if/then):
+    # its fields are checked there, and the plane-strain ones refused.
+    case = cases.example("column3d")
+    cases.validate(case)
+    case["loads"]["gravity"] = [0.0, -10.0]
+    with pytest.raises(CaseError) as raised:
+        cases.validate(case)
+    assert raised.value.path == "loads.gravity"
+    case = cases.example("column3d")
+    case["probes"] = []
+    with pytest.raises(CaseError, match="probes"):
+        cases.validate(case)

@@ -74,6 +74,23 @@ def test_cantilever_submit_wait_steps_step_result(client: Client, cantilever_job
     assert result.cutbacks.shape == (6,) and not result.cutbacks.any()
 
 
+def test_a_3d_job_gives_3d_arrays(client: Client) -> None:
+    # The built-in 3D column (128 points, 40 steps): vectors of three
+    # components, the stress tensor's six, and a base that carries the
+    # column's weight, rho0 g L h^2 = 390625 N, in z.
+    job = client.submit(cases.example("column3d"))
+    client.wait(job)
+    last = client.step(job, 40)
+    assert last.position.shape == (128, 3) and last.displacement.shape == (128, 3)
+    assert last.stress.shape == (128, 6)
+    assert last.boundaries == []
+    result = client.result(job)
+    assert result.reactions.shape == (41, 5, 3) and result.applied_load.shape == (41, 3)
+    np.testing.assert_allclose(result.reactions[-1, 4], [0, 0, 390625.0], atol=1e-6 * 390625.0)
+    # The top came down about 26 m of its 50 (AMPLE's exact 25.940 m).
+    assert 20.0 < last.position[:, 2].max() < 26.0
+
+
 def test_to_dataframe(client: Client, cantilever_job: int) -> None:
     result = client.result(cantilever_job)
     table = result.to_dataframe()

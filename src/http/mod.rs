@@ -272,8 +272,16 @@ mod tests {
                 "slope",
                 include_str!("../../python/src/mpm_client/examples/slope.json"),
             ),
+            (
+                "column3d",
+                include_str!("../../python/src/mpm_client/examples/column3d.json"),
+            ),
         ];
-        assert_eq!(bundled.map(|(name, _)| name), mpm::case::builtin::NAMES);
+        let names: Vec<&str> = (mpm::case::builtin::NAMES.iter())
+            .chain(&mpm::case::builtin::SOLID_NAMES)
+            .copied()
+            .collect();
+        assert_eq!(bundled.map(|(name, _)| name).to_vec(), names);
         for (name, text) in bundled {
             assert!(
                 Some(text) == mpm::case::builtin::get(name),

@@ -38,16 +38,18 @@ _PAGE = 500  # the service's largest page of GET /jobs
 _FIRST_PAUSE = 0.01
 _PAUSE_GROWTH = 1.25
 
-# A step document's point columns and the shape of one point's entry.
+# A step document's point columns and the shape of one point's entry, in
+# plane strain and in 3D (`analysis.type: "3d"`: vectors of three, the
+# stress tensor's six components).
 _COLUMNS: dict[str, tuple] = {
-    "position": (float, 2),
-    "displacement": (float, 2),
-    "stress": (float, 4),
-    "volume": (float, None),
-    "jacobian": (float, None),
-    "plastic_strain": (float, None),
-    "yielding": (bool, None),
-    "body": (np.int64, None),
+    "position": (float, 2, 3),
+    "displacement": (float, 2, 3),
+    "stress": (float, 4, 6),
+    "volume": (float, None, None),
+    "jacobian": (float, None, None),
+    "plastic_strain": (float, None, None),
+    "yielding": (bool, None, None),
+    "body": (np.int64, None, None),
 }
 
 
@@ -61,6 +63,11 @@ def _column(values: list | None, dtype: Any, width: int | None) -> np.ndarray | 
     return None if values is None else _array(values, dtype, width)
 
 
+def _dimension(vectors: list) -> int:
+    """2 or 3: the components of a list of vectors (2 when it is empty)."""
+    return len(vectors[0]) if vectors else 2
+
+
 @dataclass
 class Step:
     """One stored load step (step 0 is the undeformed state).
@@ -71,10 +78,13 @@ class Step:
     at all (`output.every`): `position`, `displacement` (n, 2) m; `stress`
     (n, 4) Cauchy [xx, yy, xy, zz] Pa; `volume` (n,) current, m^2 per m;
     `jacobian` (n,) det F; `plastic_strain` (n,) accumulated; `yielding` (n,)
-    bool, flowed plastically in the step; `body` (n,) body index.
+    bool, flowed plastically in the step; `body` (n,) body index. A 3D
+    case's: `position`, `displacement` (n, 3) m, `stress` (n, 6) Cauchy [xx,
+    yy, zz, xy, yz, xz] Pa, `volume` m^3.
     `boundaries`: per closed loop of outer points a dict with `body`, `hole`,
     `points` (indices), `bspline` (`degree`, `knots`, `control_points` (k, 2)
-    m) and `polyline` (m, 2) m; None when the step's points are not stored.
+    m) and `polyline` (m, 2) m; None when the step's points are not stored
+    (empty in 3D, whose surfaces are to come).
     """
 
     report: dict
@@ -99,7 +109,11 @@ class Step:
     @classmethod
     def from_json(cls, document: Mapping[str, Any]) -> Step:
         points = document.get("points") or {}
-        arrays = {name: _column(points.get(name), *spec) for name, spec in _COLUMNS.items()}
+        solid = _dimension(points.get("position") or []) == 3
+        arrays = {
+            name: _column(points.get(name), dtype, solid_width if solid else width)
+            for name, (dtype, width, solid_width) in _COLUMNS.items()
+        }
         boundaries = document.get("boundaries")
         if boundaries is not None:
             boundaries = [_boundary(b) for b in boundaries]
@@ -124,7 +138,8 @@ class Result:
 
     `steps` (k,) step numbers; `load_factor` (k,); `applied_load` (k, 2) N/m,
     the resultant of the loads applied; `reactions` (k, supports, 2) N/m, the
-    supports' reactions in the case's order (they balance `applied_load`);
+    supports' reactions in the case's order (they balance `applied_load`;
+    in 3D (k, 3) and (k, supports, 3) N);
     `newton_iterations` (k,), and `cutbacks` (k,) the tries each step
     failed and cut (0 where a server before them gives none); `probes` {name: {"step" (k,), "load_factor"
     (k,), "position" (k, 2) m, "displacement" (k, 2) m}}; `timings` summed
@@ -146,6 +161,7 @@ class Result:
     def from_json(cls, document: Mapping[str, Any]) -> Result:
         reactions = document.get("reactions", [])
         supports = len(reactions[0]["supports"]) if reactions else 0
+        dimension = _dimension([r["applied_load"] for r in reactions])
         probes = {
             name: {
                 "step": np.array([s["step"] for s in history], dtype=np.int64),
@@ -161,9 +177,9 @@ class Result:
             job=document.get("job", {}),
             steps=steps,
             load_factor=np.array([r["load_factor"] for r in reactions], dtype=float),
-            applied_load=_array([r["applied_load"] for r in reactions], float, 2),
+            applied_load=_array([r["applied_load"] for r in reactions], float, dimension),
             reactions=np.array([r["supports"] for r in reactions], dtype=float).reshape(
-                len(reactions), supports, 2
+                len(reactions), supports, dimension
             ),
             newton_iterations=np.array(
                 [newton.get(int(s), {}).get("iterations", 0) for s in steps], dtype=np.int64

@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 
 pub use crate::geometry::{Geometry, Selector};
 use crate::settings::{NewtonSettings, Substepping};
+use solid::SolidCase;
 
 /// The only case-format version this build reads.
 pub const CASE_VERSION: u32 = 1;
@@ -63,9 +64,79 @@ pub struct Case {
 /// below: what `GET /schema/case.json` serves and clients validate against.
 /// It checks shapes and names; [`Case::validate`] checks the values.
 pub fn json_schema() -> serde_json::Value {
-    let mut schema = schemars::schema_for!(Case).to_value();
+    use serde_json::{Value, json};
+    let settings = schemars::generate::SchemaSettings::draft2020_12();
+    let (plane, mut defs) = split_root(&settings, "$defs", |g| g.into_root_schema_for::<Case>());
+    let (solid, solid_defs) = split_root(&settings, "$defs", |g| {
+        g.into_root_schema_for::<SolidCase>()
+    });
+    merge_definitions(&mut defs, solid_defs);
+    defs.insert("Case".into(), plane);
+    defs.insert("SolidCase".into(), solid);
+    let mut schema = json!({
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": "Case",
+        "description": "A plane-strain case, or a 3D one when analysis.type is \"3d\"",
+        "type": "object",
+        "if": {
+            "type": "object",
+            "required": ["analysis"],
+            "properties": {
+                "analysis": {
+                    "type": "object",
+                    "required": ["type"],
+                    "properties": { "type": { "const": "3d" } }
+                }
+            }
+        },
+        "then": { "$ref": "#/$defs/SolidCase" },
+        "else": { "$ref": "#/$defs/Case" },
+        "$defs": Value::Object(defs),
+    });
     no_nulls(&mut schema);
     schema
+}
+
+/// The root schema a generator with `settings` makes (`root`), without its
+/// `$schema` and its definitions, and the definitions (kept under `defs`:
+/// `$defs`, or `components` / `schemas` for OpenAPI).
+fn split_root(
+    settings: &schemars::generate::SchemaSettings,
+    defs: &str,
+    root: impl FnOnce(schemars::SchemaGenerator) -> schemars::Schema,
+) -> (
+    serde_json::Value,
+    serde_json::Map<String, serde_json::Value>,
+) {
+    use serde_json::Value;
+    let Value::Object(mut schema) = root(settings.clone().into_generator()).to_value() else {
+        unreachable!("a struct's schema is an object")
+    };
+    schema.remove("$schema");
+    let definitions = match schema.remove(defs) {
+        Some(Value::Object(mut components)) if defs == "components" => {
+            match components.remove("schemas") {
+                Some(Value::Object(schemas)) => schemas,
+                _ => serde_json::Map::new(),
+            }
+        }
+        Some(Value::Object(definitions)) => definitions,
+        _ => serde_json::Map::new(),
+    };
+    (Value::Object(schema), definitions)
+}
+
+/// Adds `more` to `defs`. The two case formats share types (materials,
+/// the basis, Newton's settings) by name, so a name both hold must be the
+/// same schema.
+fn merge_definitions(
+    defs: &mut serde_json::Map<String, serde_json::Value>,
+    more: serde_json::Map<String, serde_json::Value>,
+) {
+    for (name, schema) in more {
+        let kept = defs.entry(name.clone()).or_insert_with(|| schema.clone());
+        assert_eq!(*kept, schema, "two schemas named {name}");
+    }
 }
 
 /// A case takes no `null` (a field left out takes its default, and
@@ -112,21 +183,16 @@ fn no_nulls(schema: &mut serde_json::Value) {
 /// The case format as OpenAPI 3.0 schemas: `Case` and every type it uses,
 /// by name, referring to each other as `#/components/schemas/NAME`.
 pub fn openapi_schemas() -> serde_json::Map<String, serde_json::Value> {
-    let root = schemars::generate::SchemaSettings::openapi3()
-        .into_generator()
-        .into_root_schema_for::<Case>();
-    let serde_json::Value::Object(mut case) = root.to_value() else {
-        unreachable!("a struct's schema is an object")
-    };
-    case.remove("$schema");
-    let mut schemas = match case.remove("components") {
-        Some(serde_json::Value::Object(mut components)) => match components.remove("schemas") {
-            Some(serde_json::Value::Object(schemas)) => schemas,
-            _ => serde_json::Map::new(),
-        },
-        _ => serde_json::Map::new(),
-    };
-    schemas.insert("Case".into(), serde_json::Value::Object(case));
+    let settings = schemars::generate::SchemaSettings::openapi3();
+    let (plane, mut schemas) = split_root(&settings, "components", |g| {
+        g.into_root_schema_for::<Case>()
+    });
+    let (solid, solid_schemas) = split_root(&settings, "components", |g| {
+        g.into_root_schema_for::<SolidCase>()
+    });
+    merge_definitions(&mut schemas, solid_schemas);
+    schemas.insert("Case".into(), plane);
+    schemas.insert("SolidCase".into(), solid);
     for schema in schemas.values_mut() {
         no_nulls(schema);
         to_openapi_3_0(schema);
