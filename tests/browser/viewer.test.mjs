@@ -97,6 +97,7 @@ before(async () => {
       { load_steps: 20, strength_reduction: { increment: 0.1, tolerance: 0.01 } },
     ],
   };
+  jobs.column3d = (await call('POST', '/jobs', JSON.parse(execFileSync(mpm, ['example', 'column3d'])))).id;
   jobs.reduced = (await call('POST', '/jobs', reduced)).id;
   jobs.cantilever = (await call('POST', '/jobs', cantilever)).id;
   jobs.staged = (await call('POST', '/jobs', staged)).id;
@@ -164,6 +165,7 @@ test('the page asks for the token, refuses a wrong one and lists the jobs with t
     [jobs.thinned]: 'succeeded',
     [jobs.stillborn]: 'failed',
     [jobs.reduced]: 'succeeded',
+    [jobs.column3d]: 'succeeded',
   });
   assert.equal(await page.$eval('#forget-token', (b) => b.hidden), false);
   // The token is kept for the tab: a reload goes straight to the list.
@@ -299,5 +301,39 @@ test('a staged job names the stage of each step and plots against the step', asy
   const axes = await page.$$eval('figure.plot', (fs) => fs.map((f) => [f.dataset.title, f.textContent]));
   const reactions = axes.find(([t]) => t === 'reactions');
   assert.ok(reactions && reactions[1].includes('load step'), 'the reactions run by step');
+  await page.close();
+});
+
+test('a 3D job is drawn in a view that turns when dragged', async () => {
+  const page = await browser.newPage({ viewport: { width: 1280, height: 1100 } });
+  await signedIn(page);
+  await page.click(`a[href="#/jobs/${jobs.column3d}"]`);
+  await page.waitForSelector('#points[data-points="128"]');
+  assert.equal(await page.$eval('#step-slider', (s) => s.max), '40');
+  assert.match(await page.textContent('#step-note'), /128 points drawn in 3D/);
+  // The 3D fields: three displacements and six stresses.
+  const fields = await page.$$eval('#field option', (os) => os.map((o) => o.value));
+  for (const key of ['uz', 'szz', 'syz', 'sxz']) assert.ok(fields.includes(key), `${key} in ${fields}`);
+  await page.selectOption('#field', 'szz');
+  const start = await canvasStatistics(page);
+  // The column, squashed to half its height, still shows as a body.
+  assert.ok(start.drawn > 0.01 * start.pixels, `only ${start.drawn} of ${start.pixels} pixels drawn`);
+  const first = await page.$eval('#points', (c) => c.dataset.view);
+
+  // A drag turns the view, and draws another picture; a double click
+  // brings the first view back.
+  const box = await (await page.$('#points')).boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.down();
+  await page.mouse.move(box.x + box.width / 2 + 120, box.y + box.height / 2 + 40, { steps: 5 });
+  await page.mouse.up();
+  await page.waitForFunction((v) => document.querySelector('#points').dataset.view !== v, first);
+  const turned = await canvasStatistics(page);
+  assert.notEqual(turned.image, start.image, 'the drag left the picture as it was');
+  await page.dblclick('#points');
+  await page.waitForFunction((v) => document.querySelector('#points').dataset.view === v, first);
+  // The reactions plot has z components, in N.
+  const plots = await page.$$eval('figure.plot', (fs) => fs.map((f) => f.textContent));
+  assert.ok(plots.some((t) => /F_z/.test(t) && /force \(N\)/.test(t)), plots.join(' | '));
   await page.close();
 });

@@ -173,6 +173,21 @@ const FIELDS = [
   { key: 'body', label: 'body', unit: 'index', needs: 'body', value: (c, i) => c.body[i] },
 ];
 
+// A 3D job's fields: vectors of three components, the stress tensor's six
+// ([xx, yy, zz, xy, yz, xz]).
+const SOLID_FIELDS = [
+  { key: 'u', label: 'displacement |u|', unit: 'm', needs: 'displacement', value: (c, i) => Math.hypot(...c.displacement[i]) },
+  ...['x', 'y', 'z'].map((axis, k) => (
+    { key: `u${axis}`, label: `displacement u_${axis}`, unit: 'm', needs: 'displacement', value: (c, i) => c.displacement[i][k] })),
+  ...['xx', 'yy', 'zz', 'xy', 'yz', 'xz'].map((pair, k) => (
+    { key: `s${pair}`, label: `stress σ_${pair}`, unit: 'Pa', needs: 'stress', value: (c, i) => c.stress[i][k] })),
+  ...FIELDS.filter((f) => ['J', 'ep', 'body'].includes(f.key)),
+];
+
+// Whether a step's points are a 3D job's (positions of three components).
+const isSolid = (columns) => columns.position.length > 0 && columns.position[0].length === 3;
+const fieldsOf = (columns) => (isSolid(columns) ? SOLID_FIELDS : FIELDS);
+
 // Step documents kept per page: they may hold a million points each.
 const CACHED_STEPS = 6;
 
@@ -238,6 +253,30 @@ async function jobPage(id, stale) {
 
   let current = { job, result: null };
   let reference = null; // step 0's points, to keep the view's frame
+  // A 3D job's view: turned by dragging, back to the start by a double click.
+  const view = { ...START_VIEW };
+  let lastDoc = null;
+  let pending = false;
+  const redrawView = () => {
+    if (pending || !lastDoc || !isSolid(lastDoc.points)) return;
+    pending = true;
+    requestAnimationFrame(() => {
+      pending = false;
+      const field = SOLID_FIELDS.find((f) => f.key === fieldSelect.value) || null;
+      drawSolid(canvas, lastDoc, reference, field, kase.grid, view);
+    });
+  };
+  let dragged = null;
+  canvas.addEventListener('pointerdown', (e) => { dragged = [e.clientX, e.clientY]; canvas.setPointerCapture(e.pointerId); });
+  canvas.addEventListener('pointerup', () => { dragged = null; });
+  canvas.addEventListener('pointermove', (e) => {
+    if (!dragged) return;
+    view.yaw += 0.01 * (e.clientX - dragged[0]);
+    view.pitch = Math.max(-Math.PI / 2, Math.min(Math.PI / 2, view.pitch + 0.01 * (e.clientY - dragged[1])));
+    dragged = [e.clientX, e.clientY];
+    redrawView();
+  });
+  canvas.addEventListener('dblclick', () => { Object.assign(view, START_VIEW); redrawView(); });
   const showJob = (j) => {
     heading.replaceChildren(`Job #${id} `, statusBadge(j.status));
     const seconds = j.solve_seconds == null ? '' : `, solved in ${j.solve_seconds.toFixed(2)} s`;
@@ -286,7 +325,15 @@ async function jobPage(id, stale) {
     }
     offerFields(fieldSelect, doc.points);
     // None when the case stores no column to colour by: one colour.
-    const field = FIELDS.find((f) => f.key === fieldSelect.value) || null;
+    const field = fieldsOf(doc.points).find((f) => f.key === fieldSelect.value) || null;
+    lastDoc = doc;
+    if (isSolid(doc.points)) {
+      const drawn = drawSolid(canvas, doc, reference, field, kase.grid, view);
+      drawColourBar(colourBar, barLabels, field, drawn.range, drawn.uniform);
+      message.textContent = `${drawn.points} points drawn in 3D (x red, y green, z blue): ` +
+        'drag to turn the view, double-click for the first one.';
+      return;
+    }
     const drawn = drawBody(canvas, doc, reference, field, kase.grid);
     drawColourBar(colourBar, barLabels, field, drawn.range, drawn.uniform);
     message.textContent = `${drawn.points} points and ${drawn.curves} boundary curve(s) drawn; ` +
@@ -329,7 +376,7 @@ async function jobPage(id, stale) {
 }
 
 function offerFields(select, columns) {
-  const available = FIELDS.filter((f) => columns[f.needs] && columns[f.needs].length);
+  const available = fieldsOf(columns).filter((f) => columns[f.needs] && columns[f.needs].length);
   const keys = available.map((f) => f.key).join();
   if (select.dataset.keys === keys) return;
   const chosen = select.value;
@@ -389,13 +436,9 @@ function drawBody(canvas, doc, reference, field, grid) {
     ctx.stroke();
   }
 
-  const values = Array.from({ length: n }, (_, i) => (field ? field.value(c, i) : 0));
-  let [lo, hi] = [Infinity, -Infinity];
-  for (const v of values) if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
   // One value everywhere (step 0's displacements): the bar says so rather
   // than show a made-up range around it.
-  const uniform = !(hi > lo) ? (Number.isFinite(lo) ? lo : 0) : null;
-  if (uniform !== null) [lo, hi] = [uniform - 0.5 * Math.abs(uniform || 1), uniform + 0.5 * Math.abs(uniform || 1)];
+  const { values, lo, hi, uniform } = fieldValues(c, field);
   // A point is drawn as a square of its own area (and half a pixel more, so
   // that neighbours meet), at least 2 px across.
   const side = (i) => Math.max(2, 0.5 + scale * Math.sqrt(c.volume && c.volume.length ? c.volume[i] : (h * h) / 4));
@@ -423,6 +466,83 @@ function drawBody(canvas, doc, reference, field, grid) {
   canvas.dataset.points = n;
   canvas.dataset.curves = doc.boundaries.length;
   return { points: n, curves: doc.boundaries.length, range: [lo, hi], uniform };
+}
+
+// A field's values at the points, their range, and the one value of a
+// uniform field (whose range is then made up around it, and the bar says so).
+function fieldValues(columns, field) {
+  const n = columns.position.length;
+  const values = Array.from({ length: n }, (_, i) => (field ? field.value(columns, i) : 0));
+  let [lo, hi] = [Infinity, -Infinity];
+  for (const v of values) if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+  const uniform = !(hi > lo) ? (Number.isFinite(lo) ? lo : 0) : null;
+  if (uniform !== null) [lo, hi] = [uniform - 0.5 * Math.abs(uniform || 1), uniform + 0.5 * Math.abs(uniform || 1)];
+  return { values, lo, hi, uniform };
+}
+
+// The first view of a 3D job: turned 35 degrees about z and tilted 25
+// degrees down, so that all three axes show.
+const START_VIEW = { yaw: -0.6, pitch: 0.45 };
+
+// Draws a 3D job's points as squares of their own size (the cube root of
+// their volume) in an orthographic view turned by `view.yaw` about z and
+// tilted by `view.pitch`, z up, the farthest drawn first; the frame holds
+// this step and step 0 whichever way the view turns; an axis triad and a
+// cell-size bar in the corner.
+function drawSolid(canvas, doc, reference, field, grid, view) {
+  const ctx = canvas.getContext('2d');
+  const { width, height } = canvas;
+  const c = doc.points;
+  const n = c.position.length;
+  const lo3 = [Infinity, Infinity, Infinity];
+  const hi3 = [-Infinity, -Infinity, -Infinity];
+  for (const x of [...c.position, ...reference.position]) {
+    for (let k = 0; k < 3; k++) { lo3[k] = Math.min(lo3[k], x[k]); hi3[k] = Math.max(hi3[k], x[k]); }
+  }
+  const centre = lo3.map((l, k) => (l + hi3[k]) / 2);
+  const radius = Math.max(0.5 * Math.hypot(...hi3.map((h, k) => h - lo3[k])), 1e-12);
+  const scale = 0.45 * Math.min(width, height) / radius;
+  const [cy, sy, cp, sp] = [Math.cos(view.yaw), Math.sin(view.yaw), Math.cos(view.pitch), Math.sin(view.pitch)];
+  // Screen right, screen up and depth (away from the eye) of a vector.
+  const project = ([x, y, z]) => {
+    const [u, w] = [x * cy - y * sy, x * sy + y * cy];
+    return [u, z * cp + w * sp, w * cp - z * sp];
+  };
+  const screen = Array.from({ length: n }, (_, i) => project(c.position[i].map((v, k) => v - centre[k])));
+  const { values, lo, hi, uniform } = fieldValues(c, field);
+  const order = Array.from({ length: n }, (_, i) => i).sort((a, b) => screen[b][2] - screen[a][2]);
+  ctx.clearRect(0, 0, width, height);
+  const h = grid.cell_size;
+  for (const i of order) {
+    const volume = c.volume && c.volume.length ? c.volume[i] : (h * h * h) / 8;
+    const s = Math.max(2, 0.5 + scale * Math.cbrt(volume));
+    ctx.fillStyle = colour((values[i] - lo) / (hi - lo));
+    ctx.fillRect(width / 2 + scale * screen[i][0] - s / 2, height / 2 - scale * screen[i][1] - s / 2, s, s);
+  }
+  // The axes, from a corner.
+  const [ax, ay, arm] = [40, height - 40, 26];
+  ctx.lineWidth = 2;
+  ctx.font = '12px sans-serif';
+  [['x', [1, 0, 0], '#d00'], ['y', [0, 1, 0], '#080'], ['z', [0, 0, 1], '#00c']].forEach(([name, e, ink]) => {
+    const [u, v] = project(e);
+    ctx.strokeStyle = ink;
+    ctx.fillStyle = ink;
+    ctx.beginPath();
+    ctx.moveTo(ax, ay);
+    ctx.lineTo(ax + arm * u, ay - arm * v);
+    ctx.stroke();
+    ctx.fillText(name, ax + (arm + 6) * u - 3, ay - (arm + 6) * v + 4);
+  });
+  // A scale bar of one cell, in the other corner.
+  ctx.fillStyle = '#222';
+  ctx.fillRect(width - 12 - h * scale, height - 14, h * scale, 3);
+  ctx.textAlign = 'right';
+  ctx.fillText(`h = ${h} m`, width - 12, height - 20);
+  ctx.textAlign = 'start';
+  canvas.dataset.points = n;
+  canvas.dataset.curves = 0;
+  canvas.dataset.view = `${view.yaw.toFixed(3)},${view.pitch.toFixed(3)}`;
+  return { points: n, curves: 0, range: [lo, hi], uniform };
 }
 
 function drawColourBar(bar, labels, field, [lo, hi], uniform = null) {
@@ -532,16 +652,19 @@ function resultPlots(result, kase) {
   }
   const supports = staged ? [] : (kase.supports || []);
   const count = Math.max(0, ...result.reactions.map((r) => r.supports.length));
+  // Reactions of three components in 3D, forces rather than per unit thickness.
+  const dimension = result.reactions.length ? result.reactions[0].applied_load.length : 2;
   if (count) {
     const series = [];
     for (let j = 0; j < count; j++) {
       const name = supports[j] ? `support ${j} (${supports[j].fix})` : `support ${j}`;
-      for (const [c, axis] of [[0, 'F_x'], [1, 'F_y']]) {
+      for (const [c, axis] of [[0, 'F_x'], [1, 'F_y'], [2, 'F_z']].slice(0, dimension)) {
         const points = result.reactions.filter((r) => j < r.supports.length).map((r) => [x(r), r.supports[j][c]]);
         series.push({ label: `${name} ${axis}`, points });
       }
     }
-    figures.push(linePlot('reactions', xLabel, 'force per unit thickness (N/m)', series, { empty }));
+    const unit = dimension === 3 ? 'force (N)' : 'force per unit thickness (N/m)';
+    figures.push(linePlot('reactions', xLabel, unit, series, { empty }));
   }
   figures.push(linePlot('Newton iterations per step', 'load step', 'iterations',
     [{ label: 'iterations', points: result.newton.filter((s) => s.step > 0).map((s) => [s.step, s.iterations]) }], { bars: true, empty }));
