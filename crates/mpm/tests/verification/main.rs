@@ -7,6 +7,7 @@ mod common;
 mod arc_length;
 mod bodies;
 mod cantilever;
+mod cantilever3d;
 mod column;
 mod column3d;
 mod footing;
