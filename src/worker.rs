@@ -16,7 +16,8 @@ use std::time::{Duration, Instant};
 use mpm::case::OutputSpec;
 use mpm::case::solid::{SolidCase, SolidOutput};
 use mpm::{
-    Case, Checkpoint, MaterialPoints, Observer, RunReport, Simulation, StepReport, StepState,
+    Case, Checkpoint, CheckpointError, Observer, RunReport, Simulation, SolidCheckpoint,
+    SolidStepState, StepReport, StepState,
 };
 use tokio::runtime::Handle;
 use tokio::sync::Notify;
@@ -211,7 +212,7 @@ fn run_job(shared: &Shared, owner: &str, job: Claimed) -> Ran {
     };
     let outcome = catch_unwind(AssertUnwindSafe(|| {
         if mpm::case::solid::is_solid(&job.case_json) {
-            run_solid(&job, &mut observer)
+            run_solid(shared, owner, &job, &mut observer)
         } else {
             run_plane(shared, owner, &job, &mut observer)
         }
@@ -292,14 +293,13 @@ fn run_plane(
         crate::config::CheckpointSchedule::new(shared.config.checkpoint_every, sim.points.len());
     observer.output = case.output.clone();
     if let Some((step, state)) = &job.checkpoint
-        && !resume(&mut sim, job.id, *step, state)
+        && !resume(
+            job.id,
+            *step,
+            Checkpoint::from_bytes(state).and_then(|c| sim.restore(&c)),
+        )
     {
-        let reset = shared
-            .runtime
-            .block_on(shared.store.start_over(job.id, owner));
-        if let Err(e) = reset {
-            observer.store_error = Some(e.to_string());
-        }
+        start_over(shared, owner, job, observer);
     }
     if sim.steps_done() == 0 {
         // Step 0, the undeformed state, so a viewer shows the start.
@@ -314,26 +314,55 @@ fn run_plane(
     })
 }
 
-/// Runs a claimed 3D job (`analysis.type: "3d"`). A 3D run keeps no
-/// checkpoints yet, so a job claimed again starts over from step 1 (its
-/// stored steps are written again as it goes).
-fn run_solid(job: &Claimed, observer: &mut JobObserver<'_>) -> Result<RunReport, Failure> {
+/// Runs a claimed 3D job (`analysis.type: "3d"`), from its checkpoint if
+/// it has one, as [`run_plane`] does.
+fn run_solid(
+    shared: &Shared,
+    owner: &str,
+    job: &Claimed,
+    observer: &mut JobObserver<'_>,
+) -> Result<RunReport, Failure> {
     // Validated on submission, as a plane-strain case is.
     let case = SolidCase::from_json(&job.case_json)
         .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
     let mut sim = Simulation::from_solid_case(&case)
         .map_err(|e| Failure::new(FailureKind::InvalidCase, e.to_string()))?;
-    observer.solid = Some((case.output.clone(), sim.load_steps));
-    // Step 0, the undeformed state, so a viewer shows the start.
-    observer.solid_step_finished(&sim.initial_report(), &sim.points);
+    observer.checkpoints =
+        crate::config::CheckpointSchedule::new(shared.config.checkpoint_every, sim.points.len());
+    observer.solid = Some(case.output.clone());
+    if let Some((step, state)) = &job.checkpoint
+        && !resume(
+            job.id,
+            *step,
+            SolidCheckpoint::from_bytes(state).and_then(|c| sim.restore(&c)),
+        )
+    {
+        start_over(shared, owner, job, observer);
+    }
+    if sim.steps_done() == 0 {
+        // Step 0, the undeformed state, so a viewer shows the start.
+        let (report, state) = sim.initial_step();
+        observer.solid_step_finished(&report, &state);
+    }
     sim.run(observer).map_err(Failure::from)
 }
 
-/// Restores a claimed job's checkpoint; whether it could. One that does not
+/// Makes the claimed job start over from step 1 (its checkpoint could not
+/// be restored).
+fn start_over(shared: &Shared, owner: &str, job: &Claimed, observer: &mut JobObserver<'_>) {
+    let reset = shared
+        .runtime
+        .block_on(shared.store.start_over(job.id, owner));
+    if let Err(e) = reset {
+        observer.store_error = Some(e.to_string());
+    }
+}
+
+/// Whether a claimed job's checkpoint was `restored`. One that does not
 /// fit (a solver of another version wrote it) is logged, and the job starts
 /// over from step 1.
-fn resume(sim: &mut Simulation, job: i64, step: i64, state: &[u8]) -> bool {
-    match Checkpoint::from_bytes(state).and_then(|c| sim.restore(&c)) {
+fn resume(job: i64, step: i64, restored: Result<(), CheckpointError>) -> bool {
+    match restored {
         Ok(()) => {
             tracing::info!(job, step, "resuming from the checkpoint");
             true
@@ -424,8 +453,8 @@ struct JobObserver<'a> {
     checkpoints: crate::config::CheckpointSchedule,
     /// Which steps store their points, and which columns.
     output: OutputSpec,
-    /// A 3D run's: which steps store their points, of how many.
-    solid: Option<(SolidOutput, usize)>,
+    /// A 3D run's: which steps store their points.
+    solid: Option<SolidOutput>,
     timed_out: bool,
     store_error: Option<String>,
     /// The store error was the database's storage failing (a full disk).
@@ -465,12 +494,16 @@ impl Observer for JobObserver<'_> {
         self.save(report, &document, checkpoint.as_deref());
     }
 
-    fn solid_step_finished(&mut self, report: &StepReport, points: &MaterialPoints<3>) {
-        let Some((output, load_steps)) = &self.solid else {
+    fn solid_step_finished(&mut self, report: &StepReport, state: &SolidStepState<'_>) {
+        let Some(output) = &self.solid else {
             return;
         };
-        let document = StoredStep::solid(report, points, output, *load_steps);
-        self.save(report, &document, None);
+        let document = StoredStep::solid(report, state.points, output, state.load_steps());
+        let checkpoint = self
+            .checkpoints
+            .due(report.step)
+            .then(|| state.checkpoint().to_bytes());
+        self.save(report, &document, checkpoint.as_deref());
     }
 
     fn should_cancel(&mut self) -> bool {

@@ -127,7 +127,7 @@ fn wait_all_final(base: &str, limit: Duration) -> BTreeMap<i64, Value> {
 /// The largest distance of each job's final points from the CLI's run of
 /// the same case.
 fn worst_against_cli(base: &str, jobs: &BTreeMap<i64, Value>, cases: &BTreeMap<i64, Value>) -> f64 {
-    let mut reference: BTreeMap<String, Vec<[f64; 2]>> = BTreeMap::new();
+    let mut reference: BTreeMap<String, Vec<Vec<f64>>> = BTreeMap::new();
     let mut worst: f64 = 0.0;
     for (id, job) in jobs {
         let case = &cases[id];

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use common::{
     Process, TempDir, agent, base_url, cli_final_positions, example, is_final, largest_difference,
-    positions, request, slow_case, spawn_mpm, submit_to, try_get_json, wait_for,
+    positions, request, slow_case, slow_solid_case, spawn_mpm, submit_to, try_get_json, wait_for,
 };
 use serde_json::{Value, json};
 
@@ -42,13 +42,12 @@ fn start_server_with(database: &Path, flags: &[&str]) -> (Process, String) {
 /// restarts with workers: the job resumes after exactly that step (the
 /// worker stored a checkpoint with every step) and ends where the CLI's
 /// uninterrupted run ends.
-fn a_job_resumes_after_its_server_is_stopped_with(signal: &str) {
+fn a_job_resumes_after_its_server_is_stopped_with(signal: &str, case: Value) {
     let dir = TempDir::new("recovery");
     let database = dir.0.join("jobs.sqlite");
     let http = agent();
 
     let (mut first, base) = start_server_with(&database, &["--checkpoint-every", "1"]);
-    let case = slow_case(40);
     let id = submit_to(&base, &case);
     let before = wait_for(&http, &base, id, Duration::from_secs(120), |j| {
         j["progress"]["step"].as_i64() >= Some(2)
@@ -95,7 +94,13 @@ fn a_job_resumes_after_its_server_is_stopped_with(signal: &str) {
 /// worker's lease expires, as its second attempt.
 #[test]
 fn a_job_resumes_after_its_server_is_killed() {
-    a_job_resumes_after_its_server_is_stopped_with("-KILL");
+    a_job_resumes_after_its_server_is_stopped_with("-KILL", slow_case(40));
+}
+
+/// The same for a 3D job, whose checkpoints are its own format.
+#[test]
+fn a_3d_job_resumes_after_its_server_is_killed() {
+    a_job_resumes_after_its_server_is_stopped_with("-KILL", slow_solid_case(40));
 }
 
 /// SIGTERM (`docker stop`): the running job goes back to the queue at its
@@ -103,7 +108,7 @@ fn a_job_resumes_after_its_server_is_killed() {
 /// ran again from step 1.
 #[test]
 fn a_job_resumes_after_its_server_is_stopped() {
-    a_job_resumes_after_its_server_is_stopped_with("-TERM");
+    a_job_resumes_after_its_server_is_stopped_with("-TERM", slow_case(40));
 }
 
 #[test]

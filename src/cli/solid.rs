@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use mpm::case::solid::{SolidCase, SolidOutput};
 use mpm::report::SolidPointColumns;
 use mpm::vtk::write_solid_vtu;
-use mpm::{MaterialPoints, Observer, Simulation, StepReport};
+use mpm::{MaterialPoints, Observer, Simulation, SolidStepState, StepReport};
 use mpm_service::jobs::admission::{PointLimit, Rejection, check_points};
 use mpm_service::results::{
     CASE_FILE, POINTS_SERIES, STEPS_DIR, SUMMARY_FILE, Series, StepFiles, Summary,
@@ -80,7 +80,8 @@ pub fn run(
     };
     if point_files {
         fs::create_dir_all(out.join(STEPS_DIR))?;
-        writer.write_step(&sim.initial_report(), &sim.points)?;
+        let (report, state) = sim.initial_step();
+        writer.write_step(&report, state.points)?;
     }
     let result = sim.run(&mut writer);
     writer.progress.clear();
@@ -173,7 +174,8 @@ impl Observer for SolidWriter {
         self.progress.iteration(iteration, residual);
     }
 
-    fn solid_step_finished(&mut self, report: &StepReport, points: &MaterialPoints<3>) {
+    fn solid_step_finished(&mut self, report: &StepReport, state: &SolidStepState<'_>) {
+        let points = state.points;
         self.progress.clear();
         print_step(report);
         if self.io_error.is_none()

@@ -388,6 +388,16 @@ pub fn example(name: &str) -> Value {
 
 /// A case that takes tens of milliseconds a step: the self-weight column
 /// made 10 m wide at 0.5 m cells (8000 points, GIMP) over `steps` steps.
+/// A 3D case that takes tens of milliseconds a step: the built-in 3D
+/// column at 0.78125 m cells, 4 x 4 x 64 of them (8192 points, GIMP),
+/// over `steps` steps.
+pub fn slow_solid_case(steps: u32) -> Value {
+    let mut case = example("column3d");
+    case["grid"]["cell_size"] = 0.78125.into();
+    case["analysis"]["load_steps"] = steps.into();
+    case
+}
+
 pub fn slow_case(steps: u32) -> Value {
     let mut case = example("column");
     case["grid"]["cell_size"] = 0.5.into();
@@ -493,7 +503,7 @@ pub fn try_get_json(agent: &ureq::Agent, url: &str) -> Option<Value> {
 }
 
 /// Final point positions of the CLI's run of `case` (`mpm run`).
-pub fn cli_final_positions(case: &Value) -> Vec<[f64; 2]> {
+pub fn cli_final_positions(case: &Value) -> Vec<Vec<f64>> {
     let dir = TempDir::new("cli-reference");
     let path = dir.0.join("case.json");
     std::fs::write(&path, case.to_string()).unwrap();
@@ -514,15 +524,15 @@ pub fn cli_final_positions(case: &Value) -> Vec<[f64; 2]> {
 }
 
 /// `points.position` of a step document.
-pub fn positions(step: &Value) -> Vec<[f64; 2]> {
+pub fn positions(step: &Value) -> Vec<Vec<f64>> {
     serde_json::from_value(step["points"]["position"].clone()).unwrap()
 }
 
 /// The largest coordinate difference between two point sets.
-pub fn largest_difference(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+pub fn largest_difference(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
     assert_eq!(a.len(), b.len(), "point counts differ");
     a.iter()
         .zip(b)
-        .flat_map(|(p, q)| [(p[0] - q[0]).abs(), (p[1] - q[1]).abs()])
+        .flat_map(|(p, q)| p.iter().zip(q).map(|(x, y)| (x - y).abs()))
         .fold(0.0, f64::max)
 }

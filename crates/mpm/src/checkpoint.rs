@@ -68,6 +68,57 @@ pub struct Checkpoint {
     pub(crate) settled: Option<Settled>,
 }
 
+/// The encoding's version of a 3D run's checkpoint ([`SolidCheckpoint`]),
+/// apart from the plane-strain ones so that neither reads as the other.
+pub(crate) const SOLID_FORMAT: u32 = 3001;
+
+/// The state of a 3D run after `steps_done` load steps: the points'
+/// positions, deformation gradients, histories, yield flags and stresses,
+/// the step-size control, Newton's predictor, and what the last step
+/// reported. A 3D run has no probes, boundary loops, implicit-boundary
+/// anchors, arc length or strength reduction yet (issue 38).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SolidCheckpoint {
+    pub(crate) format: u32,
+    pub(crate) fingerprint: u64,
+    pub(crate) steps_done: usize,
+    pub(crate) position: Vec<[f64; 3]>,
+    /// `F`, column-major.
+    pub(crate) deformation: Vec<[f64; 9]>,
+    /// `b - I` (the small strain for linear elasticity), column-major, and
+    /// the accumulated plastic strain.
+    pub(crate) history: Vec<([f64; 9], f64)>,
+    pub(crate) yielding: Vec<bool>,
+    /// Cauchy stress, column-major.
+    pub(crate) stress: Vec<[f64; 9]>,
+    pub(crate) step_size: StepSizeState,
+    pub(crate) last_increment: Option<IncrementState>,
+    pub(crate) settled: Option<Settled>,
+}
+
+impl SolidCheckpoint {
+    /// Load steps done when it was taken; a resumed run goes on with the next.
+    pub fn steps_done(&self) -> usize {
+        self.steps_done
+    }
+
+    pub fn to_bytes(&self) -> Vec<u8> {
+        postcard::to_stdvec(self).expect("a checkpoint holds only numbers and vectors")
+    }
+
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, CheckpointError> {
+        let checkpoint: SolidCheckpoint =
+            postcard::from_bytes(bytes).map_err(|e| CheckpointError::Unreadable(e.to_string()))?;
+        if checkpoint.format != SOLID_FORMAT {
+            return Err(CheckpointError::Unreadable(format!(
+                "format {} (this solver reads {SOLID_FORMAT} for 3D runs)",
+                checkpoint.format
+            )));
+        }
+        Ok(checkpoint)
+    }
+}
+
 /// The arc-length control between steps: `[length, first length, load
 /// factor]`, easy steps in a row, and the last increment `(node keys,
 /// displacements, change of load factor)`.

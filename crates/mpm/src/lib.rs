@@ -54,9 +54,9 @@ pub mod update;
 pub mod vtk;
 
 pub use case::{Case, CaseError, CaseErrorKind};
-pub use checkpoint::{Checkpoint, CheckpointError};
+pub use checkpoint::{Checkpoint, CheckpointError, SolidCheckpoint};
 pub use newton::{NewtonSettings, SolveError};
-pub use observer::{NoObserver, Observer, StepState};
+pub use observer::{NoObserver, Observer, SolidStepState, StepState};
 pub use particles::MaterialPoints;
 pub use report::{RunReport, StepReport};
 pub use stepper::{Simulation, Substepping};

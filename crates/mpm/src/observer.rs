@@ -2,7 +2,7 @@
 //! runner and the job service implement [`Observer`].
 
 use crate::boundary::{self, BoundaryLoop, BoundaryOutput};
-use crate::checkpoint::Checkpoint;
+use crate::checkpoint::{Checkpoint, SolidCheckpoint};
 use crate::newton::Monitor;
 use crate::particles::MaterialPoints;
 use crate::report::StepReport;
@@ -49,6 +49,32 @@ impl<'a> StepState<'a> {
     }
 }
 
+/// The state after a converged step of a 3D run, as observers see it.
+pub struct SolidStepState<'a> {
+    pub points: &'a MaterialPoints<3>,
+    run: &'a crate::Simulation<3>,
+}
+
+impl<'a> SolidStepState<'a> {
+    pub(crate) fn new(run: &'a crate::Simulation<3>) -> Self {
+        Self {
+            points: &run.points,
+            run,
+        }
+    }
+
+    /// Load steps in the run.
+    pub fn load_steps(&self) -> usize {
+        self.run.load_steps
+    }
+
+    /// The run's state after this step, to resume from
+    /// ([`crate::Simulation::<3>::restore`]).
+    pub fn checkpoint(&self) -> SolidCheckpoint {
+        self.run.checkpoint()
+    }
+}
+
 pub trait Observer {
     /// A load step is about to start (`step` counts from 1).
     fn step_started(&mut self, _step: usize, _n_steps: usize) {}
@@ -56,9 +82,8 @@ pub trait Observer {
     fn newton_iteration(&mut self, _step: usize, _iteration: usize, _residual: f64) {}
     /// A load step converged; `state` holds the updated points.
     fn step_finished(&mut self, _report: &StepReport, _state: &StepState<'_>) {}
-    /// A load step of a 3D run converged; `points` are the updated
-    /// points (the 3D case's writers are still to come: issue 38).
-    fn solid_step_finished(&mut self, _report: &StepReport, _points: &MaterialPoints<3>) {}
+    /// A load step of a 3D run converged; `state` holds the updated points.
+    fn solid_step_finished(&mut self, _report: &StepReport, _state: &SolidStepState<'_>) {}
     /// Polled at every Newton iteration; `true` stops the run with
     /// [`crate::SolveError::Cancelled`].
     fn should_cancel(&mut self) -> bool {

@@ -2,14 +2,16 @@
 //! simulation built from the same case (what a checkpoint holds, and its
 //! encoding: `checkpoint.rs`).
 
-use nalgebra::Matrix2;
+use nalgebra::{Matrix2, Matrix3};
 
 use crate::checkpoint::{
     ArcControlState, Checkpoint, CheckpointError, FORMAT, HistoryState, IncrementState, LoopState,
-    StepSizeState,
+    SOLID_FORMAT, SolidCheckpoint, StepSizeState,
 };
 use crate::material::CauchyStress;
-use crate::stepper::{ArcState, LastIncrement, Simulation, StepSize};
+use crate::particles::Dim;
+use crate::report::Settled;
+use crate::stepper::{ArcState, LastIncrement, RunSpace, Simulation, StepSize};
 use crate::strength_reduction::{Failed, ReductionState};
 
 impl LastIncrement {
@@ -24,12 +26,143 @@ impl From<IncrementState> for LastIncrement {
     }
 }
 
-impl Simulation {
+impl<const D: usize> Simulation<D>
+where
+    Dim<D>: RunSpace<D>,
+{
     /// Load steps converged so far.
     pub fn steps_done(&self) -> usize {
         self.steps_done
     }
 
+    fn step_size_state(&self) -> StepSizeState {
+        StepSizeState {
+            size: self.step_size.size,
+            easy_in_a_row: self.step_size.easy_in_a_row,
+            clean_steps: self.step_size.clean_steps,
+            wait: self.step_size.wait,
+        }
+    }
+
+    /// Puts back the step-size control, Newton's predictor, what the last
+    /// step reported and the steps done.
+    fn restore_controls(
+        &mut self,
+        s: &StepSizeState,
+        last_increment: &Option<IncrementState>,
+        settled: &Option<Settled>,
+        steps_done: usize,
+    ) {
+        self.step_size = StepSize {
+            size: s.size,
+            easy_in_a_row: s.easy_in_a_row,
+            clean_steps: s.clean_steps,
+            wait: s.wait,
+        };
+        self.last_increment = last_increment.clone().map(LastIncrement::from);
+        self.settled.clone_from(settled);
+        self.steps_done = steps_done;
+        self.analysed = None;
+    }
+
+    /// FNV-1a over what a case fixes before any step: the load steps, the
+    /// seeded points (reference positions, volumes, bodies), the supports'
+    /// anchors and the probes' reference positions.
+    fn fingerprint(&self) -> u64 {
+        let mut hash = Fnv::default();
+        hash.add(self.load_steps as u64);
+        hash.add(self.points.len() as u64);
+        for (x, v) in self.points.reference.iter().zip(&self.points.volume0) {
+            for c in x {
+                hash.add(c.to_bits());
+            }
+            hash.add(v.to_bits());
+        }
+        for m in &self.points.material {
+            hash.add(u64::from(*m));
+        }
+        hash.add(self.first_stage_anchors as u64);
+        if self.stages.len() > 1 {
+            for stage in &self.stages {
+                hash.add(stage.load_steps as u64);
+            }
+        }
+        for x in &self.probes.reference {
+            for c in x {
+                hash.add(c.to_bits());
+            }
+        }
+        hash.0
+    }
+}
+
+impl Simulation<3> {
+    /// A 3D run's state now, after [`Simulation::steps_done`] load steps.
+    pub fn checkpoint(&self) -> SolidCheckpoint {
+        let p = &self.points;
+        let columns = |m: &Matrix3<f64>| -> [f64; 9] { m.as_slice().try_into().expect("3x3") };
+        SolidCheckpoint {
+            format: SOLID_FORMAT,
+            fingerprint: self.fingerprint(),
+            steps_done: self.steps_done,
+            position: p.position.clone(),
+            deformation: p.deformation.iter().map(columns).collect(),
+            history: (p.history.iter())
+                .map(|h| (columns(&h.tensor), h.plastic_strain))
+                .collect(),
+            yielding: p.yielding.clone(),
+            stress: p.stress.iter().map(columns).collect(),
+            step_size: self.step_size_state(),
+            last_increment: self.last_increment.as_ref().map(LastIncrement::state),
+            settled: self.settled.clone(),
+        }
+    }
+
+    /// Puts a 3D run back where `checkpoint` was taken. `self` must be
+    /// built from the same case and not yet have run; nothing changes on
+    /// error.
+    pub fn restore(&mut self, checkpoint: &SolidCheckpoint) -> Result<(), CheckpointError> {
+        let c = checkpoint;
+        if c.fingerprint != self.fingerprint() {
+            return Err(CheckpointError::OtherCase(
+                "the seeded points or load steps",
+            ));
+        }
+        let n = self.points.len();
+        let lengths = [
+            c.position.len(),
+            c.deformation.len(),
+            c.history.len(),
+            c.yielding.len(),
+            c.stress.len(),
+        ];
+        if lengths.iter().any(|&l| l != n) {
+            return Err(CheckpointError::OtherCase("the material point counts"));
+        }
+        if c.steps_done > self.load_steps {
+            return Err(CheckpointError::Unreadable(
+                "it is past the case's last load step".into(),
+            ));
+        }
+        let p = &mut self.points;
+        p.position.clone_from(&c.position);
+        for (f, s) in p.deformation.iter_mut().zip(&c.deformation) {
+            f.copy_from_slice(s);
+        }
+        for (h, (tensor, plastic_strain)) in p.history.iter_mut().zip(&c.history) {
+            h.tensor.copy_from_slice(tensor);
+            h.plastic_strain = *plastic_strain;
+        }
+        p.yielding.clone_from(&c.yielding);
+        for (s, saved) in p.stress.iter_mut().zip(&c.stress) {
+            s.copy_from_slice(saved);
+        }
+        self.restore_controls(&c.step_size, &c.last_increment, &c.settled, c.steps_done);
+        Ok(())
+    }
+}
+
+impl Simulation {
     /// The run's state now, after [`Simulation::steps_done`] load steps.
     pub fn checkpoint(&self) -> Checkpoint {
         let p = &self.points;
@@ -69,12 +202,7 @@ impl Simulation {
             probes: self.probes.position.clone(),
             anchors_moved: self.anchors.iter().map(|a| a.moved()).collect(),
             loops: self.loops.iter().map(LoopState::of).collect(),
-            step_size: StepSizeState {
-                size: self.step_size.size,
-                easy_in_a_row: self.step_size.easy_in_a_row,
-                clean_steps: self.step_size.clean_steps,
-                wait: self.step_size.wait,
-            },
+            step_size: self.step_size_state(),
             arc: self.arc.as_ref().map(|a| ArcControlState {
                 arc: [a.length, a.first_length, a.load_factor],
                 easy_in_a_row: a.easy_in_a_row,
@@ -168,13 +296,6 @@ impl Simulation {
         for (a, moved) in self.anchors.iter_mut().zip(&c.anchors_moved) {
             a.set_moved(*moved);
         }
-        let s = &c.step_size;
-        self.step_size = StepSize {
-            size: s.size,
-            easy_in_a_row: s.easy_in_a_row,
-            clean_steps: s.clean_steps,
-            wait: s.wait,
-        };
         self.arc = c.arc.as_ref().map(|a| {
             let [length, first_length, load_factor] = a.arc;
             ArcState {
@@ -185,7 +306,6 @@ impl Simulation {
                 last: a.last.clone().map(LastIncrement::from),
             }
         });
-        self.last_increment = c.last_increment.clone().map(LastIncrement::from);
         // The materials are the case's in a fresh simulation; the
         // reduction's own are those at the factor that last held.
         self.reduction = c
@@ -200,38 +320,8 @@ impl Simulation {
         if let Some(r) = &self.reduction {
             self.points.materials = r.materials_at(r.held);
         }
-        self.settled.clone_from(&c.settled);
-        self.steps_done = c.steps_done;
-        self.analysed = None;
+        self.restore_controls(&c.step_size, &c.last_increment, &c.settled, c.steps_done);
         Ok(())
-    }
-
-    /// FNV-1a over what a case fixes before any step: the load steps, the
-    /// seeded points (reference positions, volumes, bodies), the supports'
-    /// anchors and the probes' reference positions.
-    fn fingerprint(&self) -> u64 {
-        let mut hash = Fnv::default();
-        hash.add(self.load_steps as u64);
-        hash.add(self.points.len() as u64);
-        for (x, v) in self.points.reference.iter().zip(&self.points.volume0) {
-            hash.add(x[0].to_bits());
-            hash.add(x[1].to_bits());
-            hash.add(v.to_bits());
-        }
-        for m in &self.points.material {
-            hash.add(u64::from(*m));
-        }
-        hash.add(self.first_stage_anchors as u64);
-        if self.stages.len() > 1 {
-            for stage in &self.stages {
-                hash.add(stage.load_steps as u64);
-            }
-        }
-        for x in &self.probes.reference {
-            hash.add(x[0].to_bits());
-            hash.add(x[1].to_bits());
-        }
-        hash.0
     }
 }
 
@@ -254,7 +344,7 @@ impl Fnv {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Case, Observer, RunReport, SolveError, StepReport, StepState};
+    use crate::{Case, Observer, RunReport, SolidStepState, SolveError, StepReport, StepState};
 
     /// Takes a checkpoint after step `stop_after` and stops the run there,
     /// as a killed worker would (a kill between steps loses at most the
@@ -273,6 +363,59 @@ mod tests {
         fn should_cancel(&mut self) -> bool {
             self.taken.is_some()
         }
+    }
+
+    /// The built-in 3D column (40 steps, its points crossing cells)
+    /// stopped after step 20 and resumed from its checkpoint in a fresh
+    /// simulation ends where the straight run ends, in the same Newton
+    /// iterations; a plane-strain checkpoint is not read as a 3D one.
+    #[test]
+    fn a_resumed_3d_run_ends_where_the_straight_run_ends() {
+        struct StopSolid(Option<Vec<u8>>);
+        impl Observer for StopSolid {
+            fn solid_step_finished(&mut self, report: &StepReport, state: &SolidStepState<'_>) {
+                if report.step == 20 {
+                    self.0 = Some(state.checkpoint().to_bytes());
+                }
+            }
+            fn should_cancel(&mut self) -> bool {
+                self.0.is_some()
+            }
+        }
+        let text = crate::case::builtin::get("column3d").unwrap();
+        let case = crate::case::solid::SolidCase::from_json(text).unwrap();
+        let mut straight = Simulation::from_solid_case(&case).unwrap();
+        let whole = straight.run(&mut crate::NoObserver).unwrap();
+        let mut first = Simulation::from_solid_case(&case).unwrap();
+        let mut stop = StopSolid(None);
+        assert!(matches!(
+            first.run(&mut stop),
+            Err(SolveError::Cancelled { .. })
+        ));
+        let bytes = stop.0.expect("a checkpoint after step 20");
+        assert!(Checkpoint::from_bytes(&bytes).is_err());
+        let checkpoint = SolidCheckpoint::from_bytes(&bytes).unwrap();
+        assert_eq!(checkpoint.steps_done(), 20);
+        let mut resumed = Simulation::from_solid_case(&case).unwrap();
+        resumed.restore(&checkpoint).unwrap();
+        let rest = resumed.run(&mut crate::NoObserver).unwrap();
+        assert_eq!(rest.steps.len(), 20);
+        for (a, b) in rest.steps.iter().zip(&whole.steps[20..]) {
+            assert_eq!((a.step, a.newton.iterations), (b.step, b.newton.iterations));
+        }
+        let moved = (resumed.points.position.iter())
+            .zip(&straight.points.position)
+            .flat_map(|(a, b)| (0..3).map(move |k| (a[k] - b[k]).abs()))
+            .fold(0.0, f64::max);
+        assert!(moved <= 1e-12 * 50.0, "positions differ by {moved:e}");
+        let stressed = (resumed.points.stress.iter())
+            .zip(&straight.points.stress)
+            .map(|(a, b)| (a - b).abs().max())
+            .fold(0.0, f64::max);
+        assert!(stressed <= 1e-12 * 4.0e4, "stresses differ by {stressed:e}");
+        // A plane-strain case's checkpoint is refused by a 3D run.
+        let plane = Simulation::new(&footing()).unwrap().checkpoint().to_bytes();
+        assert!(SolidCheckpoint::from_bytes(&plane).is_err());
     }
 
     fn footing() -> Case {

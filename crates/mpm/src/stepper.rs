@@ -37,7 +37,7 @@ use crate::grid::{Basis, Connectivity, Grid, NodeKey, increment};
 use crate::linsolve::{SolveCounts, SolveTally, SolverSettings};
 use crate::material::StiffnessScales;
 use crate::newton::{self, SolveError};
-use crate::observer::{self, Observer, StepState};
+use crate::observer::{self, Observer, SolidStepState, StepState};
 use crate::particles::{Dim, MaterialPoints, Space, geostatic};
 use crate::probes::Probes;
 use crate::report::{RunReport, Settled, StepReport, StepTimings, StrengthStep, SupportTraction};
@@ -239,6 +239,14 @@ impl Simulation {
 
     fn step_state(&self) -> StepState<'_> {
         StepState::new(&self.points, &self.loops, self)
+    }
+}
+
+impl Simulation<3> {
+    /// Step 0 of a 3D run: the state before any load, as a report and the
+    /// points, for writers that show the start.
+    pub fn initial_step(&self) -> (StepReport, SolidStepState<'_>) {
+        (self.initial_report(), SolidStepState::new(self))
     }
 }
 
@@ -1082,7 +1090,7 @@ impl RunSpace<3> for Dim<3> {
     }
 
     fn step_finished(sim: &Simulation<3>, observer: &mut dyn Observer, report: &StepReport) {
-        observer.solid_step_finished(report, &sim.points);
+        observer.solid_step_finished(report, &SolidStepState::new(sim));
     }
 }
 
@@ -1123,7 +1131,7 @@ impl observer::Run for Simulation {
     }
 
     fn checkpoint(&self) -> crate::Checkpoint {
-        Simulation::checkpoint(self)
+        Simulation::<2>::checkpoint(self)
     }
 }
 

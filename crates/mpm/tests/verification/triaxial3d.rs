@@ -32,7 +32,7 @@ use mpm::model::{SolidRun, face_loads};
 use mpm::particles::MaterialPoints;
 use mpm::particles::solid_seeding::{Solid, fill};
 use mpm::supports::PlaneSupport;
-use mpm::{Observer, Simulation, StepReport};
+use mpm::{Observer, Simulation, SolidStepState, StepReport};
 use nalgebra::Matrix3;
 
 /// The cube of `material` confined by `p` (Pa) and pushed just past
@@ -84,7 +84,8 @@ fn push_past_yield(material: Material, p: f64, strength: f64) -> (MaterialPoints
 struct FirstYield(Option<usize>);
 
 impl Observer for FirstYield {
-    fn solid_step_finished(&mut self, report: &StepReport, points: &MaterialPoints<3>) {
+    fn solid_step_finished(&mut self, report: &StepReport, state: &SolidStepState<'_>) {
+        let points = state.points;
         if self.0.is_none() && points.yielding.iter().any(|&y| y) {
             self.0 = Some(report.step);
         }
