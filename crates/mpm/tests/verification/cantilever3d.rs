@@ -82,8 +82,8 @@ fn the_3d_cantilever_converges_to_the_finite_element_deflection() {
         errors.push(error);
     }
     for pair in errors.windows(2) {
-        for k in 0..2 {
-            let order = (pair[0][k] / pair[1][k]).log2();
+        for (coarse, fine) in pair[0].iter().zip(&pair[1]) {
+            let order = (coarse / fine).log2();
             assert!(order > 1.4, "order {order}: {errors:?}");
         }
     }
