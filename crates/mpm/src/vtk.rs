@@ -25,12 +25,6 @@ pub fn write_vtu(out: impl Write, cols: &PointColumns) -> io::Result<()> {
         .iter()
         .flat_map(|s| [s[0], s[1], s[3], s[2], 0.0, 0.0])
         .collect();
-    let body: Vec<f64> = cols.body.iter().map(|&b| b as f64).collect();
-    let yielding: Vec<f64> = cols
-        .yielding
-        .iter()
-        .map(|&y| if y { 1.0 } else { 0.0 })
-        .collect();
     write_columns(
         out,
         &VtuColumns {
@@ -40,19 +34,15 @@ pub fn write_vtu(out: impl Write, cols: &PointColumns) -> io::Result<()> {
             stress: &stress,
             volume: &cols.volume,
             jacobian: &cols.jacobian,
-            body: &body,
+            body: &cols.body,
             plastic_strain: &cols.plastic_strain,
-            yielding: &yielding,
+            yielding: &cols.yielding,
         },
     )
 }
 
 /// Writes a 3D run's points as [`write_vtu`] writes a plane-strain run's.
 pub fn write_solid_vtu(out: impl Write, cols: &SolidPointColumns) -> io::Result<()> {
-    let body: Vec<f64> = cols.body.iter().map(|&b| b as f64).collect();
-    let yielding: Vec<f64> = (cols.yielding.iter())
-        .map(|&y| if y { 1.0 } else { 0.0 })
-        .collect();
     write_columns(
         out,
         &VtuColumns {
@@ -62,9 +52,9 @@ pub fn write_solid_vtu(out: impl Write, cols: &SolidPointColumns) -> io::Result<
             stress: cols.stress.as_flattened(),
             volume: &cols.volume,
             jacobian: &cols.jacobian,
-            body: &body,
+            body: &cols.body,
             plastic_strain: &cols.plastic_strain,
-            yielding: &yielding,
+            yielding: &cols.yielding,
         },
     )
 }
@@ -79,9 +69,9 @@ struct VtuColumns<'a> {
     stress: &'a [f64],
     volume: &'a [f64],
     jacobian: &'a [f64],
-    body: &'a [f64],
+    body: &'a [u32],
     plastic_strain: &'a [f64],
-    yielding: &'a [f64],
+    yielding: &'a [bool],
 }
 
 fn write_columns(mut out: impl Write, cols: &VtuColumns<'_>) -> io::Result<()> {
@@ -105,6 +95,11 @@ fn write_columns(mut out: impl Write, cols: &VtuColumns<'_>) -> io::Result<()> {
         blocks.push(bytes);
     };
     let f64s = |v: &[f64]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    // The body index and the yield flag as Float64, as ParaView colours by.
+    let body: Vec<f64> = cols.body.iter().map(|&b| f64::from(b)).collect();
+    let yielding: Vec<f64> = (cols.yielding.iter())
+        .map(|&y| if y { 1.0 } else { 0.0 })
+        .collect();
     let i64s = |v: &[i64]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
 
     xml.push_str("<?xml version=\"1.0\"?>\n");
@@ -134,7 +129,7 @@ fn write_columns(mut out: impl Write, cols: &VtuColumns<'_>) -> io::Result<()> {
     array(&mut xml, "stress", "Float64", 6, f64s(cols.stress));
     array(&mut xml, "volume", "Float64", 1, f64s(cols.volume));
     array(&mut xml, "jacobian", "Float64", 1, f64s(cols.jacobian));
-    array(&mut xml, "body", "Float64", 1, f64s(cols.body));
+    array(&mut xml, "body", "Float64", 1, f64s(&body));
     array(
         &mut xml,
         "plastic_strain",
@@ -142,7 +137,7 @@ fn write_columns(mut out: impl Write, cols: &VtuColumns<'_>) -> io::Result<()> {
         1,
         f64s(cols.plastic_strain),
     );
-    array(&mut xml, "yielding", "Float64", 1, f64s(cols.yielding));
+    array(&mut xml, "yielding", "Float64", 1, f64s(&yielding));
     xml.push_str("      </PointData>\n      <Points>\n");
     array(&mut xml, "position", "Float64", 3, f64s(cols.positions));
     xml.push_str("      </Points>\n      <Cells>\n");
