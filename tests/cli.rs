@@ -269,22 +269,16 @@ fn force_replaces_an_earlier_run_and_output_every_thins_the_files() {
     assert_eq!(summary["steps"].as_array().unwrap().len(), 5);
 }
 
-/// A run killed mid-way goes on from its last checkpoint with `--resume`
-/// and ends where an uninterrupted run ends, with every step's report.
-#[test]
-fn resume_goes_on_from_the_last_checkpoint() {
-    // The self-weight column widened to 8000 points over 30 steps: tens of
-    // milliseconds a step, time to kill it part-way.
-    let mut case = example("column");
-    case["grid"]["cell_size"] = 0.5.into();
-    case["grid"]["extent"] = serde_json::json!({"min": [0.0, 0.0], "max": [10.0, 50.0]});
-    case["bodies"][0]["geometry"]["rectangle"]["max"] = serde_json::json!([10.0, 50.0]);
-    case["supports"][1]["on"]["x"] = 10.0.into();
-    case["analysis"]["load_steps"] = 30.into();
-    let dir = temp_dir("resume");
+/// `case` run straight, and run again, killed once its step 4 is written
+/// and resumed with `mpm run --resume`: the scratch folder and its two
+/// output directories.
+fn killed_at_step_4_and_resumed(
+    case: &serde_json::Value,
+    name: &str,
+) -> (Scratch, std::path::PathBuf, std::path::PathBuf) {
+    let dir = temp_dir(name);
     let path = dir.join("case.json");
     std::fs::write(&path, case.to_string()).unwrap();
-
     let straight = dir.join("straight");
     run_ok(&["run", path.to_str().unwrap(), "--out"], &straight);
 
@@ -309,7 +303,6 @@ fn resume_goes_on_from_the_last_checkpoint() {
         !stopped.join("summary.json").exists(),
         "killed after it finished"
     );
-
     let resumed = mpm()
         .arg("run")
         .arg("--resume")
@@ -319,6 +312,22 @@ fn resume_goes_on_from_the_last_checkpoint() {
     let stderr = String::from_utf8_lossy(&resumed.stderr);
     assert!(resumed.status.success(), "{stderr}");
     assert!(stderr.contains("resuming after step"), "{stderr}");
+    (dir, straight, stopped)
+}
+
+/// A run killed mid-way goes on from its last checkpoint with `--resume`
+/// and ends where an uninterrupted run ends, with every step's report.
+#[test]
+fn resume_goes_on_from_the_last_checkpoint() {
+    // The self-weight column widened to 8000 points over 30 steps: tens of
+    // milliseconds a step, time to kill it part-way.
+    let mut case = example("column");
+    case["grid"]["cell_size"] = 0.5.into();
+    case["grid"]["extent"] = serde_json::json!({"min": [0.0, 0.0], "max": [10.0, 50.0]});
+    case["bodies"][0]["geometry"]["rectangle"]["max"] = serde_json::json!([10.0, 50.0]);
+    case["supports"][1]["on"]["x"] = 10.0.into();
+    case["analysis"]["load_steps"] = 30.into();
+    let (_dir, straight, stopped) = killed_at_step_4_and_resumed(&case, "resume");
     let read = |dir: &std::path::Path, file: &str| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(dir.join(file)).unwrap()).unwrap()
     };
@@ -570,11 +579,36 @@ fn a_3d_case_runs_and_its_base_carries_the_weight() {
     assert_eq!(last["points"]["stress"][0].as_array().unwrap().len(), 6);
     let series = std::fs::read_to_string(out.join("points.pvd")).unwrap();
     assert!(series.contains("steps/step_0040.vtu"), "{series}");
-    // It keeps no checkpoint, and says so when asked to resume.
+    // A finished run keeps no checkpoint: there is nothing to resume.
+    assert!(!out.join("checkpoint.bin").exists());
     let resumed = mpm().args(["run", "--resume"]).arg(&*out).output().unwrap();
     assert_eq!(resumed.status.code(), Some(2));
     let err = String::from_utf8_lossy(&resumed.stderr);
-    assert!(err.contains("cannot be resumed"), "{err}");
+    assert!(err.contains("before its first checkpoint"), "{err}");
+}
+
+/// A 3D run killed mid-way goes on from its last checkpoint with
+/// `--resume` and ends where an uninterrupted run ends, as a plane-strain
+/// run does (`resume_goes_on_from_the_last_checkpoint`).
+#[test]
+fn a_3d_run_resumes_from_its_last_checkpoint() {
+    // The 3D column at 0.78125 m cells: 8192 points over 40 steps.
+    let mut case = example("column3d");
+    case["grid"]["cell_size"] = 0.78125.into();
+    let (_dir, straight, stopped) = killed_at_step_4_and_resumed(&case, "resume3d");
+    let read = |dir: &std::path::Path, file: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join(file)).unwrap()).unwrap()
+    };
+    let summary = read(&stopped, "summary.json");
+    assert_eq!(summary["steps"].as_array().unwrap().len(), 40);
+    assert!(summary["resumed_from"].as_u64().unwrap() >= 3, "{summary}");
+    let a = read(&stopped, "steps/step_0040.json");
+    let b = read(&straight, "steps/step_0040.json");
+    assert_eq!(a["points"]["position"], b["points"]["position"]);
+    assert_eq!(a["report"]["reactions"], b["report"]["reactions"]);
+    let pvd = std::fs::read_to_string(stopped.join("points.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 41, "steps 0 to 40");
+    assert!(!stopped.join("checkpoint.bin").exists());
 }
 
 /// A 3D case with a field of the plane-strain case, or a vector of two

@@ -32,11 +32,11 @@ const OWNED_FILES: [&str; 7] = [
     REPORTS_FILE,
 ];
 /// The solver's state after the last checkpointed step (`mpm::Checkpoint`).
-const CHECKPOINT_FILE: &str = "checkpoint.bin";
+pub(crate) const CHECKPOINT_FILE: &str = "checkpoint.bin";
 /// A checkpoint being written, renamed to [`CHECKPOINT_FILE`] when whole.
-const NEW_CHECKPOINT_FILE: &str = "checkpoint.bin.new";
+pub(crate) const NEW_CHECKPOINT_FILE: &str = "checkpoint.bin.new";
 /// One step report (JSON) a line, appended as steps finish.
-const REPORTS_FILE: &str = "reports.jsonl";
+pub(crate) const REPORTS_FILE: &str = "reports.jsonl";
 
 /// `mpm run`: solves a case (a file, or a built-in example) into `out`,
 /// which must be empty unless `force` (then the files of an earlier run
@@ -84,21 +84,45 @@ pub fn resume(dir: &Path, point_files: bool, max_points: usize) -> Result<(), Cl
     })?;
     let source = source.display().to_string();
     if mpm::case::solid::is_solid(&text) {
-        return Err(CliError::input(format!(
-            "{source}: a 3D run keeps no checkpoints yet, so it cannot be resumed: run it again"
-        )));
+        return crate::solid::resume(dir, &text, &source, point_files, max_points);
     }
     let (case, mut sim) = build(&text, &source, max_points)?;
-    let bytes = fs::read(dir.join(CHECKPOINT_FILE)).map_err(|e| {
-        CliError::input(format!(
-            "{}: {e} (the run stopped before its first checkpoint: run it again)",
-            dir.join(CHECKPOINT_FILE).display()
-        ))
-    })?;
+    let bytes = checkpoint_bytes(dir)?;
     let checkpoint = Checkpoint::from_bytes(&bytes)
         .and_then(|c| sim.restore(&c).map(|()| c))
         .map_err(|e| CliError::input(format!("{}: {e}", dir.join(CHECKPOINT_FILE).display())))?;
     let done = checkpoint.steps_done();
+    let earlier = reports_until(dir, done)?;
+    eprintln!("resuming after step {done} of {}", sim.load_steps);
+    solve(case, sim, &source, dir, point_files, earlier, Some(done))
+}
+
+/// What a failed run in `out` says of going on: `mpm run --resume` when
+/// it left a checkpoint.
+pub(crate) fn resume_hint(out: &Path) -> String {
+    if out.join(CHECKPOINT_FILE).exists() {
+        format!(
+            " (mpm run --resume {} goes on from the last checkpoint)",
+            out.display()
+        )
+    } else {
+        String::new()
+    }
+}
+
+/// The checkpoint a stopped run in `dir` left.
+pub(crate) fn checkpoint_bytes(dir: &Path) -> Result<Vec<u8>, CliError> {
+    fs::read(dir.join(CHECKPOINT_FILE)).map_err(|e| {
+        CliError::input(format!(
+            "{}: {e} (the run stopped before its first checkpoint: run it again)",
+            dir.join(CHECKPOINT_FILE).display()
+        ))
+    })
+}
+
+/// The reports of steps 1 to `done` (a checkpoint's) of the stopped run in
+/// `dir`, which keeps only them and the step files up to `done`.
+pub(crate) fn reports_until(dir: &Path, done: usize) -> Result<Vec<StepReport>, CliError> {
     // Reports and step files past the checkpoint belong to the stopped try;
     // a kill may have cut its last report line short.
     let reports_path = dir.join(REPORTS_FILE);
@@ -134,8 +158,7 @@ pub fn resume(dir: &Path, point_files: bool, max_points: usize) -> Result<(), Cl
     let aside = dir.join(format!("{REPORTS_FILE}.new"));
     fs::write(&aside, kept)?;
     fs::rename(aside, &reports_path)?;
-    eprintln!("resuming after step {done} of {}", sim.load_steps);
-    solve(case, sim, &source, dir, point_files, earlier, Some(done))
+    Ok(earlier)
 }
 
 /// Reads a case and builds its points, within `max_points`: the count is
@@ -268,15 +291,7 @@ fn solve(
         // A hint of units where the first step fails on loads far beyond
         // the stiffness: E = 1 meant as 1 MPa, say.
         let units = units_hint(&case, &e).unwrap_or_default();
-        let resume = if out.join(CHECKPOINT_FILE).exists() {
-            format!(
-                " (mpm run --resume {} goes on from the last checkpoint)",
-                out.display()
-            )
-        } else {
-            String::new()
-        };
-        CliError::failed(format!("solve failed: {e}{resume}{units}"))
+        CliError::failed(format!("solve failed: {e}{}{units}", resume_hint(out)))
     })?;
     if point_files {
         let series = &writer.series;

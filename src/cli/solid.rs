@@ -2,9 +2,9 @@
 //! stdout, and in the output directory the case, `reports.jsonl`,
 //! `summary.json`, and the stored steps as `steps/*.json` (the report
 //! and the points' columns, as the service serves a step) and
-//! `steps/*.vtu` with their `points.pvd` series. No checkpoints yet
-//! (`--resume` is for plane-strain runs), no boundary files (the B-spline
-//! surfaces are issue 38's part 2).
+//! `steps/*.vtu` with their `points.pvd` series; a checkpoint every few
+//! steps, from which `mpm run --resume DIR` goes on as with a plane-strain
+//! run. No boundary files (the B-spline surfaces are issue 38's part 2).
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 use mpm::case::solid::{SolidCase, SolidOutput};
 use mpm::report::SolidPointColumns;
 use mpm::vtk::write_solid_vtu;
-use mpm::{MaterialPoints, Observer, Simulation, SolidStepState, StepReport};
+use mpm::{MaterialPoints, Observer, Simulation, SolidCheckpoint, SolidStepState, StepReport};
+use mpm_service::config::CheckpointSchedule;
 use mpm_service::jobs::admission::{PointLimit, Rejection, check_points};
 use mpm_service::results::{
     CASE_FILE, POINTS_SERIES, STEPS_DIR, SUMMARY_FILE, Series, StepFiles, Summary,
@@ -21,10 +22,10 @@ use mpm_service::results::{
 use mpm_service::step::StepDocument;
 
 use crate::CliError;
-use crate::run::{Progress, prepare_output, print_step};
-
-/// One step report (JSON) a line, as a plane-strain run writes them.
-const REPORTS_FILE: &str = "reports.jsonl";
+use crate::run::{
+    CHECKPOINT_FILE, NEW_CHECKPOINT_FILE, Progress, REPORTS_FILE, checkpoint_bytes, prepare_output,
+    print_step, reports_until, resume_hint,
+};
 
 /// Solves the 3D case `text` (from `source`) into `out`.
 pub fn run(
@@ -35,6 +36,39 @@ pub fn run(
     force: bool,
     max_points: usize,
 ) -> Result<(), CliError> {
+    let (case, sim) = build(text, source, max_points)?;
+    prepare_output(out, force)?;
+    fs::write(out.join(CASE_FILE), text)?;
+    solve(&case, sim, source, out, point_files, Vec::new(), None)
+}
+
+/// `mpm run --resume DIR` on a 3D run: goes on from its last checkpoint,
+/// as a plane-strain run does.
+pub fn resume(
+    dir: &Path,
+    text: &str,
+    source: &str,
+    point_files: bool,
+    max_points: usize,
+) -> Result<(), CliError> {
+    let (case, mut sim) = build(text, source, max_points)?;
+    let bytes = checkpoint_bytes(dir)?;
+    let checkpoint = SolidCheckpoint::from_bytes(&bytes)
+        .and_then(|c| sim.restore(&c).map(|()| c))
+        .map_err(|e| CliError::input(format!("{}: {e}", dir.join(CHECKPOINT_FILE).display())))?;
+    let done = checkpoint.steps_done();
+    let earlier = reports_until(dir, done)?;
+    eprintln!("resuming after step {done} of {}", sim.load_steps);
+    solve(&case, sim, source, dir, point_files, earlier, Some(done))
+}
+
+/// Reads a 3D case and builds its points, within `max_points`: bounded
+/// before seeding (the bodies' boxes at their spacings) and after.
+fn build(
+    text: &str,
+    source: &str,
+    max_points: usize,
+) -> Result<(SolidCase, Simulation<3>), CliError> {
     let case = SolidCase::from_json(text).map_err(|e| CliError::input(format!("{source}: {e}")))?;
     let limit = PointLimit {
         max: max_points,
@@ -46,7 +80,6 @@ pub fn run(
         }
         Rejection::MalformedJson(message) => CliError::input(format!("{source}: $: {message}")),
     };
-    // Bounded before seeding: the bodies' boxes at their spacings.
     let bound = case.points_bound();
     if bound > 2.0 * max_points as f64 {
         return Err(CliError::input(format!(
@@ -54,11 +87,24 @@ pub fn run(
             limit.name
         )));
     }
-    let mut sim = Simulation::from_solid_case(&case)
+    let sim = Simulation::from_solid_case(&case)
         .map_err(|e| CliError::input(format!("{source}: {e}")))?;
     check_points(sim.points.len(), limit).map_err(refused)?;
-    prepare_output(out, force)?;
-    fs::write(out.join(CASE_FILE), text)?;
+    Ok((case, sim))
+}
+
+/// Solves the steps `sim` has not done, writing into `out`, with a
+/// checkpoint every few steps; `earlier` are the reports of the steps done
+/// before a run resumed after step `resumed_from`.
+fn solve(
+    case: &SolidCase,
+    mut sim: Simulation<3>,
+    source: &str,
+    out: &Path,
+    point_files: bool,
+    earlier: Vec<StepReport>,
+    resumed_from: Option<usize>,
+) -> Result<(), CliError> {
     eprintln!(
         "{}: {} material points in 3D, {} load steps, {:?} basis, cells of {} m",
         case.title.as_deref().unwrap_or(source),
@@ -72,14 +118,27 @@ pub fn run(
         out: out.to_path_buf(),
         point_files,
         output: case.output.clone(),
+        checkpoints: CheckpointSchedule::new(0, sim.points.len()),
         load_steps: n,
-        reports: File::create(out.join(REPORTS_FILE))?,
+        reports: fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(out.join(REPORTS_FILE))?,
         series: Series::default(),
         progress: Progress::new(),
         io_error: None,
     };
     if point_files {
         fs::create_dir_all(out.join(STEPS_DIR))?;
+    }
+    // The step files kept from before a resumed run's checkpoint.
+    for step in 0..=sim.steps_done() {
+        let files = StepFiles::new(step);
+        if out.join(&files.points).exists() {
+            writer.series.add(step as f64 / n as f64, files);
+        }
+    }
+    if point_files && sim.steps_done() == 0 {
         let (report, state) = sim.initial_step();
         writer.write_step(&report, state.points)?;
     }
@@ -88,22 +147,30 @@ pub fn run(
     if let Some(e) = writer.io_error {
         return Err(e.into());
     }
-    let report = result.map_err(|e| CliError::failed(format!("solve failed: {e}")))?;
+    let mut report =
+        result.map_err(|e| CliError::failed(format!("solve failed: {e}{}", resume_hint(out))))?;
     if point_files {
         let series = &writer.series;
         series.write_points(BufWriter::new(File::create(out.join(POINTS_SERIES))?))?;
     }
-    let summary = Summary::new(
-        source,
-        case.title.as_deref(),
-        report.points,
-        report.load_steps,
-        report.wall_seconds,
-        &report.steps,
-    );
+    report.wall_seconds += earlier.iter().map(|s| s.timings.total).sum::<f64>();
+    report.steps.splice(0..0, earlier);
+    let summary = Summary {
+        resumed_from,
+        ..Summary::new(
+            source,
+            case.title.as_deref(),
+            report.points,
+            report.load_steps,
+            report.wall_seconds,
+            &report.steps,
+        )
+    };
     let mut f = BufWriter::new(File::create(out.join(SUMMARY_FILE))?);
     serde_json::to_writer_pretty(&mut f, &summary).map_err(|e| CliError::failed(e.to_string()))?;
     f.flush()?;
+    // The run is complete: nothing to resume.
+    let _ = fs::remove_file(out.join(CHECKPOINT_FILE));
     eprintln!(
         "done in {:.3} s; results in {}",
         report.wall_seconds,
@@ -118,6 +185,8 @@ struct SolidWriter {
     point_files: bool,
     /// Which steps store their points.
     output: SolidOutput,
+    /// When to write the solver's state.
+    checkpoints: CheckpointSchedule,
     load_steps: usize,
     reports: File,
     series: Series,
@@ -154,12 +223,20 @@ impl SolidWriter {
         Ok(())
     }
 
-    fn record(&mut self, report: &StepReport, points: &MaterialPoints<3>) -> std::io::Result<()> {
+    /// The step's report as a line of `reports.jsonl`, its files, then,
+    /// when one is due, the checkpoint (written aside and renamed, so a
+    /// kill leaves the previous one whole).
+    fn record(&mut self, report: &StepReport, state: &SolidStepState<'_>) -> std::io::Result<()> {
         let mut line = serde_json::to_string(report)?;
         line.push('\n');
         self.reports.write_all(line.as_bytes())?;
         if self.point_files {
-            self.write_step(report, points)?;
+            self.write_step(report, state.points)?;
+        }
+        if self.checkpoints.due(report.step) {
+            let aside = self.out.join(NEW_CHECKPOINT_FILE);
+            fs::write(&aside, state.checkpoint().to_bytes())?;
+            fs::rename(aside, self.out.join(CHECKPOINT_FILE))?;
         }
         Ok(())
     }
@@ -175,11 +252,10 @@ impl Observer for SolidWriter {
     }
 
     fn solid_step_finished(&mut self, report: &StepReport, state: &SolidStepState<'_>) {
-        let points = state.points;
         self.progress.clear();
         print_step(report);
         if self.io_error.is_none()
-            && let Err(e) = self.record(report, points)
+            && let Err(e) = self.record(report, state)
         {
             self.io_error = Some(e);
         }
