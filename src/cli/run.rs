@@ -34,7 +34,7 @@ const OWNED_FILES: [&str; 7] = [
 /// The solver's state after the last checkpointed step (`mpm::Checkpoint`).
 pub(crate) const CHECKPOINT_FILE: &str = "checkpoint.bin";
 /// A checkpoint being written, renamed to [`CHECKPOINT_FILE`] when whole.
-pub(crate) const NEW_CHECKPOINT_FILE: &str = "checkpoint.bin.new";
+const NEW_CHECKPOINT_FILE: &str = "checkpoint.bin.new";
 /// One step report (JSON) a line, appended as steps finish.
 pub(crate) const REPORTS_FILE: &str = "reports.jsonl";
 
@@ -370,17 +370,28 @@ impl ResultWriter {
     /// due, the checkpoint (written aside and renamed, so a kill leaves the
     /// previous one whole).
     fn record_step(&mut self, report: &StepReport, state: &StepState<'_>) -> std::io::Result<()> {
-        // One write a line: a kill cuts at most the last one.
-        let mut line = serde_json::to_string(report)?;
-        line.push('\n');
-        self.reports.write_all(line.as_bytes())?;
+        append_report(&mut self.reports, report)?;
         if self.checkpoints.due(report.step) {
-            let aside = self.out.join(NEW_CHECKPOINT_FILE);
-            fs::write(&aside, state.checkpoint().to_bytes())?;
-            fs::rename(aside, self.out.join(CHECKPOINT_FILE))?;
+            write_checkpoint(&self.out, &state.checkpoint().to_bytes())?;
         }
         Ok(())
     }
+}
+
+/// Appends `report` to `reports.jsonl` in one write: a kill cuts at most
+/// the last line.
+pub(crate) fn append_report(reports: &mut File, report: &StepReport) -> std::io::Result<()> {
+    let mut line = serde_json::to_string(report)?;
+    line.push('\n');
+    reports.write_all(line.as_bytes())
+}
+
+/// Writes a checkpoint into `out` aside and renames it, so that a kill
+/// leaves the previous one whole.
+pub(crate) fn write_checkpoint(out: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let aside = out.join(NEW_CHECKPOINT_FILE);
+    fs::write(&aside, bytes)?;
+    fs::rename(aside, out.join(CHECKPOINT_FILE))
 }
 
 impl Observer for ResultWriter {

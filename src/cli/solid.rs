@@ -23,8 +23,8 @@ use mpm_service::step::StepDocument;
 
 use crate::CliError;
 use crate::run::{
-    CHECKPOINT_FILE, NEW_CHECKPOINT_FILE, Progress, REPORTS_FILE, checkpoint_bytes, prepare_output,
-    print_step, reports_until, resume_hint,
+    CHECKPOINT_FILE, Progress, REPORTS_FILE, append_report, checkpoint_bytes, prepare_output,
+    print_step, reports_until, resume_hint, write_checkpoint,
 };
 
 /// Solves the 3D case `text` (from `source`) into `out`.
@@ -227,16 +227,12 @@ impl SolidWriter {
     /// when one is due, the checkpoint (written aside and renamed, so a
     /// kill leaves the previous one whole).
     fn record(&mut self, report: &StepReport, state: &SolidStepState<'_>) -> std::io::Result<()> {
-        let mut line = serde_json::to_string(report)?;
-        line.push('\n');
-        self.reports.write_all(line.as_bytes())?;
+        append_report(&mut self.reports, report)?;
         if self.point_files {
             self.write_step(report, state.points)?;
         }
         if self.checkpoints.due(report.step) {
-            let aside = self.out.join(NEW_CHECKPOINT_FILE);
-            fs::write(&aside, state.checkpoint().to_bytes())?;
-            fs::rename(aside, self.out.join(CHECKPOINT_FILE))?;
+            write_checkpoint(&self.out, &state.checkpoint().to_bytes())?;
         }
         Ok(())
     }
