@@ -70,7 +70,7 @@ pub struct Checkpoint {
 
 /// The encoding's version of a 3D run's checkpoint ([`SolidCheckpoint`]),
 /// apart from the plane-strain ones so that neither reads as the other.
-pub(crate) const SOLID_FORMAT: u32 = 3001;
+pub(crate) const SOLID_FORMAT: u32 = 3002;
 
 /// The state of a 3D run after `steps_done` load steps: the points'
 /// positions, deformation gradients, histories, yield flags and stresses,
@@ -91,6 +91,9 @@ pub struct SolidCheckpoint {
     pub(crate) yielding: Vec<bool>,
     /// Cauchy stress, column-major.
     pub(crate) stress: Vec<[f64; 9]>,
+    /// With F-bar, the pressures the points carry into the next step
+    /// (`MaterialPoints::fbar_pressure`); empty otherwise.
+    pub(crate) fbar_pressure: Vec<f64>,
     pub(crate) step_size: StepSizeState,
     pub(crate) last_increment: Option<IncrementState>,
     pub(crate) settled: Option<Settled>,

@@ -112,6 +112,7 @@ impl Simulation<3> {
                 .collect(),
             yielding: p.yielding.clone(),
             stress: p.stress.iter().map(columns).collect(),
+            fbar_pressure: p.fbar_pressure.clone(),
             step_size: self.step_size_state(),
             last_increment: self.last_increment.as_ref().map(LastIncrement::state),
             settled: self.settled.clone(),
@@ -136,7 +137,9 @@ impl Simulation<3> {
             c.yielding.len(),
             c.stress.len(),
         ];
-        if lengths.iter().any(|&l| l != n) {
+        if lengths.iter().any(|&l| l != n)
+            || !(c.fbar_pressure.is_empty() || c.fbar_pressure.len() == n)
+        {
             return Err(CheckpointError::OtherCase("the material point counts"));
         }
         if c.steps_done > self.load_steps {
@@ -146,6 +149,7 @@ impl Simulation<3> {
         }
         let p = &mut self.points;
         p.position.clone_from(&c.position);
+        p.fbar_pressure.clone_from(&c.fbar_pressure);
         for (f, s) in p.deformation.iter_mut().zip(&c.deformation) {
             f.copy_from_slice(s);
         }
@@ -365,8 +369,9 @@ mod tests {
         }
     }
 
-    /// The built-in 3D column (40 steps, its points crossing cells)
-    /// stopped after step 20 and resumed from its checkpoint in a fresh
+    /// The built-in 3D column (40 steps, its points crossing cells), with
+    /// and without F-bar (whose points carry their pressures across the
+    /// grid's reset in the checkpoint), stopped after step 20 and resumed from its checkpoint in a fresh
     /// simulation ends where the straight run ends, in the same Newton
     /// iterations; a plane-strain checkpoint is not read as a 3D one.
     #[test]
@@ -383,36 +388,43 @@ mod tests {
             }
         }
         let text = crate::case::builtin::get("column3d").unwrap();
-        let case = crate::case::solid::SolidCase::from_json(text).unwrap();
-        let mut straight = Simulation::from_solid_case(&case).unwrap();
-        let whole = straight.run(&mut crate::NoObserver).unwrap();
-        let mut first = Simulation::from_solid_case(&case).unwrap();
-        let mut stop = StopSolid(None);
-        assert!(matches!(
-            first.run(&mut stop),
-            Err(SolveError::Cancelled { .. })
-        ));
-        let bytes = stop.0.expect("a checkpoint after step 20");
-        assert!(Checkpoint::from_bytes(&bytes).is_err());
-        let checkpoint = SolidCheckpoint::from_bytes(&bytes).unwrap();
-        assert_eq!(checkpoint.steps_done(), 20);
-        let mut resumed = Simulation::from_solid_case(&case).unwrap();
-        resumed.restore(&checkpoint).unwrap();
-        let rest = resumed.run(&mut crate::NoObserver).unwrap();
-        assert_eq!(rest.steps.len(), 20);
-        for (a, b) in rest.steps.iter().zip(&whole.steps[20..]) {
-            assert_eq!((a.step, a.newton.iterations), (b.step, b.newton.iterations));
+        for volumetric in ["standard", "fbar"] {
+            let mut case: serde_json::Value = serde_json::from_str(text).unwrap();
+            case["analysis"]["volumetric"] = volumetric.into();
+            let case = crate::case::solid::SolidCase::from_json(&case.to_string()).unwrap();
+            let mut straight = Simulation::from_solid_case(&case).unwrap();
+            let whole = straight.run(&mut crate::NoObserver).unwrap();
+            let mut first = Simulation::from_solid_case(&case).unwrap();
+            let mut stop = StopSolid(None);
+            assert!(matches!(
+                first.run(&mut stop),
+                Err(SolveError::Cancelled { .. })
+            ));
+            let bytes = stop.0.expect("a checkpoint after step 20");
+            assert!(Checkpoint::from_bytes(&bytes).is_err());
+            let checkpoint = SolidCheckpoint::from_bytes(&bytes).unwrap();
+            assert_eq!(checkpoint.steps_done(), 20);
+            let mut resumed = Simulation::from_solid_case(&case).unwrap();
+            resumed.restore(&checkpoint).unwrap();
+            let rest = resumed.run(&mut crate::NoObserver).unwrap();
+            assert_eq!(rest.steps.len(), 20);
+            for (a, b) in rest.steps.iter().zip(&whole.steps[20..]) {
+                assert_eq!((a.step, a.newton.iterations), (b.step, b.newton.iterations));
+            }
+            let moved = (resumed.points.position.iter())
+                .zip(&straight.points.position)
+                .flat_map(|(a, b)| (0..3).map(move |k| (a[k] - b[k]).abs()))
+                .fold(0.0, f64::max);
+            assert!(moved <= 1e-12 * 50.0, "positions differ by {moved:e}");
+            let stressed = (resumed.points.stress.iter())
+                .zip(&straight.points.stress)
+                .map(|(a, b)| (a - b).abs().max())
+                .fold(0.0, f64::max);
+            assert!(stressed <= 1e-12 * 4.0e4, "stresses differ by {stressed:e}");
+            if volumetric == "fbar" {
+                assert_eq!(checkpoint.fbar_pressure.len(), resumed.points.len());
+            }
         }
-        let moved = (resumed.points.position.iter())
-            .zip(&straight.points.position)
-            .flat_map(|(a, b)| (0..3).map(move |k| (a[k] - b[k]).abs()))
-            .fold(0.0, f64::max);
-        assert!(moved <= 1e-12 * 50.0, "positions differ by {moved:e}");
-        let stressed = (resumed.points.stress.iter())
-            .zip(&straight.points.stress)
-            .map(|(a, b)| (a - b).abs().max())
-            .fold(0.0, f64::max);
-        assert!(stressed <= 1e-12 * 4.0e4, "stresses differ by {stressed:e}");
         // A plane-strain case's checkpoint is refused by a 3D run.
         let plane = Simulation::new(&footing()).unwrap().checkpoint().to_bytes();
         assert!(SolidCheckpoint::from_bytes(&plane).is_err());

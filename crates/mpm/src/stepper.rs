@@ -22,7 +22,7 @@ use std::time::Instant;
 use nalgebra::Matrix2;
 
 use crate::assembly;
-use crate::assembly::averaging::{Averaging, Carried, CellAverages, Unaveraged};
+use crate::assembly::averaging::{Averaging, Carried, CellAverages};
 use crate::assembly::cell_mean::CellMean;
 use crate::assembly::solid_ghost_faces::SolidGhostFaces;
 use crate::assembly::{FbarCells, GhostFaces, LonePoints, SoftCells, StepTerm, lone_points};
@@ -1068,19 +1068,27 @@ impl RunSpace<3> for Dim<3> {
         terms
     }
 
-    fn averaging(_: &Simulation<3>, _: &Configuration<3>) -> Option<Unaveraged> {
-        None
+    /// F-bar or none: the 3D case admits no other (`case::solid`).
+    fn averaging(sim: &Simulation<3>, start: &Configuration<3>) -> Option<FbarCells<3>> {
+        match sim.volumetric {
+            Volumetric::Fbar => {
+                Some(FbarCells::new(start).carrying(start, &sim.points.fbar_pressure))
+            }
+            Volumetric::Standard => None,
+            Volumetric::CellMean => unreachable!("a 3D case with the cell mean is refused"),
+        }
     }
 
     fn before_commit(_: &mut Simulation<3>, _: &Connectivity<3>, _: &[f64], _: &[Box<dyn Any>]) {}
 
     fn after_commit(
-        _: &mut Simulation<3>,
+        sim: &mut Simulation<3>,
         _: &Connectivity<3>,
         _: &[f64],
-        _: Option<Unaveraged>,
+        averaged: Option<Vec<f64>>,
         _: Vec<Box<dyn Any>>,
     ) -> Vec<SupportTraction> {
+        sim.points.fbar_pressure = averaged.unwrap_or_default();
         Vec::new()
     }
 

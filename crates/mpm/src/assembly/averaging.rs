@@ -8,10 +8,11 @@
 //! it is: the nodes its cells couple, the internal force at a trial
 //! increment (keeping what the tangent and the commit need of it), a
 //! point's response there, the points' stiffness, and what the next step
-//! carries across the grid's reset. The averagings exist in plane strain;
-//! in 3D the step has none yet ([`Unaveraged`]).
+//! carries across the grid's reset. Plane strain has both
+//! ([`CellAverages`]); 3D has F-bar ([`FbarCells`] on cells of eight
+//! corners).
 
-use nalgebra::Matrix2;
+use nalgebra::{Matrix2, SMatrix};
 use rayon::prelude::*;
 
 use super::cell_mean::{CellMean, CellTrial};
@@ -125,19 +126,7 @@ impl Averaging<2> for CellAverages {
                 Ok((f_int, AveragedTrial::CellMean(trial)))
             }
             CellAverages::Fbar(fbar) => {
-                let averages = fbar::trial_averages(fbar, conn, mp, u);
-                let (local, parts): (Vec<Matrix2<f64>>, Vec<_>) = (0..mp.len())
-                    .into_par_iter()
-                    .with_min_len(parallel::POINT_RESPONSES)
-                    .map(|p| {
-                        fbar::point_response(fbar, (&averages, None), conn, mp, u, p)
-                            .map(|(response, part)| (response.p, part))
-                    })
-                    .collect::<Result<Vec<_>, _>>()?
-                    .into_iter()
-                    .unzip();
-                let trial = FbarTrial::new(fbar, averages, parts);
-                let f_int = internal_force(conn, mp, |p| trial.stress(fbar, p, &local[p]));
+                let (f_int, trial) = fbar.internal_force(conn, mp, u)?;
                 Ok((f_int, AveragedTrial::Fbar(trial)))
             }
         }
@@ -157,8 +146,7 @@ impl Averaging<2> for CellAverages {
                 cells.response(trial, mp, p, want_tangent)
             }
             (CellAverages::Fbar(fbar), AveragedTrial::Fbar(trial)) => {
-                let cells = (trial.averages.as_slice(), Some(trial.means.as_slice()));
-                fbar::point_response(fbar, cells, conn, mp, u, p).map(|(response, _)| response)
+                fbar.response(trial, conn, mp, u, p, want_tangent)
             }
             _ => unreachable!("a trial state of another averaging"),
         }
@@ -187,7 +175,7 @@ impl Averaging<2> for CellAverages {
                 cells.add_to(conn, mp, trial, pattern, values);
             }
             (CellAverages::Fbar(fbar), AveragedTrial::Fbar(trial)) => {
-                fbar.add_to(conn, mp, trial, pattern, values);
+                fbar.add_couplings(trial, conn, mp, pattern, values);
             }
             _ => unreachable!("a trial state of another averaging"),
         }
@@ -199,7 +187,7 @@ impl Averaging<2> for CellAverages {
                 Carried::CellMeanStress(cells.carried(trial, mp))
             }
             (CellAverages::Fbar(fbar), AveragedTrial::Fbar(trial)) => {
-                Carried::FbarPressure(fbar.carried(trial))
+                Carried::FbarPressure(Averaging::carried(fbar, trial, mp))
             }
             _ => unreachable!("a trial state of another averaging"),
         }
@@ -213,60 +201,76 @@ impl Averaging<2> for CellAverages {
     }
 }
 
-/// No averaging: in 3D, until F-bar and the cell mean are made for cells
-/// of eight corners. The type has no values, so a 3D step's averaging is
-/// always `None`, and the methods below cannot be called.
-pub enum Unaveraged {}
-
-impl Averaging<3> for Unaveraged {
-    type Trial = Unaveraged;
-    type Carried = Unaveraged;
+/// F-bar in either dimension (in 3D the only averaging so far).
+impl<const D: usize> Averaging<D> for FbarCells<D>
+where
+    Dim<D>: Space<D>,
+{
+    type Trial = FbarTrial<D>;
+    /// Each point's pressure ([`FbarCells::carried`]).
+    type Carried = Vec<f64>;
 
     fn coupling_groups(&self) -> Vec<Vec<u32>> {
-        match *self {}
+        FbarCells::coupling_groups(self)
     }
 
     fn internal_force(
         &self,
-        _: &Connectivity<3>,
-        _: &MaterialPoints<3>,
-        _: &[f64],
-    ) -> Result<(Vec<f64>, Unaveraged), InadmissiblePoint> {
-        match *self {}
+        conn: &Connectivity<D>,
+        mp: &MaterialPoints<D>,
+        u: &[f64],
+    ) -> Result<(Vec<f64>, FbarTrial<D>), InadmissiblePoint> {
+        let averages = fbar::trial_averages(self, conn, mp, u);
+        let (local, parts): (Vec<SMatrix<f64, D, D>>, Vec<_>) = (0..mp.len())
+            .into_par_iter()
+            .with_min_len(parallel::POINT_RESPONSES)
+            .map(|p| {
+                fbar::point_response(self, (&averages, None), conn, mp, u, p)
+                    .map(|(response, part)| (<Dim<D> as Space<D>>::stress_of(&response), part))
+            })
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter()
+            .unzip();
+        let trial = FbarTrial::new(self, averages, parts);
+        let f_int = internal_force(conn, mp, |p| trial.stress(self, p, &local[p]));
+        Ok((f_int, trial))
     }
 
+    /// The response always has its tangent: F-bar's stress is made from it.
     fn response(
         &self,
-        _: &Unaveraged,
-        _: &Connectivity<3>,
-        _: &MaterialPoints<3>,
-        _: &[f64],
-        _: usize,
-        _: bool,
-    ) -> Result<Response<3>, InadmissiblePoint> {
-        match *self {}
+        trial: &FbarTrial<D>,
+        conn: &Connectivity<D>,
+        mp: &MaterialPoints<D>,
+        u: &[f64],
+        p: usize,
+        _want_tangent: bool,
+    ) -> Result<Response<D>, InadmissiblePoint> {
+        let cells = (trial.averages.as_slice(), Some(trial.means.as_slice()));
+        fbar::point_response(self, cells, conn, mp, u, p).map(|(response, _)| response)
     }
 
-    fn own_tangent(&self, _: &MaterialPoints<3>, _: usize) -> Option<Tangent<3>> {
-        match *self {}
+    /// F-bar's points answer to a modified gradient.
+    fn own_tangent(&self, _: &MaterialPoints<D>, _: usize) -> Option<Tangent<D>> {
+        None
     }
 
     fn add_couplings(
         &self,
-        _: &Unaveraged,
-        _: &Connectivity<3>,
-        _: &MaterialPoints<3>,
-        _: &Pattern,
-        _: &mut [f64],
+        trial: &FbarTrial<D>,
+        conn: &Connectivity<D>,
+        mp: &MaterialPoints<D>,
+        pattern: &Pattern,
+        values: &mut [f64],
     ) {
-        match *self {}
+        self.add_to(conn, mp, trial, pattern, values);
     }
 
-    fn carried(&self, _: &Unaveraged, _: &MaterialPoints<3>) -> Unaveraged {
-        match *self {}
+    fn carried(&self, trial: &FbarTrial<D>, _: &MaterialPoints<D>) -> Vec<f64> {
+        FbarCells::carried(self, trial)
     }
 
-    fn trial_bytes(trial: &Unaveraged) -> usize {
-        match *trial {}
+    fn trial_bytes(trial: &FbarTrial<D>) -> usize {
+        trial.heap_bytes()
     }
 }

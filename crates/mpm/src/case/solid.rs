@@ -63,6 +63,32 @@ pub struct SolidAnalysis {
     pub substepping: SubsteppingSpec,
     #[serde(default)]
     pub stabilisation: SolidStabilisation,
+    /// Each point's volume change the average of its cell's (`fbar`,
+    /// against volumetric locking near incompressibility), or its own
+    /// (`standard`). The plane-strain case's `cell_mean` is not made for
+    /// 3D cells yet.
+    #[serde(default)]
+    pub volumetric: SolidVolumetric,
+}
+
+/// The volumetric treatments a 3D step has.
+#[derive(
+    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum SolidVolumetric {
+    #[default]
+    Standard,
+    Fbar,
+}
+
+impl From<SolidVolumetric> for super::Volumetric {
+    fn from(v: SolidVolumetric) -> Self {
+        match v {
+            SolidVolumetric::Standard => Self::Standard,
+            SolidVolumetric::Fbar => Self::Fbar,
+        }
+    }
 }
 
 /// The stabilisation a 3D step has so far.
@@ -617,8 +643,11 @@ mod tests {
         material["bodies"][0]["material"]["poisson_ratio"] = 0.5.into();
         let mut spline = column();
         spline["basis"] = "bspline2".into();
+        let mut cell_mean = column();
+        cell_mean["analysis"]["volumetric"] = "cell_mean".into();
         for (case, path) in [
             (spline, "basis"),
+            (cell_mean, "analysis.volumetric"),
             (steps, "analysis.load_steps"),
             (plane, "supports[0].on"),
             (fill, "bodies[0].points"),

@@ -4,7 +4,7 @@
 //! state is `[f64; D]` or a `D x D` matrix.
 
 use std::fmt::Debug;
-use std::ops::Index;
+use std::ops::{Add, AddAssign, Index, Mul, Sub};
 
 use nalgebra::{Matrix2, Matrix3, Matrix4, SMatrix};
 
@@ -34,7 +34,7 @@ pub trait Space<const D: usize> {
     type Slopes: Copy + Debug + Default + PartialEq + Send + Sync;
     /// The model's tangent `dP / d(dF)`, `D^2 x D^2`, entry `(D i + I, D j
     /// + J)` for `dP_iI / d(dF)_jJ`.
-    type Tangent: Copy + Debug + Send + Sync + Index<(usize, usize), Output = f64>;
+    type Tangent: TangentMatrix + Debug + Send + Sync;
     /// A model's response to a trial increment ([`Material::respond`],
     /// [`Material::respond_3d`]).
     type Response: TrialResponse + Send;
@@ -52,6 +52,11 @@ pub trait Space<const D: usize> {
     /// The stress a response pairs with `dF` per unit reference volume.
     fn stress_of(response: &Self::Response) -> SMatrix<f64, D, D>;
     fn tangent_of(response: &Self::Response) -> Self::Tangent;
+    /// The stress and the tangent of a response, for an averaging to
+    /// rewrite (F-bar's, `crate::assembly::fbar`).
+    fn stress_and_tangent(
+        response: &mut Self::Response,
+    ) -> (&mut SMatrix<f64, D, D>, &mut Self::Tangent);
     /// What a point commits of a response: its history and Cauchy stress.
     fn state_of(response: &Self::Response) -> (Self::History, Self::Stress);
     /// The equivalent plastic strain a history holds.
@@ -66,6 +71,31 @@ pub trait Space<const D: usize> {
     fn first_non_finite(points: &MaterialPoints<D>) -> Option<usize>
     where
         Dim<D>: Space<D>;
+}
+
+/// What F-bar does with a model's `D^2 x D^2` tangent: sums, scaling, and
+/// products of `D x D` tensors flattened row by row.
+pub trait TangentMatrix:
+    Copy
+    + Index<(usize, usize), Output = f64>
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<f64, Output = Self>
+    + AddAssign
+{
+    fn from_fn(f: impl FnMut(usize, usize) -> f64) -> Self;
+}
+
+impl TangentMatrix for Matrix4<f64> {
+    fn from_fn(f: impl FnMut(usize, usize) -> f64) -> Self {
+        Matrix4::from_fn(f)
+    }
+}
+
+impl TangentMatrix for Tangent3 {
+    fn from_fn(f: impl FnMut(usize, usize) -> f64) -> Self {
+        Tangent3::from_fn(f)
+    }
 }
 
 impl Space<2> for Dim<2> {
@@ -96,6 +126,10 @@ impl Space<2> for Dim<2> {
 
     fn tangent_of(response: &Response) -> Matrix4<f64> {
         response.tangent
+    }
+
+    fn stress_and_tangent(response: &mut Response) -> (&mut Matrix2<f64>, &mut Matrix4<f64>) {
+        (&mut response.p, &mut response.tangent)
     }
 
     fn state_of(response: &Response) -> (History, CauchyStress) {
@@ -144,6 +178,10 @@ impl Space<3> for Dim<3> {
 
     fn tangent_of(response: &Response3) -> Tangent3 {
         response.tangent
+    }
+
+    fn stress_and_tangent(response: &mut Response3) -> (&mut Matrix3<f64>, &mut Tangent3) {
+        (&mut response.p, &mut response.tangent)
     }
 
     fn state_of(response: &Response3) -> (History3, Matrix3<f64>) {

@@ -10,7 +10,7 @@ pub mod geostatic;
 pub mod seeding;
 pub mod solid_seeding;
 
-pub use dimension::{Dim, Space};
+pub use dimension::{Dim, Space, TangentMatrix};
 
 use crate::grid::Support;
 use crate::material::{History3, Material};
@@ -72,6 +72,16 @@ where
 
     pub fn is_empty(&self) -> bool {
         self.position.is_empty()
+    }
+
+    /// Volume ratio `J = det F`.
+    pub fn jacobian(&self, p: usize) -> f64 {
+        <Dim<D> as Space<D>>::determinant(&self.deformation[p])
+    }
+
+    /// Current volume `J V0`.
+    pub fn volume(&self, p: usize) -> f64 {
+        self.jacobian(p) * self.volume0[p]
     }
 
     /// Bytes of the points' state on the heap.
@@ -150,16 +160,6 @@ impl MaterialPoints {
         self.add_seeds(material, density, seeds, material.initial_history());
     }
 
-    /// Volume ratio `J = det F`.
-    pub fn jacobian(&self, p: usize) -> f64 {
-        self.deformation[p].determinant()
-    }
-
-    /// Current volume `J V0`.
-    pub fn volume(&self, p: usize) -> f64 {
-        self.jacobian(p) * self.volume0[p]
-    }
-
     /// The point's domain for GIMP now. An upright rectangular cell stays
     /// an axis-aligned rectangle, its half-widths scaled by the diagonal of
     /// the right stretch tensor `U = sqrt(F^T F)`, so it follows stretch
@@ -206,16 +206,6 @@ impl MaterialPoints<3> {
                 && self.deformation[p].iter().all(|x| x.is_finite())
                 && self.stress[p].iter().all(|x| x.is_finite()))
         })
-    }
-
-    /// Volume ratio `J = det F`.
-    pub fn jacobian(&self, p: usize) -> f64 {
-        self.deformation[p].determinant()
-    }
-
-    /// Current volume `J V0`.
-    pub fn volume(&self, p: usize) -> f64 {
-        self.jacobian(p) * self.volume0[p]
     }
 
     /// The point's box domain now: its half-widths scaled by the diagonal

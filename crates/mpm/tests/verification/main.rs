@@ -17,6 +17,7 @@ mod hinge;
 mod ibm;
 mod lame;
 mod locking;
+mod locking3d;
 mod newton_convergence;
 mod one_point_cells;
 mod plasticity;
