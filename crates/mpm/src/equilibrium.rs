@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use crate::assembly::averaging::{Averaging, CellAverages};
 use crate::assembly::{self, FbarCells, NodeAdjacency, Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
-use crate::grid::{Basis, Connectivity, NodeKey, increment, lattice_coordinates};
+use crate::grid::{Basis, Connectivity, Grid, NodeKey, increment, lattice_coordinates};
 use crate::linsolve::{Factorisation, GridNodes, SolveTally, SolverSettings, SparseSolver};
 use crate::material::Material;
 use crate::newton::{Equilibrium, PathEquilibrium};
@@ -475,6 +475,10 @@ where
         let (mut du, kind) = self.solve_columns(&[r], accuracy)?;
         Ok((du.pop().expect("one right-hand side"), kind))
     }
+
+    fn impose(&self, u: &mut [f64]) {
+        self.held.impose(u);
+    }
 }
 
 impl<const D: usize> PathEquilibrium for StepEquilibrium<'_, D>
@@ -525,6 +529,18 @@ impl<const D: usize> StepEquilibrium<'_, D>
 where
     Dim<D>: StepSpace<D>,
 {
+    /// The grid supports move the nodes they hold in a step from load
+    /// factor `from` to `to` ([`HeldDofs::moving`]), which Newton's
+    /// iterates then carry ([`Equilibrium::impose`]).
+    pub(crate) fn move_supports<S: NodeHold<D>>(
+        &mut self,
+        supports: &[S],
+        grid: &Grid<D>,
+        factors: (f64, f64),
+    ) {
+        self.held = std::mem::take(&mut self.held).moving(supports, grid, self.conn, factors);
+    }
+
     /// Solves `K x = b` for each of `rhs` with the tangent at the last
     /// trial state.
     fn solve_columns(

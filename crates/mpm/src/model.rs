@@ -510,6 +510,7 @@ impl Simulation<3> {
                     axis,
                     at,
                     fix: s.fix.components(),
+                    rotation: s.rotation.map(|r| (r.angle.to_radians(), r.center)),
                 }
             })
             .collect();

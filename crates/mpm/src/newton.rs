@@ -356,6 +356,9 @@ pub trait Equilibrium {
     /// iterative solver may stop there; a direct one answers exactly).
     fn correction(&mut self, r: &[f64], accuracy: f64)
     -> Result<(Vec<f64>, Factorisation), String>;
+    /// Writes the increments the supports prescribe into `u`'s
+    /// constrained DOFs (which corrections leave alone); none by default.
+    fn impose(&self, _u: &mut [f64]) {}
 }
 
 /// A step's equilibrium whose load factor is an unknown beside the
@@ -640,7 +643,8 @@ pub fn solve<M: Monitor + ?Sized>(
 
 /// Solves one load step, from the `predicted` increment when it is
 /// admissible and leaves less out-of-balance force than `u = 0`, else from
-/// `u = 0`; returns the converged increment.
+/// `u = 0` (either with the increments the supports prescribe,
+/// [`Equilibrium::impose`]); returns the converged increment.
 ///
 /// The predictor matters past yield: at `u = 0` no point flows, so the
 /// first tangent is the elastic one whatever the step's size, and every
@@ -663,12 +667,18 @@ pub fn solve_from<M: Monitor + ?Sized>(
     predicted: Option<Vec<f64>>,
 ) -> Result<(Vec<f64>, NewtonInfo), SolveError> {
     let mut u = vec![0.0; eq.n_dofs()];
+    eq.impose(&mut u);
     let mut info = NewtonInfo::default();
     let inadmissible = |iteration, p: InadmissiblePoint, residual| {
         SolveError::inadmissible(step, iteration, p, residual)
     };
     let at_zero = eq.out_of_balance(&u);
-    let predicted = predicted.filter(|p| p.len() == u.len() && p.iter().any(|&x| x != 0.0));
+    let predicted = predicted
+        .filter(|p| p.len() == u.len() && p.iter().any(|&x| x != 0.0))
+        .map(|mut p| {
+            eq.impose(&mut p);
+            p
+        });
     let mut from_prediction = false;
     let (mut r, mut scale) = match (at_zero, predicted) {
         (at_zero, Some(p)) => match (eq.out_of_balance(&p), at_zero) {

@@ -619,6 +619,13 @@ where
             Increment::Trial { .. } => (1.0, 1.0, false),
         };
         let mut eq = self.assemble(&conn, start_factor, path, previous);
+        if let Increment::To(from, to) = control {
+            eq.move_supports(
+                &self.stages[self.stage].grid_supports,
+                &self.grid,
+                (from, to),
+            );
+        }
         let grid_seconds = clock.lap();
 
         let (u, load_factor, newton) = match control {

@@ -218,12 +218,30 @@ pub struct SolidPointLoad {
     pub force: [f64; 3],
 }
 
-/// Displacement components held on the grid nodes of the plane `on`.
+/// Displacement components held on the grid nodes of the plane `on`:
+/// at rest, or turned with `rotation`.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PlaneSupportSpec {
     pub on: PlaneSpec,
     pub fix: SolidFix,
+    /// The nodes' prescribed motion: the rotation about the plane's normal
+    /// through `center`, ramped with the load factor. `fix` must hold both
+    /// components in the plane; a held normal component stays at rest.
+    #[serde(default)]
+    pub rotation: Option<PlaneRotationSpec>,
+}
+
+/// A rigid rotation of a support plane about its normal axis.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneRotationSpec {
+    /// Degrees at the last load step, counter-clockwise looking down the
+    /// axis from its positive side (x: y towards z; y: z towards x; z: x
+    /// towards y); at most 360 in size.
+    pub angle: f64,
+    /// A point of the axis of rotation (m).
+    pub center: [f64; 3],
 }
 
 /// A grid plane normal to an axis: exactly one of `x`, `y`, `z`.
@@ -373,11 +391,29 @@ impl SolidCase {
             finite(&format!("loads.tractions[{i}].traction"), &t.traction)?;
         }
         for (i, support) in self.supports.iter().enumerate() {
-            if support.on.plane().is_none() {
+            let Some((axis, _)) = support.on.plane() else {
                 return Err(CaseError::new(
                     format!("supports[{i}].on"),
                     "give exactly one of x, y, z: the plane normal to that axis",
                 ));
+            };
+            if let Some(rotation) = &support.rotation {
+                let path = format!("supports[{i}].rotation");
+                finite(&format!("{path}.center"), &rotation.center)?;
+                if !rotation.angle.is_finite() || rotation.angle.abs() > 360.0 {
+                    return Err(CaseError::new(
+                        format!("{path}.angle"),
+                        format!("is {}: give degrees, at most 360 in size", rotation.angle),
+                    ));
+                }
+                let held = support.fix.components();
+                if (0..3).any(|c| c != axis && !held[c]) {
+                    return Err(CaseError::new(
+                        format!("supports[{i}].fix"),
+                        "a rotating support must hold both components in its plane (the rotation \
+                         prescribes them): give \"xyz\", or the two in-plane axes",
+                    ));
+                }
             }
         }
         // As in plane strain, where such supports need the implicit
@@ -645,9 +681,18 @@ mod tests {
         spline["basis"] = "bspline2".into();
         let mut cell_mean = column();
         cell_mean["analysis"]["volumetric"] = "cell_mean".into();
+        let turning = |fix: &str, angle: f64| {
+            let mut case = column();
+            case["supports"][0]["fix"] = fix.into();
+            case["supports"][0]["rotation"] =
+                serde_json::json!({ "angle": angle, "center": [0.0, 0.0, 0.0] });
+            case
+        };
         for (case, path) in [
             (spline, "basis"),
             (cell_mean, "analysis.volumetric"),
+            (turning("z", 10.0), "supports[0].fix"),
+            (turning("xyz", 400.0), "supports[0].rotation.angle"),
             (steps, "analysis.load_steps"),
             (plane, "supports[0].on"),
             (fill, "bodies[0].points"),

@@ -41,6 +41,7 @@ fn column_3d(cells: usize, basis: Basis, load_steps: usize) -> (MaterialPoints<3
         axis,
         at,
         fix: std::array::from_fn(|c| c == axis),
+        rotation: None,
     };
     let supports = vec![
         roller(0, 0, 0.0),
@@ -52,6 +53,7 @@ fn column_3d(cells: usize, basis: Basis, load_steps: usize) -> (MaterialPoints<3
             axis: 2,
             at: 0.0,
             fix: [true; 3],
+            rotation: None,
         },
     ];
     let mut sim = Simulation::solid(SolidRun {

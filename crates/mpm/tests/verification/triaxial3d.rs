@@ -60,6 +60,7 @@ fn push_past_yield(material: Material, p: f64, strength: f64) -> (MaterialPoints
         axis,
         at: 0.0,
         fix: std::array::from_fn(|c| c == axis),
+        rotation: None,
     };
     let mut sim = Simulation::solid(SolidRun {
         grid: Grid {
