@@ -1,10 +1,13 @@
-"""Turn a 2D gmsh mesh into a case body: `geometry: {"mesh": {...}}`.
+"""Turn a gmsh mesh into a case body: `geometry: {"mesh": {...}}`.
 
-meshio reads the .msh file; its triangles and quadrilaterals become the
-body's elements (node indices, either way round), its nodes the x and y
-of gmsh's points. Nodes no element uses are dropped. The case around the
-body comes from a template (a case JSON whose first body's geometry is
-replaced), or a minimal one.
+meshio reads the .msh file. A mesh with hexahedra is a 3D body: its
+hexahedra become the elements (eight node indices each, in gmsh's order,
+either handedness), its nodes gmsh's points, and the case is a 3D one
+(`analysis.type: "3d"`). Otherwise its triangles and quadrilaterals
+become a plane-strain body's elements (node indices, either way round),
+its nodes the x and y of gmsh's points. Nodes no element uses are
+dropped. The case around the body comes from a template (a case JSON
+whose first body's geometry is replaced), or a minimal one.
 
     pip install meshio
     python3 scripts/gmsh_to_case.py mesh.msh --template case.json > case.json
@@ -24,20 +27,24 @@ import sys
 import meshio
 
 CELL_TYPES = ("triangle", "quad")
+SOLID_CELL_TYPES = ("hexahedron",)
 
 
 def mesh_geometry(path, digits=9):
+    """The body's `mesh` geometry, and whether it is 3D."""
     mesh = meshio.read(path)
+    solid = any(block.type in SOLID_CELL_TYPES for block in mesh.cells)
+    types, dims = (SOLID_CELL_TYPES, 3) if solid else (CELL_TYPES, 2)
     elements = []
     for block in mesh.cells:
-        if block.type in CELL_TYPES:
+        if block.type in types:
             elements.extend(block.data.tolist())
     if not elements:
-        sys.exit(f"{path}: no triangles or quadrilaterals")
+        sys.exit(f"{path}: no hexahedra, triangles or quadrilaterals")
     used = sorted({i for e in elements for i in e})
     renumber = {old: new for new, old in enumerate(used)}
-    nodes = [[round(float(mesh.points[i][0]), digits), round(float(mesh.points[i][1]), digits)] for i in used]
-    return {"nodes": nodes, "elements": [[renumber[i] for i in e] for e in elements]}
+    nodes = [[round(float(mesh.points[i][d]), digits) for d in range(dims)] for i in used]
+    return {"nodes": nodes, "elements": [[renumber[i] for i in e] for e in elements]}, solid
 
 
 def main():
@@ -45,14 +52,15 @@ def main():
     parser.add_argument("mesh", help="a .msh file (or anything meshio reads)")
     parser.add_argument("--template", help="case JSON whose first body takes the mesh")
     args = parser.parse_args()
-    geometry = {"mesh": mesh_geometry(args.mesh)}
+    mesh, solid = mesh_geometry(args.mesh)
+    geometry = {"mesh": mesh}
     if args.template:
         with open(args.template) as f:
             case = json.load(f)
     else:
         case = {
             "version": 1,
-            "analysis": {"load_steps": 1},
+            "analysis": {"type": "3d", "load_steps": 1} if solid else {"load_steps": 1},
             "grid": {"cell_size": 0.5},
             "basis": "gimp",
             "bodies": [

@@ -69,6 +69,24 @@ pub struct Mesh {
     pub elements: Vec<Vec<usize>>,
 }
 
+/// The nodes and hexahedra of a 3D mesh body, as meshio reads them from a
+/// gmsh file: each element's eight corners in gmsh's (and VTK's) order, the
+/// face `0 1 2 3` then the opposite face `4 5 6 7`, node `k + 4` across
+/// from node `k`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct HexMesh {
+    pub nodes: Vec<[f64; 3]>,
+    pub elements: Vec<[usize; 8]>,
+}
+
+impl HexMesh {
+    /// Element `k`'s corners.
+    pub fn corners(&self, k: usize) -> [[f64; 3]; 8] {
+        self.elements[k].map(|i| self.nodes[i])
+    }
+}
+
 impl Mesh {
     /// Each element's corners, counter-clockwise.
     pub fn element_corners(&self) -> impl Iterator<Item = Vec<[f64; 2]>> + '_ {

@@ -13,10 +13,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::validate::{check_newton, check_substepping, check_version, parse, positive};
+use super::validate::{
+    check_mesh_size, check_newton, check_substepping, check_version, parse, positive,
+};
 use super::{BasisKind, CaseError, MaterialSpec, NewtonSpec, SubsteppingSpec};
-use crate::geometry::Geometry;
-use crate::particles::solid_seeding::Solid;
+use crate::geometry::{Geometry, HexMesh};
+use crate::particles::solid_seeding::{self, Solid};
 
 /// A complete 3D analysis.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
@@ -172,6 +174,10 @@ pub enum SolidGeometry {
         inner_radius: f64,
         outer_radius: f64,
     },
+    /// A mesh of hexahedra (`nodes` `[[x, y, z], ...]`, `elements` eight
+    /// node indices each in gmsh's order), as `scripts/gmsh_to_case.py`
+    /// makes it from a `.msh` file.
+    Mesh(HexMesh),
 }
 
 /// How densely a body is filled: exactly one of `per_cell` (points per
@@ -449,6 +455,15 @@ impl SolidCase {
         (0..self.bodies.len())
             .map(|i| {
                 let s = self.spacing(i);
+                if let SolidGeometry::Mesh(mesh) = &self.bodies[i].geometry {
+                    // Its elements' counts, whatever their shapes.
+                    return (0..mesh.elements.len())
+                        .map(|k| {
+                            let n = solid_seeding::hexahedron_counts(&mesh.corners(k), s);
+                            n.iter().map(|&c| c as f64).product::<f64>()
+                        })
+                        .sum();
+                }
                 let (lo, hi) = self.bodies[i].geometry.bounds();
                 (0..3)
                     .map(|d| ((hi[d] - lo[d]) / s).ceil() + 1.0)
@@ -491,6 +506,7 @@ impl SolidBody {
                     ));
                 }
             }
+            SolidGeometry::Mesh(mesh) => check_hex_mesh(&format!("{g}.mesh"), mesh)?,
         }
         if let SolidGeometry::Extrusion { section, .. } = &self.geometry {
             // The section is a plane-strain body's geometry, checked as one.
@@ -559,6 +575,17 @@ impl SolidGeometry {
                 inner_radius: *inner_radius,
                 outer_radius: *outer_radius,
             },
+            SolidGeometry::Mesh(mesh) => {
+                // Each element right-handed: a mirrored one turned over.
+                let mut mesh = mesh.clone();
+                for k in 0..mesh.elements.len() {
+                    if solid_seeding::trilinear(&mesh.corners(k), [0.5; 3]).1 < 0.0 {
+                        let e = mesh.elements[k];
+                        mesh.elements[k] = [e[0], e[3], e[2], e[1], e[4], e[7], e[6], e[5]];
+                    }
+                }
+                Solid::Mesh(mesh)
+            }
         }
     }
 
@@ -580,8 +607,86 @@ impl SolidGeometry {
                 outer_radius: r,
                 ..
             } => (center.map(|c| c - r), center.map(|c| c + r)),
+            SolidGeometry::Mesh(mesh) => {
+                let bound = |pick: fn(f64, f64) -> f64, start: f64| -> [f64; 3] {
+                    std::array::from_fn(|d| mesh.nodes.iter().map(|x| x[d]).fold(start, pick))
+                };
+                (
+                    bound(f64::min, f64::INFINITY),
+                    bound(f64::max, f64::NEG_INFINITY),
+                )
+            }
         }
     }
+}
+
+/// A hexahedral mesh: finite nodes, no more of them or of elements than a
+/// 2D mesh may have ([`check_mesh_size`]); at least one element, each of
+/// eight distinct nodes that exist, not inverted (its map's Jacobian of one sign, and not near zero,
+/// at all eight corners: a right-handed or a mirrored element, never a
+/// folded one); and no face shared by more than two elements. Elements
+/// that overlap without sharing faces are not detected.
+fn check_hex_mesh(path: &str, mesh: &HexMesh) -> Result<(), CaseError> {
+    let nodes = &mesh.nodes;
+    check_mesh_size(path, nodes.len(), mesh.elements.len())?;
+    for (i, v) in nodes.iter().enumerate() {
+        finite(&format!("{path}.nodes[{i}]"), v)?;
+    }
+    let (lo, hi) = SolidGeometry::Mesh(HexMesh {
+        nodes: nodes.clone(),
+        elements: Vec::new(),
+    })
+    .bounds();
+    let scale = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
+    let mut faces: std::collections::HashMap<[usize; 4], u8> = std::collections::HashMap::new();
+    const FACES: [[usize; 4]; 6] = [
+        [0, 1, 2, 3],
+        [4, 5, 6, 7],
+        [0, 1, 5, 4],
+        [1, 2, 6, 5],
+        [2, 3, 7, 6],
+        [3, 0, 4, 7],
+    ];
+    for (k, e) in mesh.elements.iter().enumerate() {
+        let at = format!("{path}.elements[{k}]");
+        if let Some(&i) = e.iter().find(|&&i| i >= nodes.len()) {
+            return Err(CaseError::new(
+                at,
+                format!("node {i} does not exist ({} nodes)", nodes.len()),
+            ));
+        }
+        if (0..8).any(|a| (a + 1..8).any(|b| e[a] == e[b])) {
+            return Err(CaseError::new(at, "repeats a node"));
+        }
+        let corners = mesh.corners(k);
+        let jacobians: Vec<f64> = (0..8)
+            .map(|c| {
+                let xi = [(c & 1) as f64, ((c >> 1) & 1) as f64, (c >> 2) as f64];
+                solid_seeding::trilinear(&corners, xi).1
+            })
+            .collect();
+        let small = 1e-12 * scale.powi(3);
+        if !(jacobians.iter().all(|&j| j > small) || jacobians.iter().all(|&j| j < -small)) {
+            return Err(CaseError::new(
+                at,
+                "is inverted or flat: its shape's Jacobian changes sign or vanishes at a corner \
+                 (nodes in gmsh's order: one face 0 1 2 3, then 4 5 6 7 across from them)",
+            ));
+        }
+        for face in FACES {
+            let mut key = face.map(|c| e[c]);
+            key.sort_unstable();
+            let count = faces.entry(key).or_insert(0);
+            *count += 1;
+            if *count > 2 {
+                return Err(CaseError::new(
+                    at,
+                    format!("shares its face through nodes {key:?} with two other elements"),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Every component finite.
@@ -702,6 +807,48 @@ mod tests {
         ] {
             let e = refused(&case);
             assert!(e.path.starts_with(path), "{path}: {e}");
+        }
+    }
+
+    /// A hexahedral mesh body is refused at the element that is not one
+    /// (a missing or repeated node, an inverted or flat shape, a face of
+    /// three elements); a good one of two elements, one of them mirrored,
+    /// is taken, and seeds its exact volume.
+    #[test]
+    fn a_hexahedral_mesh_that_is_not_one_is_refused() {
+        let nodes: Vec<[f64; 3]> = (0..12)
+            .map(|n| [(n % 3) as f64, ((n / 3) % 2) as f64, (n / 6) as f64])
+            .collect();
+        let good = [[0, 1, 4, 3, 6, 7, 10, 9], [2, 1, 4, 5, 8, 7, 10, 11]];
+        let case = |elements: Vec<[usize; 8]>| {
+            let mut case = column();
+            case["bodies"][0]["geometry"] =
+                serde_json::json!({ "mesh": { "nodes": nodes.clone(), "elements": elements } });
+            case["grid"].as_object_mut().unwrap().remove("extent");
+            case["supports"] = serde_json::json!([]);
+            case
+        };
+        let taken = SolidCase::from_json(&case(good.to_vec()).to_string()).unwrap();
+        let seeds = crate::particles::solid_seeding::fill(
+            &taken.bodies[0].geometry.solid(),
+            taken.spacing(0),
+        );
+        let volume: f64 = seeds.iter().map(|s| s.volume).sum();
+        assert!((volume - 2.0).abs() < 1e-14, "{volume}");
+        let flat = [0, 1, 4, 3, 0, 1, 4, 3];
+        let folded = [0, 1, 3, 4, 6, 7, 10, 9];
+        for (elements, message) in [
+            (vec![good[0], [0, 1, 4, 3, 6, 7, 10, 12]], "does not exist"),
+            (vec![good[0], flat], "repeats a node"),
+            (vec![good[0], folded], "inverted or flat"),
+            (vec![good[0], good[0], good[0]], "two other elements"),
+        ] {
+            let e = refused(&case(elements));
+            assert!(
+                e.path.starts_with("bodies[0].geometry.mesh.elements["),
+                "{e}"
+            );
+            assert!(e.message.contains(message), "{e}");
         }
     }
 

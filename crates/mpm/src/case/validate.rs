@@ -985,6 +985,24 @@ fn check_ring(path: &str, ring: &[[f64; 2]]) -> Result<(), CaseError> {
     Ok(())
 }
 
+/// A mesh of either dimension has at least one element, and at most
+/// [`MAX_MESH_NODES`] nodes and elements.
+pub(super) fn check_mesh_size(path: &str, nodes: usize, elements: usize) -> Result<(), CaseError> {
+    if nodes > MAX_MESH_NODES || elements > MAX_MESH_NODES {
+        return Err(CaseError::new(
+            path,
+            format!("more than {MAX_MESH_NODES} nodes or elements"),
+        ));
+    }
+    if elements == 0 {
+        return Err(CaseError::new(
+            format!("{path}.elements"),
+            "needs at least one element",
+        ));
+    }
+    Ok(())
+}
+
 /// A mesh: at most [`MAX_MESH_NODES`] finite nodes; at least one element,
 /// each of three or four distinct nodes that exist, enclosing area, a
 /// quadrilateral strictly convex; a boundary of closed simple rings; and
@@ -992,20 +1010,9 @@ fn check_ring(path: &str, ring: &[[f64; 2]]) -> Result<(), CaseError> {
 /// up to the area the rings enclose shows.
 fn check_mesh(path: &str, mesh: &crate::geometry::Mesh) -> Result<(), CaseError> {
     let nodes = &mesh.nodes;
-    if nodes.len() > MAX_MESH_NODES || mesh.elements.len() > MAX_MESH_NODES {
-        return Err(CaseError::new(
-            path,
-            format!("more than {MAX_MESH_NODES} nodes or elements"),
-        ));
-    }
+    check_mesh_size(path, nodes.len(), mesh.elements.len())?;
     for (i, v) in nodes.iter().enumerate() {
         finite_pair(&format!("{path}.nodes[{i}]"), *v)?;
-    }
-    if mesh.elements.is_empty() {
-        return Err(CaseError::new(
-            format!("{path}.elements"),
-            "needs at least one element",
-        ));
     }
     let (lo, hi) = Geometry::Mesh(crate::geometry::Mesh {
         nodes: nodes.clone(),
