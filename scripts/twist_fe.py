@@ -63,8 +63,22 @@ Printed
   beta G a^4 / L, beta = 1/3 - (64 / pi^5) sum_{n odd} tanh(n pi / 2) / n^5
   (free warping, so below the clamped bar's value).
 
-Needs numpy, scipy and scikit-fem (`pip install scikit-fem`). The finest mesh
-takes about 11 GB of memory (the LU) and several minutes on two cores.
+The ends
+--------
+The stiffness is Saint-Venant's interior plus the two clamped ends, which
+converge differently: the interior as about h^3.7, the ends, where the
+clamped faces meet the free ones, more slowly (order 1.6 to 2 on these
+meshes), so that the order seen on the 10 m bar (about 3.4, the interior
+dominating) overstates how fast it converges. `python3 twist_fe.py --ends
+4 8 12` separates the two for the linear problem: with the ends far apart,
+theta / T = (length - 2 delta) / GJ, and linear solutions on bars 2 m and
+4 m long on the same meshes give the rigidity GJ (against Saint-Venant's
+beta G a^4) and delta per mesh; it prints T / theta of the 10 m bar from
+Saint-Venant's GJ and delta extrapolated (orders observed, 2 and 1).
+
+Needs numpy, scipy and scikit-fem (`pip install scikit-fem`). On two cores
+the default run takes about 12 minutes and 6 GB (n = 8: 11 minutes);
+`--ends 4 8 12` takes about 6 minutes and 12 GB (n = 12, 4 m).
 """
 
 import sys
@@ -73,6 +87,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.optimize import brentq
 from skfem import Basis, BilinearForm, ElementHex2, ElementVector, LinearForm, MeshHex, asm
 from skfem.models.elasticity import linear_elasticity
 
@@ -134,10 +149,13 @@ def tangent_form(du, v, w):
 
 
 class Bar:
-    """An n x n x 10n mesh of the bar with its basis and DOF sets."""
+    """A bar of the given length (L unless told) meshed by cubes of side 1/n,
+    with its basis and DOF sets."""
 
-    def __init__(self, n):
-        self.mesh = MeshHex.init_tensor(np.linspace(0.0, L, 10 * n + 1), np.linspace(0.0, SIDE, n + 1), np.linspace(0.0, SIDE, n + 1))
+    def __init__(self, n, length=L):
+        self.length = length
+        along = round(length * n / SIDE)
+        self.mesh = MeshHex.init_tensor(np.linspace(0.0, length, along + 1), np.linspace(0.0, SIDE, n + 1), np.linspace(0.0, SIDE, n + 1))
         self.basis = Basis(self.mesh, ElementVector(ElementHex2()), intorder=4)
         self.ndofs = self.basis.N
         # The components' DOFs, node by node in the same order.
@@ -145,7 +163,7 @@ class Bar:
         self.nodes = self.basis.doflocs[:, self.xdofs]
         assert np.allclose(self.nodes, self.basis.doflocs[:, self.ydofs]) and np.allclose(self.nodes, self.basis.doflocs[:, self.zdofs])
         self.left = np.isclose(self.nodes[0], 0.0)
-        self.right = np.isclose(self.nodes[0], L)
+        self.right = np.isclose(self.nodes[0], length)
         ends = self.left | self.right
         self.fixed = np.sort(np.concatenate([self.xdofs[ends], self.ydofs[ends], self.zdofs[ends]]))
         self.free = np.setdiff1d(np.arange(self.ndofs), self.fixed)
@@ -232,7 +250,7 @@ class LinearSolver:
 
 
 def solve_linear(bar, solver):
-    """T / theta of the small-strain problem."""
+    """T / theta of the small-strain problem (solved for theta = 1)."""
     K = bar.tangent(linear_moduli())
     u = np.zeros(bar.ndofs)
     u[bar.fixed] = bar.linear_end_displacement(1.0)
@@ -242,8 +260,8 @@ def solve_linear(bar, solver):
 
 
 def turn_sections(bar, u, angle):
-    """Turn every cross-section of the deformed bar about the axis by angle x / L."""
-    phi = angle * bar.nodes[0] / L
+    """Turn every cross-section of the deformed bar about the axis by angle x / length."""
+    phi = angle * bar.nodes[0] / bar.length
     y = bar.nodes[1] + u[bar.ydofs] - 0.5
     z = bar.nodes[2] + u[bar.zdofs] - 0.5
     u[bar.ydofs] = 0.5 + np.cos(phi) * y - np.sin(phi) * z - bar.nodes[1]
@@ -325,35 +343,74 @@ def check():
 
 
 def saint_venant():
-    """beta G a^4 / L for the free-warping square bar."""
+    """Saint-Venant's beta of the square section, the torsional rigidity being beta G a^4."""
     n = np.arange(1, 200, 2)
-    beta = 1.0 / 3.0 - 64.0 / np.pi**5 * np.sum(np.tanh(n * np.pi / 2.0) / n**5)
-    return beta, beta * MU * SIDE**4 / L
+    return 1.0 / 3.0 - 64.0 / np.pi**5 * np.sum(np.tanh(n * np.pi / 2.0) / n**5)
+
+
+def observed_order(sizes, values):
+    """The order p of the last three values, from
+    (a - b) / (b - c) = (r1^p - 1) r2^p / (r2^p - 1), r1 and r2 the ratios of
+    the mesh sizes (both 2 for halved meshes, where this is 2^p)."""
+    (n1, n2, n3), (a, b, c) = sizes[-3:], values[-3:]
+    r1, r2 = n2 / n1, n3 / n2
+    return brentq(lambda p: (a - b) / (b - c) - (r1**p - 1.0) * r2**p / (r2**p - 1.0), 0.1, 10.0)
+
+
+def richardson(sizes, values, p):
+    """The last two values extrapolated with order p."""
+    return values[-1] + (values[-1] - values[-2]) / ((sizes[-1] / sizes[-2]) ** p - 1.0)
 
 
 def extrapolate(name, sizes, values):
-    """Print the order and the Richardson extrapolation of one quantity."""
+    """Print the order and the Richardson extrapolations of one quantity."""
     text = ", ".join(f"n = {n}: {v:.8e}" for n, v in zip(sizes, values))
     print(f"{name}: {text}")
-    if len(values) >= 2:
-        b, c = values[-2], values[-1]
-        line = f"  Richardson (order 2) {c + (c - b) / 3.0:.8e}"
-        if len(values) >= 3:
-            a = values[-3]
-            p = np.log(abs((a - b) / (b - c))) / np.log(2.0)
-            extrapolated = c + (c - b) / (2.0**p - 1.0)
-            line = f"  order {p:.2f}, Richardson {extrapolated:.8e} (last mesh off by {abs(c / extrapolated - 1):.1e});" + line
-        print(line)
+    if len(values) >= 3:
+        p = observed_order(sizes, values)
+        extrapolated = richardson(sizes, values, p)
+        print(f"  order {p:.2f}, Richardson {extrapolated:.8e} (last mesh off by {abs(values[-1] / extrapolated - 1):.1e}); Richardson (order 2) {richardson(sizes, values, 2.0):.8e}")
+    elif len(values) == 2:
+        print(f"  Richardson (order 2) {richardson(sizes, values, 2.0):.8e}")
+
+
+def end_effect(sizes):
+    """The linear problem split into the bar's interior and its ends.
+
+    With the ends far apart, the compliance is theta / T = (length - 2 delta) / GJ:
+    GJ the torsional rigidity of the cross-section (Saint-Venant's beta G a^4
+    in the limit) and delta the length that each clamped end takes off. Bars
+    of 2 m and 4 m on the same meshes give GJ and delta per mesh; then T / theta
+    of the 10 m bar from Saint-Venant's GJ and delta extrapolated."""
+    exact = saint_venant() * MU * SIDE**4
+    deltas = []
+    for n in sizes:
+        start = time.time()
+        short, long = (solve_linear(Bar(n, length), LinearSolver()) for length in (2.0, 4.0))
+        rigidity = 2.0 / (1.0 / long - 1.0 / short)
+        delta = 1.0 - rigidity / (2.0 * short)
+        deltas.append(delta)
+        print(f"n = {n}: T/theta {short:.8e} (2 m), {long:.8e} (4 m); GJ {rigidity:.8e} (Saint-Venant + {rigidity - exact:.3e}), delta {delta:.8f} m; wall time {time.time() - start:.1f} s", flush=True)
+    print(f"Saint-Venant GJ {exact:.8e} N m2; T/theta of the {L:g} m bar with delta of the last mesh {exact / (L - 2.0 * deltas[-1]):.8e} N m")
+    if len(sizes) >= 3:
+        p = observed_order(sizes, deltas)
+        for order in (p, 2.0, 1.0):
+            delta = richardson(sizes, deltas, order)
+            print(f"  delta extrapolated with order {order:.2f}: {delta:.8f} m, T/theta {exact / (L - 2.0 * delta):.8e} N m")
 
 
 def main():
-    sizes = [int(arg) for arg in sys.argv[1:]] or [1, 2, 4, 8]
+    args = sys.argv[1:]
+    if args[:1] == ["--ends"]:
+        end_effect([int(arg) for arg in args[1:]] or [2, 4, 8])
+        return
+    sizes = [int(arg) for arg in args] or [1, 2, 4, 8]
     check()
     results = [twist(n) for n in sizes]
     for k, name in enumerate(["T at 90 deg [N m]", "T/theta at 9 deg [N m]", "linear T/theta [N m]"]):
         extrapolate(name, sizes, [r[k] for r in results])
-    beta, stiffness = saint_venant()
-    print(f"Saint-Venant: beta {beta:.6f}, beta G a^4 / L {stiffness:.8e} N m")
+    beta = saint_venant()
+    print(f"Saint-Venant: beta {beta:.6f}, beta G a^4 / L {beta * MU * SIDE**4 / L:.8e} N m")
 
 
 if __name__ == "__main__":

@@ -94,6 +94,10 @@ pub struct SolidCheckpoint {
     /// With F-bar, the pressures the points carry into the next step
     /// (`MaterialPoints::fbar_pressure`); empty otherwise.
     pub(crate) fbar_pressure: Vec<f64>,
+    /// With the cell mean, the stresses the points carry into the next
+    /// step (`MaterialPoints::cell_mean_stress`), column-major; empty
+    /// otherwise.
+    pub(crate) cell_mean_stress: Vec<[f64; 9]>,
     pub(crate) step_size: StepSizeState,
     pub(crate) last_increment: Option<IncrementState>,
     pub(crate) settled: Option<Settled>,

@@ -18,7 +18,7 @@ use nalgebra::SMatrix;
 use rayon::prelude::*;
 
 use crate::assembly::averaging::{Averaging, CellAverages};
-use crate::assembly::{self, FbarCells, NodeAdjacency, Pattern, Side, StepTerm};
+use crate::assembly::{self, NodeAdjacency, Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
 use crate::grid::{Basis, Connectivity, Grid, NodeKey, increment, lattice_coordinates};
 use crate::linsolve::{Factorisation, GridNodes, SolveTally, SolverSettings, SparseSolver};
@@ -54,7 +54,7 @@ impl StepSpace<2> for Dim<2> {
 
 impl StepSpace<3> for Dim<3> {
     type Support = PlaneSupport<3>;
-    type Averages = FbarCells<3>;
+    type Averages = CellAverages<3>;
     fn grid_nodes(keys: &[NodeKey]) -> GridNodes {
         GridNodes::Solid(keys.iter().map(|&key| lattice_coordinates(key)).collect())
     }
@@ -968,24 +968,26 @@ mod tests {
         ((miss / size).sqrt(), asymmetry)
     }
 
-    /// F-bar's tangent in 3D, as [`the_averaged_tangents_are_the_derivatives_of_their_forces`]
-    /// checks it in plane strain: a block of 4 x 2 x 2 cells (GIMP, 8
+    /// The averagings' tangents in 3D, as
+    /// [`the_averaged_tangents_are_the_derivatives_of_their_forces`]
+    /// checks them in plane strain: a block of 4 x 2 x 2 cells (GIMP, 8
     /// points a cell, the grid off the body), clamped at one end, sheared,
-    /// bent and twisted, with pressures carried from an earlier step;
-    /// Hencky and Mohr-Coulomb (phi = psi = 30 degrees, most points
-    /// yielding). Measured misses: 1.4e-11 (Hencky) and 2.5e-10
-    /// (Mohr-Coulomb, every point yielding) of `|K v|`, and symmetric to
-    /// 2e-16 of the largest entry.
+    /// bent and twisted, with pressures and stresses carried from an
+    /// earlier step; Hencky and Mohr-Coulomb (phi = psi = 30 degrees,
+    /// every point yielding). Measured misses, F-bar: 1.4e-11 (Hencky) and
+    /// 2.5e-10 (Mohr-Coulomb) of `|K v|`; the cell mean: 3.2e-11 and
+    /// 9.4e-11; all symmetric to 3.3e-16 of the largest entry.
     #[test]
-    fn the_3d_fbar_tangent_is_the_derivative_of_its_force() {
+    fn the_3d_averaged_tangents_are_the_derivatives_of_their_forces() {
         let hencky = serde_json::json!({ "model": "hencky", "youngs_modulus": 1e6,
             "poisson_ratio": 0.3, "density": 0.0 });
         let sand = serde_json::json!({ "model": "mohr_coulomb", "youngs_modulus": 1e6,
             "poisson_ratio": 0.3, "density": 0.0, "cohesion": 1e2, "friction_angle": 30.0 });
-        for material in [hencky, sand] {
+        let variants = ["fbar", "cell_mean"].map(|v| [(v, hencky.clone()), (v, sand.clone())]);
+        for (volumetric, material) in variants.into_iter().flatten() {
             let case = serde_json::json!({
                 "version": 1,
-                "analysis": { "type": "3d", "load_steps": 1, "volumetric": "fbar" },
+                "analysis": { "type": "3d", "load_steps": 1, "volumetric": volumetric },
                 "grid": { "cell_size": 0.5, "origin": [0.1, 0.13, 0.07] },
                 "basis": "gimp",
                 "bodies": [{
@@ -997,8 +999,23 @@ mod tests {
             });
             let case = SolidCase::from_json(&case.to_string()).unwrap();
             let mut sim = Simulation::from_solid_case(&case).unwrap();
-            sim.points.fbar_pressure = (0..sim.points.len())
-                .map(|p| 20.0 * ((p * 37) % 11) as f64 - 100.0)
+            let carried = |p: usize| 20.0 * ((p * 37) % 11) as f64 - 100.0;
+            sim.points.fbar_pressure = (0..sim.points.len()).map(carried).collect();
+            sim.points.cell_mean_stress = (0..sim.points.len())
+                .map(|p| {
+                    let s = carried(p);
+                    nalgebra::Matrix3::new(
+                        s,
+                        0.3 * s,
+                        0.0,
+                        0.3 * s,
+                        -0.5 * s,
+                        0.2 * s,
+                        0.1 * s,
+                        0.2 * s,
+                        0.4 * s,
+                    )
+                })
                 .collect();
             let conn = sim.reset_grid();
             let mut eq = sim.assemble(&conn, 1.0, false, None);
@@ -1012,7 +1029,7 @@ mod tests {
                     }
                 })
                 .collect();
-            let label = format!("3D F-bar, {}", material["model"]);
+            let label = format!("3D {volumetric}, {}", material["model"]);
             assert_tangent_is_derivative(&mut eq, &u, &label, material["model"] == "mohr_coulomb");
         }
     }

@@ -534,7 +534,8 @@ impl Simulation<3> {
         sim.settings.line_search = newton.line_search;
         sim.settings.predictor = newton.predictor;
         sim.settings.ghost_penalty = case.analysis.stabilisation.ghost_penalty;
-        sim.volumetric = case.analysis.volumetric.into();
+        sim.volumetric = case.analysis.volumetric;
+        sim.settings.hourglass = case.analysis.stabilisation.hourglass;
         sim.substepping = Substepping {
             min_fraction: case.analysis.substepping.min_fraction,
             max_cutbacks: case.analysis.substepping.max_cutbacks as usize,

@@ -113,6 +113,7 @@ impl Simulation<3> {
             yielding: p.yielding.clone(),
             stress: p.stress.iter().map(columns).collect(),
             fbar_pressure: p.fbar_pressure.clone(),
+            cell_mean_stress: p.cell_mean_stress.iter().map(columns).collect(),
             step_size: self.step_size_state(),
             last_increment: self.last_increment.as_ref().map(LastIncrement::state),
             settled: self.settled.clone(),
@@ -137,9 +138,8 @@ impl Simulation<3> {
             c.yielding.len(),
             c.stress.len(),
         ];
-        if lengths.iter().any(|&l| l != n)
-            || !(c.fbar_pressure.is_empty() || c.fbar_pressure.len() == n)
-        {
+        let carried = [c.fbar_pressure.len(), c.cell_mean_stress.len()];
+        if lengths.iter().any(|&l| l != n) || carried.iter().any(|&l| l != 0 && l != n) {
             return Err(CheckpointError::OtherCase("the material point counts"));
         }
         if c.steps_done > self.load_steps {
@@ -150,6 +150,9 @@ impl Simulation<3> {
         let p = &mut self.points;
         p.position.clone_from(&c.position);
         p.fbar_pressure.clone_from(&c.fbar_pressure);
+        p.cell_mean_stress = (c.cell_mean_stress.iter())
+            .map(|s| Matrix3::from_column_slice(s))
+            .collect();
         for (f, s) in p.deformation.iter_mut().zip(&c.deformation) {
             f.copy_from_slice(s);
         }
@@ -370,8 +373,8 @@ mod tests {
     }
 
     /// The built-in 3D column (40 steps, its points crossing cells), with
-    /// and without F-bar (whose points carry their pressures across the
-    /// grid's reset in the checkpoint), stopped after step 20 and resumed from its checkpoint in a fresh
+    /// and without F-bar and the cell mean (whose points carry their
+    /// pressures and stresses across the grid's reset in the checkpoint), stopped after step 20 and resumed from its checkpoint in a fresh
     /// simulation ends where the straight run ends, in the same Newton
     /// iterations; a plane-strain checkpoint is not read as a 3D one.
     #[test]
@@ -388,9 +391,12 @@ mod tests {
             }
         }
         let text = crate::case::builtin::get("column3d").unwrap();
-        for volumetric in ["standard", "fbar"] {
+        for volumetric in ["standard", "fbar", "cell_mean"] {
             let mut case: serde_json::Value = serde_json::from_str(text).unwrap();
             case["analysis"]["volumetric"] = volumetric.into();
+            // The default hourglass stiffness (1e-2) lets a point of this
+            // column invert at step 20 (in 2D at step 29).
+            case["analysis"]["stabilisation"] = serde_json::json!({ "hourglass": 0.05 });
             let case = crate::case::solid::SolidCase::from_json(&case.to_string()).unwrap();
             let mut straight = Simulation::from_solid_case(&case).unwrap();
             let whole = straight.run(&mut crate::NoObserver).unwrap();
@@ -421,9 +427,12 @@ mod tests {
                 .map(|(a, b)| (a - b).abs().max())
                 .fold(0.0, f64::max);
             assert!(stressed <= 1e-12 * 4.0e4, "stresses differ by {stressed:e}");
-            if volumetric == "fbar" {
-                assert_eq!(checkpoint.fbar_pressure.len(), resumed.points.len());
-            }
+            let carried = match volumetric {
+                "fbar" => checkpoint.fbar_pressure.len(),
+                "cell_mean" => checkpoint.cell_mean_stress.len(),
+                _ => resumed.points.len(),
+            };
+            assert_eq!(carried, resumed.points.len());
         }
         // A plane-strain case's checkpoint is refused by a 3D run.
         let plane = Simulation::new(&footing()).unwrap().checkpoint().to_bytes();

@@ -984,16 +984,7 @@ impl RunSpace<2> for Dim<2> {
     }
 
     fn averaging(sim: &Simulation, start: &Configuration) -> Option<CellAverages> {
-        match sim.volumetric {
-            Volumetric::Fbar => Some(CellAverages::Fbar(
-                FbarCells::new(start).carrying(start, &sim.points.fbar_pressure),
-            )),
-            Volumetric::CellMean => Some(CellAverages::CellMean(
-                CellMean::new(start, sim.settings.hourglass)
-                    .carrying(start, &sim.points.cell_mean_stress),
-            )),
-            Volumetric::Standard => None,
-        }
+        sim.averaging(start)
     }
 
     /// The stress slopes of the points the one-point cells' term holds
@@ -1027,13 +1018,7 @@ impl RunSpace<2> for Dim<2> {
         averaged: Option<Carried>,
         carried: Vec<Box<dyn Any>>,
     ) -> Vec<SupportTraction> {
-        sim.points.fbar_pressure = Vec::new();
-        sim.points.cell_mean_stress = Vec::new();
-        match averaged {
-            Some(Carried::FbarPressure(pressure)) => sim.points.fbar_pressure = pressure,
-            Some(Carried::CellMeanStress(stress)) => sim.points.cell_mean_stress = stress,
-            None => {}
-        }
+        sim.keep_carried(averaged);
         let mut support_tractions = Vec::new();
         for carried in carried {
             if let Ok(band) = carried.downcast::<BandTerms>() {
@@ -1075,15 +1060,8 @@ impl RunSpace<3> for Dim<3> {
         terms
     }
 
-    /// F-bar or none: the 3D case admits no other (`case::solid`).
-    fn averaging(sim: &Simulation<3>, start: &Configuration<3>) -> Option<FbarCells<3>> {
-        match sim.volumetric {
-            Volumetric::Fbar => {
-                Some(FbarCells::new(start).carrying(start, &sim.points.fbar_pressure))
-            }
-            Volumetric::Standard => None,
-            Volumetric::CellMean => unreachable!("a 3D case with the cell mean is refused"),
-        }
+    fn averaging(sim: &Simulation<3>, start: &Configuration<3>) -> Option<CellAverages<3>> {
+        sim.averaging(start)
     }
 
     fn before_commit(_: &mut Simulation<3>, _: &Connectivity<3>, _: &[f64], _: &[Box<dyn Any>]) {}
@@ -1092,10 +1070,10 @@ impl RunSpace<3> for Dim<3> {
         sim: &mut Simulation<3>,
         _: &Connectivity<3>,
         _: &[f64],
-        averaged: Option<Vec<f64>>,
+        averaged: Option<Carried<3>>,
         _: Vec<Box<dyn Any>>,
     ) -> Vec<SupportTraction> {
-        sim.points.fbar_pressure = averaged.unwrap_or_default();
+        sim.keep_carried(averaged);
         Vec::new()
     }
 
@@ -1106,6 +1084,38 @@ impl RunSpace<3> for Dim<3> {
 
     fn step_finished(sim: &Simulation<3>, observer: &mut dyn Observer, report: &StepReport) {
         observer.solid_step_finished(report, &SolidStepState::new(sim));
+    }
+}
+
+impl<const D: usize> Simulation<D>
+where
+    Dim<D>: StepSpace<D>,
+{
+    /// The averaging of the points' deformation the run asks for, with
+    /// what the points carry from the last step.
+    fn averaging(&self, start: &Configuration<D>) -> Option<CellAverages<D>> {
+        match self.volumetric {
+            Volumetric::Fbar => Some(CellAverages::Fbar(
+                FbarCells::new(start).carrying(start, &self.points.fbar_pressure),
+            )),
+            Volumetric::CellMean => Some(CellAverages::CellMean(
+                CellMean::new(start, self.settings.hourglass)
+                    .carrying(start, &self.points.cell_mean_stress),
+            )),
+            Volumetric::Standard => None,
+        }
+    }
+
+    /// Keeps what the points carry of a converged step's averaging into
+    /// the next.
+    fn keep_carried(&mut self, averaged: Option<Carried<D>>) {
+        self.points.fbar_pressure = Vec::new();
+        self.points.cell_mean_stress = Vec::new();
+        match averaged {
+            Some(Carried::FbarPressure(pressure)) => self.points.fbar_pressure = pressure,
+            Some(Carried::CellMeanStress(stress)) => self.points.cell_mean_stress = stress,
+            None => {}
+        }
     }
 }
 

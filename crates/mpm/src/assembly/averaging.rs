@@ -8,11 +8,10 @@
 //! it is: the nodes its cells couple, the internal force at a trial
 //! increment (keeping what the tangent and the commit need of it), a
 //! point's response there, the points' stiffness, and what the next step
-//! carries across the grid's reset. Plane strain has both
-//! ([`CellAverages`]); 3D has F-bar ([`FbarCells`] on cells of eight
-//! corners).
+//! carries across the grid's reset. Both are one code for either
+//! dimension ([`CellAverages`]; in 3D their cells have eight corners).
 
-use nalgebra::{Matrix2, SMatrix};
+use nalgebra::SMatrix;
 use rayon::prelude::*;
 
 use super::cell_mean::{CellMean, CellTrial};
@@ -82,29 +81,32 @@ where
     fn trial_bytes(trial: &Self::Trial) -> usize;
 }
 
-/// The plane-strain averagings.
-pub enum CellAverages {
-    Fbar(FbarCells),
-    CellMean(CellMean),
+/// The averagings, in either dimension.
+pub enum CellAverages<const D: usize = 2> {
+    Fbar(FbarCells<D>),
+    CellMean(CellMean<D>),
 }
 
 /// A trial state of [`CellAverages`].
-pub enum AveragedTrial {
-    Fbar(FbarTrial),
-    CellMean(CellTrial),
+pub enum AveragedTrial<const D: usize = 2> {
+    Fbar(FbarTrial<D>),
+    CellMean(CellTrial<D>),
 }
 
 /// What a step carries of the last one's averaging: F-bar's pressures
 /// ([`FbarCells::carried`]) or the cell mean's stresses
 /// ([`CellMean::carried`]).
-pub enum Carried {
+pub enum Carried<const D: usize = 2> {
     FbarPressure(Vec<f64>),
-    CellMeanStress(Vec<Matrix2<f64>>),
+    CellMeanStress(Vec<SMatrix<f64, D, D>>),
 }
 
-impl Averaging<2> for CellAverages {
-    type Trial = AveragedTrial;
-    type Carried = Carried;
+impl<const D: usize> Averaging<D> for CellAverages<D>
+where
+    Dim<D>: Space<D>,
+{
+    type Trial = AveragedTrial<D>;
+    type Carried = Carried<D>;
 
     fn coupling_groups(&self) -> Vec<Vec<u32>> {
         match self {
@@ -115,10 +117,10 @@ impl Averaging<2> for CellAverages {
 
     fn internal_force(
         &self,
-        conn: &Connectivity,
-        mp: &MaterialPoints,
+        conn: &Connectivity<D>,
+        mp: &MaterialPoints<D>,
         u: &[f64],
-    ) -> Result<(Vec<f64>, AveragedTrial), InadmissiblePoint> {
+    ) -> Result<(Vec<f64>, AveragedTrial<D>), InadmissiblePoint> {
         match self {
             CellAverages::CellMean(cells) => {
                 let trial = cells.trial(conn, mp, u)?;
@@ -134,13 +136,13 @@ impl Averaging<2> for CellAverages {
 
     fn response(
         &self,
-        trial: &AveragedTrial,
-        conn: &Connectivity,
-        mp: &MaterialPoints,
+        trial: &AveragedTrial<D>,
+        conn: &Connectivity<D>,
+        mp: &MaterialPoints<D>,
         u: &[f64],
         p: usize,
         want_tangent: bool,
-    ) -> Result<Response<2>, InadmissiblePoint> {
+    ) -> Result<Response<D>, InadmissiblePoint> {
         match (self, trial) {
             (CellAverages::CellMean(cells), AveragedTrial::CellMean(trial)) => {
                 cells.response(trial, mp, p, want_tangent)
@@ -152,7 +154,7 @@ impl Averaging<2> for CellAverages {
         }
     }
 
-    fn own_tangent(&self, mp: &MaterialPoints, p: usize) -> Option<Tangent<2>> {
+    fn own_tangent(&self, mp: &MaterialPoints<D>, p: usize) -> Option<Tangent<D>> {
         match self {
             // The points' own stiffness is the hourglass term's; the
             // models' tangents enter through the cells' blocks.
@@ -164,9 +166,9 @@ impl Averaging<2> for CellAverages {
 
     fn add_couplings(
         &self,
-        trial: &AveragedTrial,
-        conn: &Connectivity,
-        mp: &MaterialPoints,
+        trial: &AveragedTrial<D>,
+        conn: &Connectivity<D>,
+        mp: &MaterialPoints<D>,
         pattern: &Pattern,
         values: &mut [f64],
     ) {
@@ -181,7 +183,7 @@ impl Averaging<2> for CellAverages {
         }
     }
 
-    fn carried(&self, trial: &AveragedTrial, mp: &MaterialPoints) -> Carried {
+    fn carried(&self, trial: &AveragedTrial<D>, mp: &MaterialPoints<D>) -> Carried<D> {
         match (self, trial) {
             (CellAverages::CellMean(cells), AveragedTrial::CellMean(trial)) => {
                 Carried::CellMeanStress(cells.carried(trial, mp))
@@ -193,7 +195,7 @@ impl Averaging<2> for CellAverages {
         }
     }
 
-    fn trial_bytes(trial: &AveragedTrial) -> usize {
+    fn trial_bytes(trial: &AveragedTrial<D>) -> usize {
         match trial {
             AveragedTrial::Fbar(trial) => trial.heap_bytes(),
             AveragedTrial::CellMean(trial) => trial.heap_bytes(),
@@ -201,7 +203,7 @@ impl Averaging<2> for CellAverages {
     }
 }
 
-/// F-bar in either dimension (in 3D the only averaging so far).
+/// F-bar on its own, as [`CellAverages::Fbar`] asks it.
 impl<const D: usize> Averaging<D> for FbarCells<D>
 where
     Dim<D>: Space<D>,

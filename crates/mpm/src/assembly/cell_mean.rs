@@ -35,39 +35,42 @@
 //! and what it loses in bending (the strain's variation within a cell):
 //! docs/guide.md, Material models, and `mpm study bearing`.
 
-use nalgebra::{Matrix2, Matrix4};
+use nalgebra::SMatrix;
 use rayon::prelude::*;
 
 use super::Pattern;
-use super::fbar::FbarCells;
+use super::fbar::{FbarCells, higher_invariants};
 use crate::configuration::Configuration;
 use crate::grid::{Connectivity, increment};
-use crate::material::Response;
 use crate::parallel;
-use crate::particles::MaterialPoints;
 use crate::particles::admissible::{self, InadmissiblePoint};
+use crate::particles::{Dim, MaterialPoints, Space, TangentMatrix};
+
+type Tensor<const D: usize> = SMatrix<f64, D, D>;
+type Tangent<const D: usize> = <Dim<D> as Space<D>>::Tangent;
+type Response<const D: usize> = <Dim<D> as Space<D>>::Response;
 
 /// The averaging cells of a step, with each cell's `beta V0_c`.
-pub struct CellMean {
-    cells: FbarCells,
+pub struct CellMean<const D: usize = 2> {
+    cells: FbarCells<D>,
     /// Per cell, `beta V0_c`.
     stiffness: Vec<f64>,
     /// Per point, the stress it carries beside its cell's mean (`O_q`, see
     /// [`CellMean::carrying`]); zero until it is given.
-    offset: Vec<Matrix2<f64>>,
+    offset: Vec<Tensor<D>>,
 }
 
 /// A trial state's cell terms.
-pub struct CellTrial {
+pub struct CellTrial<const D: usize = 2> {
     /// Per point, its own displacement gradient `g_q`.
-    grads: Vec<Matrix2<f64>>,
+    grads: Vec<Tensor<D>>,
     /// Per cell, `g_bar`.
-    means: Vec<Matrix2<f64>>,
+    means: Vec<Tensor<D>>,
     /// Per cell, `T_c`.
-    stress: Vec<Matrix2<f64>>,
+    stress: Vec<Tensor<D>>,
 }
 
-impl CellTrial {
+impl<const D: usize> CellTrial<D> {
     /// Bytes held on the heap.
     pub fn heap_bytes(&self) -> usize {
         use std::mem::size_of_val;
@@ -77,10 +80,13 @@ impl CellTrial {
     }
 }
 
-impl CellMean {
+impl<const D: usize> CellMean<D>
+where
+    Dim<D>: Space<D>,
+{
     /// The cells of the step starting at `start`, with `beta` the fraction
     /// `hourglass` of each cell's material's `2 mu`.
-    pub fn new(start: &Configuration, hourglass: f64) -> Self {
+    pub fn new(start: &Configuration<D>, hourglass: f64) -> Self {
         let cells = FbarCells::new(start);
         let points = start.points;
         let fraction = hourglass;
@@ -93,7 +99,7 @@ impl CellMean {
                 fraction * 2.0 * mu * v0
             })
             .collect();
-        let offset = vec![Matrix2::zeros(); points.len()];
+        let offset = vec![Tensor::zeros(); points.len()];
         Self {
             cells,
             stiffness,
@@ -120,7 +126,7 @@ impl CellMean {
     /// where the model changed (a strength-reduction trial weakens it),
     /// that less what its own stress lost. A point alone in its cell is a
     /// standard point and carries nothing.
-    pub fn carrying(mut self, start: &Configuration, carried: &[Matrix2<f64>]) -> Self {
+    pub fn carrying(mut self, start: &Configuration<D>, carried: &[Tensor<D>]) -> Self {
         let mp = start.points;
         if carried.len() != mp.len() {
             return self;
@@ -134,14 +140,14 @@ impl CellMean {
             .with_min_len(parallel::POINT_RESPONSES)
             .map(|q| {
                 if self.cells.members(self.cells.place(q).0).len() == 1 {
-                    return Matrix2::zeros();
+                    return Tensor::zeros();
                 }
-                let offset = self
-                    .response(&trial, mp, q, false)
-                    .map(|own| carried[q] + own.p - self.mean_stress(&trial, mp, q));
+                let offset = self.response(&trial, mp, q, false).map(|own| {
+                    carried[q] + Dim::<D>::stress_of(&own) - self.mean_stress(&trial, mp, q)
+                });
                 match offset {
                     Ok(o) if o.iter().all(|x| x.is_finite()) => o,
-                    _ => Matrix2::zeros(),
+                    _ => Tensor::zeros(),
                 }
             })
             .collect();
@@ -155,21 +161,22 @@ impl CellMean {
     /// pushed to the step's end by its cell's mean `dF`, for
     /// [`CellMean::carrying`] in the next step: where no point changes
     /// cell, the next step's offsets are those of this one, as moved.
-    pub fn carried(&self, trial: &CellTrial, mp: &MaterialPoints) -> Vec<Matrix2<f64>> {
+    pub fn carried(&self, trial: &CellTrial<D>, mp: &MaterialPoints<D>) -> Vec<Tensor<D>> {
         (0..mp.len())
             .into_par_iter()
             .with_min_len(parallel::POINT_RESPONSES)
             .map(|q| {
-                let df_bar = Matrix2::identity() + trial.means[self.cells.place(q).0];
+                let df_bar = Tensor::<D>::identity() + trial.means[self.cells.place(q).0];
                 let worked = self.mean_stress(trial, mp, q) + self.offset[q];
-                let own = self.response(trial, mp, q, false).map_or(worked, |r| r.p);
+                let own = (self.response(trial, mp, q, false))
+                    .map_or(worked, |r| Dim::<D>::stress_of(&r));
                 (worked - own) * df_bar.transpose()
             })
             .collect()
     }
 
     /// Point `q`'s share of its cell's stress, `w_q / V0_q T_c`.
-    fn mean_stress(&self, trial: &CellTrial, mp: &MaterialPoints, q: usize) -> Matrix2<f64> {
+    fn mean_stress(&self, trial: &CellTrial<D>, mp: &MaterialPoints<D>, q: usize) -> Tensor<D> {
         let (c, w) = self.cells.place(q);
         trial.stress[c] * (w / mp.volume0[q])
     }
@@ -183,16 +190,16 @@ impl CellMean {
     /// response to its cell's mean; or the first inadmissible point.
     pub fn trial(
         &self,
-        conn: &Connectivity,
-        mp: &MaterialPoints,
+        conn: &Connectivity<D>,
+        mp: &MaterialPoints<D>,
         u: &[f64],
-    ) -> Result<CellTrial, InadmissiblePoint> {
-        let grads: Vec<Matrix2<f64>> = (0..mp.len())
+    ) -> Result<CellTrial<D>, InadmissiblePoint> {
+        let grads: Vec<Tensor<D>> = (0..mp.len())
             .into_par_iter()
             .with_min_len(parallel::BOOKKEEPING)
             .map(|p| increment(conn.point_links(p), u).1)
             .collect();
-        let means: Vec<Matrix2<f64>> = (0..self.cells.cells())
+        let means: Vec<Tensor<D>> = (0..self.cells.cells())
             .map(|c| {
                 self.cells
                     .members(c)
@@ -206,12 +213,12 @@ impl CellMean {
             means,
             stress: Vec::new(),
         };
-        let stresses: Vec<Matrix2<f64>> = (0..mp.len())
+        let stresses: Vec<Tensor<D>> = (0..mp.len())
             .into_par_iter()
             .with_min_len(parallel::POINT_RESPONSES)
             .map(|p| {
                 self.response(&trial, mp, p, false)
-                    .map(|r| r.p * mp.volume0[p])
+                    .map(|r| Dim::<D>::stress_of(&r) * mp.volume0[p])
             })
             .collect::<Result<_, _>>()?;
         trial.stress = (0..self.cells.cells())
@@ -231,29 +238,25 @@ impl CellMean {
     /// gradient or its cell's inverts it or the response is not finite.
     pub fn response(
         &self,
-        trial: &CellTrial,
-        mp: &MaterialPoints,
+        trial: &CellTrial<D>,
+        mp: &MaterialPoints<D>,
         p: usize,
         want_tangent: bool,
-    ) -> Result<Response, InadmissiblePoint> {
+    ) -> Result<Response<D>, InadmissiblePoint> {
         let (c, _) = self.cells.place(p);
         let (g, g_bar) = (&trial.grads[p], &trial.means[c]);
-        let j_start = mp.deformation[p].determinant();
-        let dj = |g: &Matrix2<f64>| 1.0 + g.trace() + g.determinant();
+        let j_start = mp.jacobian(p);
+        let dj = |g: &Tensor<D>| 1.0 + g.trace() + higher_invariants(g);
         let j_bar = j_start * dj(g_bar);
         admissible::check_volume(p, j_start, &[j_start * dj(g), j_bar])?;
         let material = &mp.materials[mp.material[p] as usize];
-        let response = if want_tangent {
-            material.respond(&mp.history[p], g_bar, j_start)
-        } else {
-            material.respond_without_tangent(&mp.history[p], g_bar, j_start)
-        };
+        let response = Dim::<D>::respond(material, &mp.history[p], g_bar, j_start, want_tangent);
         admissible::check_response(p, j_bar, response)
     }
 
     /// Point `q`'s stress `S_q`, paired with its own gradient (see the
     /// module docs), with the offset it carries.
-    pub fn stress(&self, trial: &CellTrial, mp: &MaterialPoints, q: usize) -> Matrix2<f64> {
+    pub fn stress(&self, trial: &CellTrial<D>, mp: &MaterialPoints<D>, q: usize) -> Tensor<D> {
         let (c, w) = self.cells.place(q);
         (trial.stress[c] + (trial.grads[q] - trial.means[c]) * self.stiffness[c])
             * (w / mp.volume0[q])
@@ -263,9 +266,9 @@ impl CellMean {
     /// The local part of point `q`'s tangent (on its own gradient),
     /// `beta V0_c w_q / V0_q` times the identity: the stiffness assembly
     /// multiplies by `V0_q`.
-    pub fn local_tangent(&self, mp: &MaterialPoints, q: usize) -> Matrix4<f64> {
+    pub fn local_tangent(&self, mp: &MaterialPoints<D>, q: usize) -> Tangent<D> {
         let (c, w) = self.cells.place(q);
-        Matrix4::identity() * (self.stiffness[c] * w / mp.volume0[q])
+        Tangent::<D>::identity() * (self.stiffness[c] * w / mp.volume0[q])
     }
 
     /// Adds the cell terms' stiffness, `G_bar^T (sum_p V0_p A_p - beta
@@ -274,52 +277,61 @@ impl CellMean {
     /// tangents are made here, at the cells' means.
     pub fn add_to(
         &self,
-        conn: &Connectivity,
-        mp: &MaterialPoints,
-        trial: &CellTrial,
+        conn: &Connectivity<D>,
+        mp: &MaterialPoints<D>,
+        trial: &CellTrial<D>,
         pattern: &Pattern,
         values: &mut [f64],
     ) {
-        let blocks: Vec<(usize, Vec<[f64; 2]>, Matrix4<f64>)> = (0..self.cells.cells())
+        let blocks: Vec<(usize, Vec<[f64; D]>, Tangent<D>)> = (0..self.cells.cells())
             .into_par_iter()
             .map(|c| {
                 let nodes = self.cells.nodes(c);
                 let index = |n: u32| nodes.binary_search(&n).expect("a node of the cell");
-                let mut mean_grad = vec![[0.0; 2]; nodes.len()];
-                let mut a = Matrix4::identity() * -self.stiffness[c];
+                let mut mean_grad = vec![[0.0; D]; nodes.len()];
+                let mut a = Tangent::<D>::identity() * -self.stiffness[c];
                 for &q in self.cells.members(c) {
                     let q = q as usize;
                     let w = self.cells.place(q).1;
                     for l in conn.point_links(q) {
                         let k = index(l.node);
-                        mean_grad[k][0] += w * l.grad[0];
-                        mean_grad[k][1] += w * l.grad[1];
+                        for d in 0..D {
+                            mean_grad[k][d] += w * l.grad[d];
+                        }
                     }
                     // An admissible trial: the point loop checked it.
                     let response = self
                         .response(trial, mp, q, true)
                         .expect("an admissible trial state");
-                    a += response.tangent * mp.volume0[q];
+                    a += Dim::<D>::tangent_of(&response) * mp.volume0[q];
                 }
                 (c, mean_grad, a)
             })
             .collect();
         for (c, m, a) in blocks {
             let nodes = self.cells.nodes(c);
-            // q[2i+l][j] = sum_n a[(2i+l),(2j+n)] m_b,n, per node b.
+            // q[D i + l][j] = sum_n a[(D i + l), (D j + n)] m_b,n, per
+            // node b (rows 0..D^2 of nine); sums from their first term.
             for (kb, &nb) in nodes.iter().enumerate() {
-                let mut q = [[0.0; 2]; 4];
-                for (row, qr) in q.iter_mut().enumerate() {
+                let mut q = [[0.0; D]; 9];
+                for (row, qr) in q.iter_mut().enumerate().take(D * D) {
                     for (j, qrj) in qr.iter_mut().enumerate() {
-                        *qrj = a[(row, 2 * j)] * m[kb][0] + a[(row, 2 * j + 1)] * m[kb][1];
+                        let mut sum = a[(row, D * j)] * m[kb][0];
+                        for n in 1..D {
+                            sum += a[(row, D * j + n)] * m[kb][n];
+                        }
+                        *qrj = sum;
                     }
                 }
                 for (ka, &na) in nodes.iter().enumerate() {
                     let (base, stride) = pattern.block(na, nb);
-                    for i in 0..2 {
-                        for j in 0..2 {
-                            values[base + i + j * stride] +=
-                                m[ka][0] * q[2 * i][j] + m[ka][1] * q[2 * i + 1][j];
+                    for i in 0..D {
+                        for j in 0..D {
+                            let mut sum = m[ka][0] * q[D * i][j];
+                            for l in 1..D {
+                                sum += m[ka][l] * q[D * i + l][j];
+                            }
+                            values[base + i + j * stride] += sum;
                         }
                     }
                 }

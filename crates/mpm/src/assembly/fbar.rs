@@ -538,7 +538,7 @@ fn cofactor<const D: usize>(m: &Tensor<D>) -> Tensor<D> {
 
 /// `dJ - 1 - tr g` for `dJ = det(I + g)`: `det g` in 2D, the second
 /// invariant and `det g` in 3D.
-fn higher_invariants<const D: usize>(g: &Tensor<D>) -> f64
+pub(super) fn higher_invariants<const D: usize>(g: &Tensor<D>) -> f64
 where
     Dim<D>: Space<D>,
 {

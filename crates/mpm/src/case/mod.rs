@@ -568,7 +568,7 @@ fn default_tangent_regularisation() -> f64 {
 pub(crate) fn default_ghost_penalty() -> f64 {
     NewtonSettings::default().ghost_penalty
 }
-fn default_hourglass() -> f64 {
+pub(crate) fn default_hourglass() -> f64 {
     NewtonSettings::default().hourglass
 }
 fn default_lone_points() -> bool {

@@ -65,32 +65,13 @@ pub struct SolidAnalysis {
     pub substepping: SubsteppingSpec,
     #[serde(default)]
     pub stabilisation: SolidStabilisation,
-    /// Each point's volume change the average of its cell's (`fbar`,
-    /// against volumetric locking near incompressibility), or its own
-    /// (`standard`). The plane-strain case's `cell_mean` is not made for
-    /// 3D cells yet.
+    /// As the plane-strain case's: each point's volume change the average
+    /// of its cell's (`fbar`, against volumetric locking near
+    /// incompressibility), its whole strain increment its cell's mean
+    /// (`cell_mean`, against locking by dilatancy), or its own
+    /// (`standard`); the cells have eight corners.
     #[serde(default)]
-    pub volumetric: SolidVolumetric,
-}
-
-/// The volumetric treatments a 3D step has.
-#[derive(
-    Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default, schemars::JsonSchema,
-)]
-#[serde(rename_all = "snake_case")]
-pub enum SolidVolumetric {
-    #[default]
-    Standard,
-    Fbar,
-}
-
-impl From<SolidVolumetric> for super::Volumetric {
-    fn from(v: SolidVolumetric) -> Self {
-        match v {
-            SolidVolumetric::Standard => Self::Standard,
-            SolidVolumetric::Fbar => Self::Fbar,
-        }
-    }
+    pub volumetric: super::Volumetric,
 }
 
 /// The stabilisation a 3D step has so far.
@@ -102,12 +83,17 @@ pub struct SolidStabilisation {
     /// strain case's `analysis.stabilisation.ghost_penalty`; 0 turns it off.
     #[serde(default = "super::default_ghost_penalty")]
     pub ghost_penalty: f64,
+    /// With `analysis.volumetric: cell_mean`, the plane-strain case's
+    /// `analysis.stabilisation.hourglass` (default 1e-2).
+    #[serde(default = "super::default_hourglass")]
+    pub hourglass: f64,
 }
 
 impl Default for SolidStabilisation {
     fn default() -> Self {
         Self {
             ghost_penalty: super::default_ghost_penalty(),
+            hourglass: super::default_hourglass(),
         }
     }
 }
@@ -359,12 +345,14 @@ impl SolidCase {
         }
         check_newton(&a.newton)?;
         check_substepping(&a.substepping)?;
-        let gamma = a.stabilisation.ghost_penalty;
-        if !(gamma >= 0.0 && gamma.is_finite()) {
-            return Err(CaseError::new(
-                "analysis.stabilisation.ghost_penalty",
-                "must be a finite number, 0 or more",
-            ));
+        let s = &a.stabilisation;
+        for (value, path) in [
+            (s.ghost_penalty, "analysis.stabilisation.ghost_penalty"),
+            (s.hourglass, "analysis.stabilisation.hourglass"),
+        ] {
+            if !(value >= 0.0 && value.is_finite()) {
+                return Err(CaseError::new(path, "must be a finite number, 0 or more"));
+            }
         }
         if self.output.every == 0 {
             return Err(CaseError::new("output.every", "must be at least 1"));
@@ -784,8 +772,8 @@ mod tests {
         material["bodies"][0]["material"]["poisson_ratio"] = 0.5.into();
         let mut spline = column();
         spline["basis"] = "bspline2".into();
-        let mut cell_mean = column();
-        cell_mean["analysis"]["volumetric"] = "cell_mean".into();
+        let mut volumetric = column();
+        volumetric["analysis"]["volumetric"] = "b_bar".into();
         let turning = |fix: &str, angle: f64| {
             let mut case = column();
             case["supports"][0]["fix"] = fix.into();
@@ -795,7 +783,7 @@ mod tests {
         };
         for (case, path) in [
             (spline, "basis"),
-            (cell_mean, "analysis.volumetric"),
+            (volumetric, "analysis.volumetric"),
             (turning("z", 10.0), "supports[0].fix"),
             (turning("xyz", 400.0), "supports[0].rotation.angle"),
             (steps, "analysis.load_steps"),

@@ -73,7 +73,7 @@ pub trait Space<const D: usize> {
         Dim<D>: Space<D>;
 }
 
-/// What F-bar does with a model's `D^2 x D^2` tangent: sums, scaling, and
+/// What the averagings (F-bar, the cell mean) do with a model's `D^2 x D^2` tangent: sums, scaling, and
 /// products of `D x D` tensors flattened row by row.
 pub trait TangentMatrix:
     Copy
@@ -84,6 +84,9 @@ pub trait TangentMatrix:
     + AddAssign
 {
     fn from_fn(f: impl FnMut(usize, usize) -> f64) -> Self;
+    fn identity() -> Self {
+        Self::from_fn(|r, c| if r == c { 1.0 } else { 0.0 })
+    }
 }
 
 impl TangentMatrix for Matrix4<f64> {
