@@ -26,3 +26,4 @@ mod slab3d;
 mod stages;
 mod strength_reduction;
 mod triaxial3d;
+mod twist3d;
