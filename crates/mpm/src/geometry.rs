@@ -81,6 +81,24 @@ pub struct HexMesh {
 }
 
 impl HexMesh {
+    /// A hexahedron's six faces, as its corners (gmsh's order).
+    pub const FACES: [[usize; 4]; 6] = [
+        [0, 1, 2, 3],
+        [4, 5, 6, 7],
+        [0, 1, 5, 4],
+        [1, 2, 6, 5],
+        [2, 3, 7, 6],
+        [3, 0, 4, 7],
+    ];
+
+    /// The nodes of face `face` of element `k`, sorted: the same for the
+    /// two elements that share it.
+    pub fn face_key(&self, k: usize, face: usize) -> [usize; 4] {
+        let mut key = Self::FACES[face].map(|c| self.elements[k][c]);
+        key.sort_unstable();
+        key
+    }
+
     /// Element `k`'s corners.
     pub fn corners(&self, k: usize) -> [[f64; 3]; 8] {
         self.elements[k].map(|i| self.nodes[i])

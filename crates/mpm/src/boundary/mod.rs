@@ -6,9 +6,11 @@ pub mod curve;
 pub mod detection;
 pub mod edge_detection;
 pub mod face_loads;
+pub mod face_patches;
 pub mod ibm;
 pub mod loading;
 pub mod quadrature;
+pub mod surface;
 pub mod traction;
 
 use serde::Serialize;

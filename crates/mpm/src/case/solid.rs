@@ -627,14 +627,6 @@ fn check_hex_mesh(path: &str, mesh: &HexMesh) -> Result<(), CaseError> {
     .bounds();
     let scale = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
     let mut faces: std::collections::HashMap<[usize; 4], u8> = std::collections::HashMap::new();
-    const FACES: [[usize; 4]; 6] = [
-        [0, 1, 2, 3],
-        [4, 5, 6, 7],
-        [0, 1, 5, 4],
-        [1, 2, 6, 5],
-        [2, 3, 7, 6],
-        [3, 0, 4, 7],
-    ];
     for (k, e) in mesh.elements.iter().enumerate() {
         let at = format!("{path}.elements[{k}]");
         if let Some(&i) = e.iter().find(|&&i| i >= nodes.len()) {
@@ -661,9 +653,8 @@ fn check_hex_mesh(path: &str, mesh: &HexMesh) -> Result<(), CaseError> {
                  (nodes in gmsh's order: one face 0 1 2 3, then 4 5 6 7 across from them)",
             ));
         }
-        for face in FACES {
-            let mut key = face.map(|c| e[c]);
-            key.sort_unstable();
+        for face in 0..6 {
+            let key = mesh.face_key(k, face);
             let count = faces.entry(key).or_insert(0);
             *count += 1;
             if *count > 2 {

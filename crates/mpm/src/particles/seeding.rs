@@ -403,7 +403,10 @@ impl Star {
 /// own patch; any other convex polygon is cut by the lines from its
 /// centroid to the middles of its sides, one patch per vertex. Otherwise
 /// its triangles ([`crate::triangulation`]) are cut so, three patches each.
-fn polygon_patches(vertices: &[[f64; 2]], holes: &[Vec<[f64; 2]>]) -> Vec<[[f64; 2]; 4]> {
+pub(crate) fn polygon_patches(
+    vertices: &[[f64; 2]],
+    holes: &[Vec<[f64; 2]>],
+) -> Vec<[[f64; 2]; 4]> {
     let mid = |a: [f64; 2], b: [f64; 2]| [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0];
     if holes.is_empty() && strictly_convex(vertices) {
         let v = if crate::geometry::signed_area(vertices) > 0.0 {
@@ -446,7 +449,7 @@ fn triangle_patches([a, b, c]: [[f64; 2]; 3]) -> [[[f64; 2]; 4]; 3] {
 /// Its points are those of a composite midpoint rule on each element's
 /// map, each with its exact sub-cell's area (the rule's weight times the
 /// Jacobian, integrated), and each sub-cell its point's GIMP domain.
-fn mesh_patches(mesh: &crate::geometry::Mesh) -> Vec<[[f64; 2]; 4]> {
+pub(crate) fn mesh_patches(mesh: &crate::geometry::Mesh) -> Vec<[[f64; 2]; 4]> {
     mesh.element_corners()
         .flat_map(|v| match v.len() {
             3 => triangle_patches([v[0], v[1], v[2]]).to_vec(),
