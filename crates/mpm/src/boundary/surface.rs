@@ -296,133 +296,216 @@ fn derivative(here: Point3, back: &[(Point3, f64)], ahead: &[(Point3, f64)]) -> 
 
 /// The surface through `grid`, each patch from the data around it.
 pub fn interpolate(grid: &DataGrid) -> Surface {
-    let [nu, nv] = grid.counts;
+    let interpolation = Interpolation::new(grid.clone());
     let cells = grid.cells();
-    // Tangents along the rows (u) and the columns (v).
-    let mut tu = vec![None; nu * nv];
-    for j in 0..nv {
-        let row: Vec<Point3> = (0..nu).map(|i| grid.at(i, j)).collect();
-        for (i, t) in line_tangents(&row, grid.closed[0]).into_iter().enumerate() {
-            tu[i + nu * j] = Some(t);
+    let patches = (0..cells[1])
+        .flat_map(|l| (0..cells[0]).map(move |k| (k, l)))
+        .map(|(k, l)| interpolation.patch(k, l))
+        .collect();
+    Surface { cells, patches }
+}
+
+/// A data grid with what its patches are made from: the tangents along
+/// its rows (`tu`) and columns (`tv`) at every data point, and the lengths
+/// of its edges (`au[i + nu j]` from `(i, j)` to `(i + 1, j)`, `av` from
+/// `(i, j)` to `(i, j + 1)`). A data point moved ([`Interpolation::move_point`])
+/// changes only its row's and its column's, and the patches within
+/// [`Interpolation::REACH`] of it.
+#[derive(Debug, Clone)]
+pub struct Interpolation {
+    grid: DataGrid,
+    tu: Vec<LineTangent>,
+    tv: Vec<LineTangent>,
+    au: Vec<f64>,
+    av: Vec<f64>,
+}
+
+impl Interpolation {
+    /// How far (in cells, each way) the patches a data point shapes reach:
+    /// patch `(k, l)` reads data up to three rows and columns beyond its
+    /// corners (the twist's differences two along a line, each of an edge
+    /// whose tangent reads one further). Checked by
+    /// `moving_a_data_point_changes_only_the_patches_within_reach` (at 2 it
+    /// fails).
+    pub const REACH: usize = 3;
+
+    pub fn new(grid: DataGrid) -> Self {
+        let n = grid.points.len();
+        let mut out = Self {
+            grid,
+            tu: vec![LineTangent::smooth([0.0; 3]); n],
+            tv: vec![LineTangent::smooth([0.0; 3]); n],
+            au: vec![0.0; n],
+            av: vec![0.0; n],
+        };
+        for j in 0..out.grid.counts[1] {
+            out.row(j);
         }
-    }
-    let mut tv = vec![None; nu * nv];
-    for i in 0..nu {
-        let column: Vec<Point3> = (0..nv).map(|j| grid.at(i, j)).collect();
-        for (j, t) in line_tangents(&column, grid.closed[1])
-            .into_iter()
-            .enumerate()
-        {
-            tv[i + nu * j] = Some(t);
+        for i in 0..out.grid.counts[0] {
+            out.column(i);
         }
+        out
     }
-    let tu: Vec<LineTangent> = tu.into_iter().map(Option::unwrap).collect();
-    let tv: Vec<LineTangent> = tv.into_iter().map(Option::unwrap).collect();
-    let wrap = |k: isize, d: usize| -> Option<usize> {
-        let n = grid.counts[d] as isize;
-        if grid.closed[d] {
+
+    pub fn grid(&self) -> &DataGrid {
+        &self.grid
+    }
+
+    /// Index `k` along direction `d`, wrapped round a closed direction;
+    /// `None` past an open end.
+    fn wrap(&self, k: isize, d: usize) -> Option<usize> {
+        let n = self.grid.counts[d] as isize;
+        if self.grid.closed[d] {
             Some(k.rem_euclid(n) as usize)
         } else {
             (0..n).contains(&k).then_some(k as usize)
         }
-    };
-    // Edge lengths: au[i + nu j] from (i, j) to (i + 1, j); av likewise
-    // from (i, j) to (i, j + 1).
-    let mut au = vec![0.0; nu * nv];
-    let mut av = vec![0.0; nu * nv];
-    for j in 0..nv {
+    }
+
+    /// Row `j`'s tangents and edges.
+    fn row(&mut self, j: usize) {
+        let nu = self.grid.counts[0];
+        let row: Vec<Point3> = (0..nu).map(|i| self.grid.at(i, j)).collect();
+        for (i, t) in line_tangents(&row, self.grid.closed[0]).into_iter().enumerate() {
+            self.tu[i + nu * j] = t;
+        }
         for i in 0..nu {
-            if let Some(i1) = wrap(i as isize + 1, 0) {
-                au[i + nu * j] = edge_length(
-                    grid.at(i, j),
-                    tu[i + nu * j].outgoing,
-                    grid.at(i1, j),
-                    tu[i1 + nu * j].incoming,
-                );
-            }
-            if let Some(j1) = wrap(j as isize + 1, 1) {
-                av[i + nu * j] = edge_length(
-                    grid.at(i, j),
-                    tv[i + nu * j].outgoing,
-                    grid.at(i, j1),
-                    tv[i + nu * j1].incoming,
+            if let Some(i1) = self.wrap(i as isize + 1, 0) {
+                self.au[i + nu * j] = edge_length(
+                    row[i],
+                    self.tu[i + nu * j].outgoing,
+                    row[i1],
+                    self.tu[i1 + nu * j].incoming,
                 );
             }
         }
     }
-    let mut patches = Vec::with_capacity(cells[0] * cells[1]);
-    for l in 0..cells[1] {
-        for k in 0..cells[0] {
-            let i = [k, wrap(k as isize + 1, 0).unwrap()];
-            let j = [l, wrap(l as isize + 1, 1).unwrap()];
-            let q = |a: usize, b: usize| grid.at(i[a], j[b]);
-            // Tangent along u leaving the patch's side a, toward the
-            // other: outgoing at a = 0, incoming at a = 1.
-            let tu_side = |ii: usize, jj: usize, a: usize| {
-                let t = tu[ii + nu * jj];
-                if a == 0 { t.outgoing } else { t.incoming }
-            };
-            let tv_side = |ii: usize, jj: usize, b: usize| {
-                let t = tv[ii + nu * jj];
-                if b == 0 { t.outgoing } else { t.incoming }
-            };
-            let mut c = [[[0.0; 3]; 4]; 4];
-            for a in 0..2 {
-                for b in 0..2 {
-                    c[3 * a][3 * b] = q(a, b);
-                }
+
+    /// Column `i`'s tangents and edges.
+    fn column(&mut self, i: usize) {
+        let [nu, nv] = self.grid.counts;
+        let column: Vec<Point3> = (0..nv).map(|j| self.grid.at(i, j)).collect();
+        for (j, t) in line_tangents(&column, self.grid.closed[1]).into_iter().enumerate() {
+            self.tv[i + nu * j] = t;
+        }
+        for j in 0..nv {
+            if let Some(j1) = self.wrap(j as isize + 1, 1) {
+                self.av[i + nu * j] = edge_length(
+                    column[j],
+                    self.tv[i + nu * j].outgoing,
+                    column[j1],
+                    self.tv[i + nu * j1].incoming,
+                );
             }
+        }
+    }
+
+    /// Moves data point `(i, j)` to `to`, and remakes its row's and its
+    /// column's tangents and edges.
+    pub fn move_point(&mut self, i: usize, j: usize, to: Point3) {
+        let nu = self.grid.counts[0];
+        self.grid.points[i + nu * j] = to;
+        self.row(j);
+        self.column(i);
+    }
+
+    /// The patches `(k, l)` a data point at `(i, j)` shapes: those within
+    /// [`Interpolation::REACH`] cells, wrapped round closed directions,
+    /// each once.
+    pub fn patches_near(&self, i: usize, j: usize) -> Vec<(usize, usize)> {
+        let cells = self.grid.cells();
+        let near = |m: usize, d: usize| -> Vec<usize> {
+            let r = Self::REACH as isize;
+            let mut v: Vec<usize> = (m as isize - r..=m as isize + r)
+                .filter_map(|k| {
+                    if self.grid.closed[d] {
+                        Some(k.rem_euclid(cells[d] as isize) as usize)
+                    } else {
+                        (0..cells[d] as isize).contains(&k).then_some(k as usize)
+                    }
+                })
+                .collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let (ks, ls) = (near(i, 0), near(j, 1));
+        ls.iter().flat_map(|&l| ks.iter().map(move |&k| (k, l))).collect()
+    }
+
+    /// Patch `(k, l)`, from the data point `(k, l)` to `(k + 1, l + 1)`.
+    pub fn patch(&self, k: usize, l: usize) -> BezierPatch {
+        let nu = self.grid.counts[0];
+        let (tu, tv, au, av) = (&self.tu, &self.tv, &self.au, &self.av);
+        let wrap = |k: isize, d: usize| self.wrap(k, d);
+        let i = [k, wrap(k as isize + 1, 0).unwrap()];
+        let j = [l, wrap(l as isize + 1, 1).unwrap()];
+        let q = |a: usize, b: usize| self.grid.at(i[a], j[b]);
+        // Tangent along u leaving the patch's side a, toward the
+        // other: outgoing at a = 0, incoming at a = 1.
+        let tu_side = |ii: usize, jj: usize, a: usize| {
+            let t = tu[ii + nu * jj];
+            if a == 0 { t.outgoing } else { t.incoming }
+        };
+        let tv_side = |ii: usize, jj: usize, b: usize| {
+            let t = tv[ii + nu * jj];
+            if b == 0 { t.outgoing } else { t.incoming }
+        };
+        let mut c = [[[0.0; 3]; 4]; 4];
+        for a in 0..2 {
             for b in 0..2 {
-                let len = au[k + nu * j[b]];
-                c[1][3 * b] = add(q(0, b), scale(tu_side(i[0], j[b], 0), len / 3.0));
-                c[2][3 * b] = sub(q(1, b), scale(tu_side(i[1], j[b], 1), len / 3.0));
+                c[3 * a][3 * b] = q(a, b);
             }
-            for a in 0..2 {
-                let len = av[i[a] + nu * l];
-                c[3 * a][1] = add(q(a, 0), scale(tv_side(i[a], j[0], 0), len / 3.0));
-                c[3 * a][2] = sub(q(a, 1), scale(tv_side(i[a], j[1], 1), len / 3.0));
-            }
-            // The twist at each corner (a, b).
-            for a in 0..2 {
-                for b in 0..2 {
-                    // Along v, on column i[a], of F(m) = au(k, m) T_u.
-                    let f = |m: usize| scale(tu_side(i[a], m, a), au[k + nu * m]);
-                    let corner_v = |m: usize| tv[i[a] + nu * m].corner;
-                    let len_v = |m: usize| av[i[a] + nu * m];
-                    let line = Line {
-                        d: 1,
-                        corner: &corner_v,
-                        f: &f,
-                        length: &len_v,
-                        wrap: &wrap,
-                    };
-                    let w_a = scale(line.slope_at(j[b], b == 0), av[i[a] + nu * l]);
-                    // Along u, on row j[b], of G(m) = av(m, l) T_v.
-                    let g = |m: usize| scale(tv_side(m, j[b], b), av[m + nu * l]);
-                    let corner_u = |m: usize| tu[m + nu * j[b]].corner;
-                    let len_u = |m: usize| au[m + nu * j[b]];
-                    let line = Line {
-                        d: 0,
-                        corner: &corner_u,
-                        f: &g,
-                        length: &len_u,
-                        wrap: &wrap,
-                    };
-                    let w_b = scale(line.slope_at(i[a], a == 0), au[k + nu * j[b]]);
-                    let twist = scale(add(w_a, w_b), 0.5 / 9.0);
-                    // P_inner = P_edge_s + P_edge_t - P_corner +- twist / 9.
-                    let (ai, bi) = (if a == 0 { 1 } else { 2 }, if b == 0 { 1 } else { 2 });
-                    let sign = if a == b { 1.0 } else { -1.0 };
-                    c[ai][bi] = add(
-                        sub(add(c[ai][3 * b], c[3 * a][bi]), c[3 * a][3 * b]),
-                        scale(twist, sign),
-                    );
-                }
-            }
-            patches.push(BezierPatch { control: c });
         }
+        for b in 0..2 {
+            let len = au[k + nu * j[b]];
+            c[1][3 * b] = add(q(0, b), scale(tu_side(i[0], j[b], 0), len / 3.0));
+            c[2][3 * b] = sub(q(1, b), scale(tu_side(i[1], j[b], 1), len / 3.0));
+        }
+        for a in 0..2 {
+            let len = av[i[a] + nu * l];
+            c[3 * a][1] = add(q(a, 0), scale(tv_side(i[a], j[0], 0), len / 3.0));
+            c[3 * a][2] = sub(q(a, 1), scale(tv_side(i[a], j[1], 1), len / 3.0));
+        }
+        // The twist at each corner (a, b).
+        for a in 0..2 {
+            for b in 0..2 {
+                // Along v, on column i[a], of F(m) = au(k, m) T_u.
+                let f = |m: usize| scale(tu_side(i[a], m, a), au[k + nu * m]);
+                let corner_v = |m: usize| tv[i[a] + nu * m].corner;
+                let len_v = |m: usize| av[i[a] + nu * m];
+                let line = Line {
+                    d: 1,
+                    corner: &corner_v,
+                    f: &f,
+                    length: &len_v,
+                    wrap: &wrap,
+                };
+                let w_a = scale(line.slope_at(j[b], b == 0), av[i[a] + nu * l]);
+                // Along u, on row j[b], of G(m) = av(m, l) T_v.
+                let g = |m: usize| scale(tv_side(m, j[b], b), av[m + nu * l]);
+                let corner_u = |m: usize| tu[m + nu * j[b]].corner;
+                let len_u = |m: usize| au[m + nu * j[b]];
+                let line = Line {
+                    d: 0,
+                    corner: &corner_u,
+                    f: &g,
+                    length: &len_u,
+                    wrap: &wrap,
+                };
+                let w_b = scale(line.slope_at(i[a], a == 0), au[k + nu * j[b]]);
+                let twist = scale(add(w_a, w_b), 0.5 / 9.0);
+                // P_inner = P_edge_s + P_edge_t - P_corner +- twist / 9.
+                let (ai, bi) = (if a == 0 { 1 } else { 2 }, if b == 0 { 1 } else { 2 });
+                let sign = if a == b { 1.0 } else { -1.0 };
+                c[ai][bi] = add(
+                    sub(add(c[ai][3 * b], c[3 * a][bi]), c[3 * a][3 * b]),
+                    scale(twist, sign),
+                );
+            }
+        }
+        BezierPatch { control: c }
     }
-    Surface { cells, patches }
 }
 
 /// A function sampled along one grid line, for the twist's differences.
@@ -570,6 +653,60 @@ pub(crate) mod tests {
                         let q = &s.patches[k + cu * (l + 1)];
                         assert!(norm(sub(p.point(w, 1.0), q.point(w, 0.0))) < 1e-14);
                     }
+                }
+            }
+        }
+    }
+
+    /// Moving one data point changes only the patches
+    /// [`Interpolation::patches_near`] lists, and as remaking the whole
+    /// surface would: on a wavy sheet (open both ways, with a corner line)
+    /// and round a wavy tube (closed one way).
+    #[test]
+    fn moving_a_data_point_changes_only_the_patches_within_reach() {
+        for closed in [false, true] {
+            let (nu, nv) = (12, 11);
+            let mut points = Vec::new();
+            for j in 0..nv {
+                for i in 0..nu {
+                    let a = TAU * i as f64 / nu as f64;
+                    let y = j as f64 * 0.3;
+                    points.push(if closed {
+                        [(1.0 + 0.1 * (3.0 * a).sin()) * a.cos(), (1.0 + 0.05 * y) * a.sin(), y]
+                    } else {
+                        // A ridge (corner) along i = 5.
+                        let x = i as f64 * 0.3;
+                        [x, y + 0.02 * (i * i) as f64, (x - 1.5).abs() + 0.2 * (1.5 * y).cos()]
+                    });
+                }
+            }
+            let grid = DataGrid {
+                counts: [nu, nv],
+                closed: [closed, false],
+                points,
+            };
+            let before = interpolate(&grid);
+            let cells = grid.cells();
+            let mut moved = Interpolation::new(grid.clone());
+            for j in 0..nv {
+                for i in 0..nu {
+                    let at = grid.at(i, j);
+                    let to = add(at, [0.01, -0.02, 0.015]);
+                    moved.move_point(i, j, to);
+                    let mut changed_grid = grid.clone();
+                    changed_grid.points[i + nu * j] = to;
+                    let rebuilt = interpolate(&changed_grid);
+                    let near = moved.patches_near(i, j);
+                    for l in 0..cells[1] {
+                        for k in 0..cells[0] {
+                            let p = moved.patch(k, l);
+                            assert_eq!(p, rebuilt.patches[k + cells[0] * l]);
+                            if p != before.patches[k + cells[0] * l] {
+                                assert!(near.contains(&(k, l)), "({i}, {j}) moved ({k}, {l})");
+                            }
+                        }
+                    }
+                    moved.move_point(i, j, at);
                 }
             }
         }
