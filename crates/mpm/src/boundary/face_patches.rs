@@ -492,6 +492,17 @@ pub struct FacePatch {
 }
 
 impl FacePatch {
+    /// Bezier cells along each direction.
+    pub fn data_grid_cells(&self) -> [usize; 2] {
+        [0, 1].map(|d| {
+            if self.closed[d] {
+                self.counts[d]
+            } else {
+                self.counts[d] - 1
+            }
+        })
+    }
+
     /// The data points where the points are now.
     pub fn data_grid(&self, points: &MaterialPoints<3>) -> DataGrid {
         DataGrid {

@@ -11,6 +11,7 @@ pub mod ibm;
 pub mod loading;
 pub mod quadrature;
 pub mod surface;
+pub mod surface_loading;
 pub mod traction;
 
 use serde::Serialize;

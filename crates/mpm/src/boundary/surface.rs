@@ -366,7 +366,10 @@ impl Interpolation {
     fn row(&mut self, j: usize) {
         let nu = self.grid.counts[0];
         let row: Vec<Point3> = (0..nu).map(|i| self.grid.at(i, j)).collect();
-        for (i, t) in line_tangents(&row, self.grid.closed[0]).into_iter().enumerate() {
+        for (i, t) in line_tangents(&row, self.grid.closed[0])
+            .into_iter()
+            .enumerate()
+        {
             self.tu[i + nu * j] = t;
         }
         for i in 0..nu {
@@ -385,7 +388,10 @@ impl Interpolation {
     fn column(&mut self, i: usize) {
         let [nu, nv] = self.grid.counts;
         let column: Vec<Point3> = (0..nv).map(|j| self.grid.at(i, j)).collect();
-        for (j, t) in line_tangents(&column, self.grid.closed[1]).into_iter().enumerate() {
+        for (j, t) in line_tangents(&column, self.grid.closed[1])
+            .into_iter()
+            .enumerate()
+        {
             self.tv[i + nu * j] = t;
         }
         for j in 0..nv {
@@ -430,7 +436,9 @@ impl Interpolation {
             v
         };
         let (ks, ls) = (near(i, 0), near(j, 1));
-        ls.iter().flat_map(|&l| ks.iter().map(move |&k| (k, l))).collect()
+        ls.iter()
+            .flat_map(|&l| ks.iter().map(move |&k| (k, l)))
+            .collect()
     }
 
     /// Patch `(k, l)`, from the data point `(k, l)` to `(k + 1, l + 1)`.
@@ -672,11 +680,19 @@ pub(crate) mod tests {
                     let a = TAU * i as f64 / nu as f64;
                     let y = j as f64 * 0.3;
                     points.push(if closed {
-                        [(1.0 + 0.1 * (3.0 * a).sin()) * a.cos(), (1.0 + 0.05 * y) * a.sin(), y]
+                        [
+                            (1.0 + 0.1 * (3.0 * a).sin()) * a.cos(),
+                            (1.0 + 0.05 * y) * a.sin(),
+                            y,
+                        ]
                     } else {
                         // A ridge (corner) along i = 5.
                         let x = i as f64 * 0.3;
-                        [x, y + 0.02 * (i * i) as f64, (x - 1.5).abs() + 0.2 * (1.5 * y).cos()]
+                        [
+                            x,
+                            y + 0.02 * (i * i) as f64,
+                            (x - 1.5).abs() + 0.2 * (1.5 * y).cos(),
+                        ]
                     });
                 }
             }
