@@ -148,3 +148,15 @@ fn cell_crossings(ctrl: &[Point; 4], grid: &Grid) -> Vec<f64> {
     out.push(1.0);
     out
 }
+
+/// The nodes of a quadrature's `shares` (`(node, share)`), sorted, and
+/// each share's node's place among them.
+pub fn share_nodes(shares: &[(usize, f64)]) -> (Vec<usize>, Vec<u32>) {
+    let mut nodes: Vec<usize> = shares.iter().map(|&(a, _)| a).collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let place = (shares.iter())
+        .map(|(a, _)| nodes.binary_search(a).expect("a share's node") as u32)
+        .collect();
+    (nodes, place)
+}

@@ -213,7 +213,8 @@ pub struct BezierPatch {
     pub control: [[Point3; 4]; 4],
 }
 
-fn bernstein(s: f64) -> ([f64; 4], [f64; 4]) {
+/// The cubic Bernstein polynomials at `s` and their derivatives.
+pub(crate) fn bernstein(s: f64) -> ([f64; 4], [f64; 4]) {
     let r = 1.0 - s;
     (
         [r * r * r, 3.0 * s * r * r, 3.0 * s * s * r, s * s * s],

@@ -28,8 +28,8 @@
 use rayon::prelude::*;
 
 use super::face_patches::{DataPoint, FacePatch};
-use super::quadrature::hat_shares;
-use super::surface::{BezierPatch, DataGrid, Interpolation, Point3, cross};
+use super::quadrature::{hat_shares, share_nodes};
+use super::surface::{BezierPatch, DataGrid, Interpolation, Point3, bernstein, cross};
 use crate::assembly::{Pattern, Side, StepTerm};
 use crate::configuration::Configuration;
 use crate::grid::{Basis, Grid, NodeKey};
@@ -107,19 +107,6 @@ impl SurfaceTraction {
     }
 }
 
-fn bernstein(s: f64) -> ([f64; 4], [f64; 4]) {
-    let r = 1.0 - s;
-    (
-        [r * r * r, 3.0 * s * r * r, 3.0 * s * s * r, s * s * s],
-        [
-            -3.0 * r * r,
-            3.0 * r * (r - 2.0 * s),
-            3.0 * s * (2.0 * r - s),
-            3.0 * s * s,
-        ],
-    )
-}
-
 /// The derivative of one node's forces by a cell's 16 control points:
 /// entry `[a][b][r][c]` is `d f_r / d P_(a b), c`.
 pub type ControlNetDerivative = [[[[f64; 3]; 3]; 4]; 4];
@@ -175,12 +162,7 @@ impl CellQuadrature {
                 }
             }
         }
-        q.nodes = q.shares.iter().map(|&(a, _)| a).collect();
-        q.nodes.sort_unstable();
-        q.nodes.dedup();
-        q.place = (q.shares.iter())
-            .map(|(a, _)| q.nodes.binary_search(a).expect("a share's node") as u32)
-            .collect();
+        (q.nodes, q.place) = share_nodes(&q.shares);
         q
     }
 

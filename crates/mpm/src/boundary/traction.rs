@@ -14,7 +14,7 @@
 //! that corner's share to the active ones, in proportion.
 
 use super::curve::{Point, bezier, bezier_derivative};
-use super::quadrature::{gauss_points, hat_shares};
+use super::quadrature::{gauss_points, hat_shares, share_nodes};
 use crate::grid::{Basis, Grid, NodeKey};
 
 /// What acts on a stretch of boundary.
@@ -109,12 +109,7 @@ impl SegmentQuadrature {
             q.points.push((t, w));
             q.first.push(q.shares.len());
         }
-        q.nodes = q.shares.iter().map(|&(a, _)| a).collect();
-        q.nodes.sort_unstable();
-        q.nodes.dedup();
-        q.place = (q.shares.iter())
-            .map(|(a, _)| q.nodes.binary_search(a).expect("a share's node") as u32)
-            .collect();
+        (q.nodes, q.place) = share_nodes(&q.shares);
         q
     }
 
