@@ -5,7 +5,7 @@
 use mpm::case::OutputSpec;
 use mpm::case::solid::SolidOutput;
 use mpm::report::{PointColumns, SolidPointColumns};
-use mpm::{MaterialPoints, StepReport, StepState};
+use mpm::{SolidStepState, StepReport, StepState};
 use serde::Serialize;
 use serde_json::value::{RawValue, to_raw_value};
 
@@ -17,7 +17,8 @@ pub struct StepDocument<R, P, B> {
     pub report: R,
     /// `mpm::report::PointColumns`
     pub points: P,
-    /// `[mpm::boundary::BoundaryOutput]`
+    /// `[mpm::boundary::BoundaryOutput]`, or in 3D
+    /// `[mpm::boundary::face_patches::SurfaceOutput]`
     pub boundaries: B,
 }
 
@@ -54,16 +55,11 @@ impl StoredStep {
         }
     }
 
-    /// The stored form of a 3D run's step: its points (every column) if
-    /// `output` stores them at this step of `load_steps`, else `null`; no
-    /// boundary curves (`[]`) until part 2 of issue 38 gives 3D bodies
-    /// their surfaces.
-    pub fn solid(
-        report: &StepReport,
-        points: &MaterialPoints<3>,
-        output: &SolidOutput,
-        load_steps: usize,
-    ) -> Self {
+    /// The stored form of a 3D run's step: its points (every column) and
+    /// its bodies' surfaces (`SurfaceOutput`: the B-spline patches) if
+    /// `output` stores them at this step, else `null` for both.
+    pub fn solid(report: &StepReport, state: &SolidStepState<'_>, output: &SolidOutput) -> Self {
+        let load_steps = state.load_steps();
         let raw = |text: &str| RawValue::from_string(text.into()).expect("JSON");
         let stores_points = output.stores_points(report.step, load_steps);
         let report = to_raw_value(report).expect("reports serialise");
@@ -76,8 +72,8 @@ impl StoredStep {
         }
         Self {
             report,
-            points: to_raw_value(&SolidPointColumns::new(points)).expect("points serialise"),
-            boundaries: raw("[]"),
+            points: to_raw_value(&SolidPointColumns::new(state.points)).expect("points serialise"),
+            boundaries: to_raw_value(&state.surfaces()).expect("surfaces serialise"),
         }
     }
 

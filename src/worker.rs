@@ -498,7 +498,7 @@ impl Observer for JobObserver<'_> {
         let Some(output) = &self.solid else {
             return;
         };
-        let document = StoredStep::solid(report, state.points, output, state.load_steps());
+        let document = StoredStep::solid(report, state, output);
         let checkpoint = self
             .checkpoints
             .due(report.step)

@@ -149,7 +149,8 @@ fn a_3d_job_runs_and_its_steps_match_the_cli() {
     let (out, cli) = cli_run("column3d", 40);
     let api = app.get_json(&format!("/jobs/{id}/steps/40"));
     assert_eq!(api["points"].to_string(), cli["points"].to_string());
-    assert_eq!(api["boundaries"], json!([]));
+    assert_eq!(api["boundaries"].to_string(), cli["boundaries"].to_string());
+    assert_eq!(api["boundaries"].as_array().unwrap().len(), 6);
     assert_eq!(api["report"]["reactions"], cli["report"]["reactions"]);
     // The column's top has come down by about 26 m of its 50 (AMPLE's
     // -25.940 m exactly, `tests/verification/column3d.rs`).
@@ -165,11 +166,17 @@ fn a_3d_job_runs_and_its_steps_match_the_cli() {
     let cli_vtu = String::from_utf8_lossy(&cli_vtu);
     assert_eq!(piece(&vtu), piece(&cli_vtu));
     assert!(piece(&vtu).unwrap().contains("NumberOfPoints=\"128\""));
+    // The surfaces as VTP: the CLI's file.
+    let (status, vtp) = app.get(&format!("/jobs/{id}/steps/40?format=vtp"));
+    assert_eq!(status, 200);
+    let cli_vtp = std::fs::read_to_string(out.0.join("steps/step_0040_boundary.vtp")).unwrap();
+    assert_eq!(vtp, cli_vtp);
 
-    // The archive holds the files `mpm run` wrote (no boundary files in
-    // 3D), by the same names.
+    // The archive holds the files `mpm run` wrote, by the same names: per
+    // step its document, points and surfaces; the case, summary and two
+    // series.
     let zip = archive_like_the_cli(&app, id, &out);
-    assert_eq!(zip.len(), 3 + 2 * 41);
+    assert_eq!(zip.len(), 4 + 3 * 41);
 
     // A plane-strain field in a 3D case, a vector of two components where
     // three are needed, and bodies over the point limit.

@@ -570,8 +570,9 @@ fn a_3d_case_runs_and_its_base_carries_the_weight() {
         (base[2].as_f64().unwrap() - weight).abs() < 1e-6 * weight,
         "{base:?}"
     );
+    // Per step its document, its points (VTU) and its surfaces (VTP).
     let files = std::fs::read_dir(out.join("steps")).unwrap().count();
-    assert_eq!(files, 2 * 41);
+    assert_eq!(files, 3 * 41);
     let last: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("steps/step_0040.json")).unwrap())
             .unwrap();
@@ -579,6 +580,12 @@ fn a_3d_case_runs_and_its_base_carries_the_weight() {
     assert_eq!(last["points"]["stress"][0].as_array().unwrap().len(), 6);
     let series = std::fs::read_to_string(out.join("points.pvd")).unwrap();
     assert!(series.contains("steps/step_0040.vtu"), "{series}");
+    let surfaces = std::fs::read_to_string(out.join("boundary.pvd")).unwrap();
+    assert!(
+        surfaces.contains("steps/step_0040_boundary.vtp"),
+        "{surfaces}"
+    );
+    assert_eq!(last["boundaries"].as_array().unwrap().len(), 6);
     // A finished run keeps no checkpoint: there is nothing to resume.
     assert!(!out.join("checkpoint.bin").exists());
     let resumed = mpm().args(["run", "--resume"]).arg(&*out).output().unwrap();

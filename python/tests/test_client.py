@@ -83,7 +83,15 @@ def test_a_3d_job_gives_3d_arrays(client: Client) -> None:
     last = client.step(job, 40)
     assert last.position.shape == (128, 3) and last.displacement.shape == (128, 3)
     assert last.stress.shape == (128, 6)
-    assert last.boundaries == []
+    # Its surface: the box's six faces as bicubic B-spline patches, which
+    # enclose the points.
+    assert len(last.boundaries) == 6
+    for patch in last.boundaries:
+        cu, cv = patch["cells"]
+        assert patch["control_points"].shape == (3 * cv + 1, 3 * cu + 1, 3)
+        assert len(patch["knots"][0]) == 3 * cu + 5 and patch["degree"] == 3
+    net = np.concatenate([p["control_points"].reshape(-1, 3) for p in last.boundaries])
+    assert (net.min(0) <= last.position.min(0)).all() and (net.max(0) >= last.position.max(0)).all()
     result = client.result(job)
     assert result.reactions.shape == (41, 5, 3) and result.applied_load.shape == (41, 3)
     np.testing.assert_allclose(result.reactions[-1, 4], [0, 0, 390625.0], atol=1e-6 * 390625.0)

@@ -4,7 +4,8 @@
 //! and the points' columns, as the service serves a step) and
 //! `steps/*.vtu` with their `points.pvd` series; a checkpoint every few
 //! steps, from which `mpm run --resume DIR` goes on as with a plane-strain
-//! run. No boundary files (the B-spline surfaces are issue 38's part 2).
+//! run; each stored step's surfaces as `steps/*_boundary.vtp` (quads on
+//! the B-spline patches) with their `boundary.pvd` series.
 
 use std::fs::{self, File};
 use std::io::{BufWriter, Write};
@@ -12,12 +13,12 @@ use std::path::{Path, PathBuf};
 
 use mpm::case::solid::{SolidCase, SolidOutput};
 use mpm::report::SolidPointColumns;
-use mpm::vtk::write_solid_vtu;
-use mpm::{MaterialPoints, Observer, Simulation, SolidCheckpoint, SolidStepState, StepReport};
+use mpm::vtk::{write_solid_vtu, write_surface_vtp};
+use mpm::{Observer, Simulation, SolidCheckpoint, SolidStepState, StepReport};
 use mpm_service::config::CheckpointSchedule;
 use mpm_service::jobs::admission::{PointLimit, Rejection, check_points};
 use mpm_service::results::{
-    CASE_FILE, POINTS_SERIES, STEPS_DIR, SUMMARY_FILE, Series, StepFiles, Summary,
+    BOUNDARY_SERIES, CASE_FILE, POINTS_SERIES, STEPS_DIR, SUMMARY_FILE, Series, StepFiles, Summary,
 };
 use mpm_service::step::StepDocument;
 
@@ -140,7 +141,7 @@ fn solve(
     }
     if point_files && sim.steps_done() == 0 {
         let (report, state) = sim.initial_step();
-        writer.write_step(&report, state.points)?;
+        writer.write_step(&report, &state)?;
     }
     let result = sim.run(&mut writer);
     writer.progress.clear();
@@ -152,6 +153,7 @@ fn solve(
     if point_files {
         let series = &writer.series;
         series.write_points(BufWriter::new(File::create(out.join(POINTS_SERIES))?))?;
+        series.write_boundary(BufWriter::new(File::create(out.join(BOUNDARY_SERIES))?))?;
     }
     report.wall_seconds += earlier.iter().map(|s| s.timings.total).sum::<f64>();
     report.steps.splice(0..0, earlier);
@@ -201,17 +203,18 @@ impl SolidWriter {
     fn write_step(
         &mut self,
         report: &StepReport,
-        points: &MaterialPoints<3>,
+        state: &SolidStepState<'_>,
     ) -> std::io::Result<()> {
         if !self.output.stores_points(report.step, self.load_steps) {
             return Ok(());
         }
         let files = StepFiles::new(report.step);
-        let columns = SolidPointColumns::new(points);
+        let columns = SolidPointColumns::new(state.points);
+        let surfaces = state.surfaces();
         let document = StepDocument {
             report,
             points: &columns,
-            boundaries: &[(); 0],
+            boundaries: &surfaces,
         };
         let mut w = BufWriter::new(File::create(self.out.join(&files.document))?);
         serde_json::to_writer(&mut w, &document)?;
@@ -219,6 +222,9 @@ impl SolidWriter {
         let mut vtu = BufWriter::new(File::create(self.out.join(&files.points))?);
         write_solid_vtu(&mut vtu, &columns)?;
         vtu.flush()?;
+        let mut vtp = BufWriter::new(File::create(self.out.join(&files.boundary))?);
+        write_surface_vtp(&mut vtp, &surfaces)?;
+        vtp.flush()?;
         self.series.add(report.series_time(), files);
         Ok(())
     }
@@ -229,7 +235,7 @@ impl SolidWriter {
     fn record(&mut self, report: &StepReport, state: &SolidStepState<'_>) -> std::io::Result<()> {
         append_report(&mut self.reports, report)?;
         if self.point_files {
-            self.write_step(report, state.points)?;
+            self.write_step(report, state)?;
         }
         if self.checkpoints.due(report.step) {
             write_checkpoint(&self.out, &state.checkpoint().to_bytes())?;

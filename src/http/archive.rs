@@ -107,8 +107,7 @@ fn write_archive(
         zip.write_all(bytes).map_err(io_error)
     };
     add(&mut zip, CASE_FILE, case.as_bytes())?;
-    // A 3D run has no boundary curves until its surfaces (issue 38's
-    // part 2): no boundary files.
+    // A 3D run's boundary files are its surfaces.
     let solid = mpm::case::solid::is_solid(case);
 
     // Each step's files are written into the zip as they are made: one
@@ -130,20 +129,16 @@ fn write_archive(
         drop(document);
         start(&mut zip, &files.points)?;
         steps::write_points(&step, solid, &mut zip)?;
-        if !solid {
-            start(&mut zip, &files.boundary)?;
-            steps::write_boundaries(&step, &mut zip)?;
-        }
+        start(&mut zip, &files.boundary)?;
+        steps::write_boundaries(&step, solid, &mut zip)?;
         series.add(report.series_time(), files);
     }
     let mut pvd = Vec::new();
     series.write_points(&mut pvd).map_err(io_error)?;
     add(&mut zip, POINTS_SERIES, &pvd)?;
-    if !solid {
-        pvd.clear();
-        series.write_boundary(&mut pvd).map_err(io_error)?;
-        add(&mut zip, BOUNDARY_SERIES, &pvd)?;
-    }
+    pvd.clear();
+    series.write_boundary(&mut pvd).map_err(io_error)?;
+    add(&mut zip, BOUNDARY_SERIES, &pvd)?;
 
     let source = format!("job {}", job.id);
     let warnings = mpm::Case::from_json(case)

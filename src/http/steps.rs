@@ -8,9 +8,10 @@ use super::extract::{IdPath, Params};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use mpm::boundary::BoundaryOutput;
+use mpm::boundary::face_patches::SurfaceOutput;
 use mpm::case::solid::is_solid;
 use mpm::report::{PointColumns, SolidPointColumns};
-use mpm::vtk::{write_solid_vtu, write_vtp, write_vtu};
+use mpm::vtk::{write_solid_vtu, write_surface_vtp, write_vtp, write_vtu};
 use serde::Deserialize;
 use serde_json::value::RawValue;
 use std::io::{BufWriter, Write};
@@ -89,7 +90,7 @@ pub async fn step(
         write_points(&step, solid, &mut bytes)?;
         format!("job-{id}-step-{k:04}.vtu")
     } else {
-        write_boundaries(&step, &mut bytes)?;
+        write_boundaries(&step, solid, &mut bytes)?;
         format!("job-{id}-step-{k:04}_boundary.vtp")
     };
     drop(step);
@@ -205,12 +206,24 @@ pub(super) fn write_points(
     .map_err(|e| ApiError::Internal(e.to_string()))
 }
 
-/// A stored step's boundary curves as VTP, written to `out`.
-pub(super) fn write_boundaries(step: &StoredStep, out: impl Write) -> Result<(), ApiError> {
-    let boundaries: Vec<BoundaryOutput> = serde_json::from_str(step.boundaries.get())
-        .map_err(|e| ApiError::Internal(format!("stored boundaries: {e}")))?;
+/// A stored step's boundary curves (a 3D run's surfaces) as VTP, written
+/// to `out`.
+pub(super) fn write_boundaries(
+    step: &StoredStep,
+    solid: bool,
+    out: impl Write,
+) -> Result<(), ApiError> {
+    let stored = |e: serde_json::Error| ApiError::Internal(format!("stored boundaries: {e}"));
     let mut out = BufWriter::new(out);
-    write_vtp(&mut out, &boundaries)
-        .and_then(|()| out.flush())
-        .map_err(|e| ApiError::Internal(e.to_string()))
+    if solid {
+        let surfaces: Vec<SurfaceOutput> =
+            serde_json::from_str(step.boundaries.get()).map_err(stored)?;
+        write_surface_vtp(&mut out, &surfaces)
+    } else {
+        let boundaries: Vec<BoundaryOutput> =
+            serde_json::from_str(step.boundaries.get()).map_err(stored)?;
+        write_vtp(&mut out, &boundaries)
+    }
+    .and_then(|()| out.flush())
+    .map_err(|e| ApiError::Internal(e.to_string()))
 }

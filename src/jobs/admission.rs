@@ -156,7 +156,8 @@ fn admit_solid(case: SolidCase, limits: &Limits) -> Result<Admitted, Rejection> 
     })?;
     let points = sim.points.len();
     check_points(points, limit)?;
-    let bytes = solid_stored_bytes(&case, points);
+    let cells: Vec<[usize; 2]> = sim.faces.iter().map(|f| f.data_grid_cells()).collect();
+    let bytes = solid_stored_bytes(&case, points, &cells);
     check_stored_bytes(bytes, &case, points, limits)?;
     Ok(Admitted {
         case: Submitted::Solid(case),
@@ -305,6 +306,18 @@ pub const STORED_BYTES_PER_POINT: f64 = 305.0;
 /// (`mpm::report::SolidPointColumns`: fifteen numbers, a body index and a
 /// yield flag, as [`STORED_BYTES_PER_POINT`]).
 pub const STORED_BYTES_PER_SOLID_POINT: f64 = 420.0;
+/// Bytes one control point of a stored 3D surface takes, at most: three
+/// numbers of at most 24 characters, their commas and brackets.
+pub const STORED_BYTES_PER_CONTROL_POINT: f64 = 78.0;
+/// Bytes of a stored 3D surface patch besides its control points: its
+/// body, cells and flags (128), and its knots, integers to 12 characters.
+fn surface_patch_bytes(cells: [usize; 2]) -> f64 {
+    let [u, v] = cells.map(|c| c as f64);
+    (3.0 * u + 1.0) * (3.0 * v + 1.0) * STORED_BYTES_PER_CONTROL_POINT
+        + 128.0
+        + 12.0 * (3.0 * u + 3.0 * v + 10.0)
+}
+
 /// Bytes one boundary point (a data point of a boundary curve) takes in a
 /// stored step, at most: eight polyline samples (8 x 52), up to three knots
 /// and three control points (at a corner; 3 x 25 + 3 x 52) and its index.
@@ -344,14 +357,17 @@ pub fn stored_bytes(case: &Case, seeded: Footprint) -> f64 {
     points * case.output.point_steps(load_steps) as f64 + report * (load_steps + 1) as f64
 }
 
-/// What a 3D job will store: its points at the steps its `output` keeps
-/// (step 0 included), and every step's report (as [`stored_bytes`]).
-pub fn solid_stored_bytes(case: &SolidCase, points: usize) -> f64 {
+/// What a 3D job will store: its points and surfaces (`surface_cells`,
+/// each face patch's cells) at the steps its `output` keeps (step 0
+/// included), and every step's report (as [`stored_bytes`]).
+pub fn solid_stored_bytes(case: &SolidCase, points: usize, surface_cells: &[[usize; 2]]) -> f64 {
     let report = 1024.0
         + 60.0 * case.supports.len() as f64
         + 50.0 * f64::from(case.analysis.newton.max_iterations + 1);
     let load_steps = case.analysis.load_steps as usize;
-    points as f64 * STORED_BYTES_PER_SOLID_POINT * case.output.point_steps(load_steps) as f64
+    let surfaces: f64 = surface_cells.iter().map(|&c| surface_patch_bytes(c)).sum();
+    (points as f64 * STORED_BYTES_PER_SOLID_POINT + surfaces)
+        * case.output.point_steps(load_steps) as f64
         + report * (load_steps + 1) as f64
 }
 
@@ -495,6 +511,33 @@ mod tests {
         holds_tightly(one, STORED_BYTES_PER_SOLID_POINT);
     }
 
+    /// The same for a 3D surface's control points, and a patch's own
+    /// bytes: a patch of the largest values and knots serialised.
+    #[test]
+    fn a_stored_surface_takes_at_most_its_bound() {
+        let worst = -1.2345678901234567e-100;
+        let patch = |n: usize| mpm::boundary::face_patches::SurfaceOutput {
+            body: usize::MAX,
+            cells: [n, 1],
+            closed: [false, false],
+            degree: 3,
+            knots: [
+                (0..3 * n + 5).map(|_| 123456.0).collect(),
+                vec![123456.0; 8],
+            ],
+            control_points: vec![[worst; 3]; (3 * n + 1) * 4],
+        };
+        // Each cell along u adds 12 control points and three knots.
+        let bytes = |n: usize| serde_json::to_string(&patch(n)).unwrap().len() as f64;
+        let marginal = (bytes(1001) - bytes(1)) / 1000.0;
+        let bound = 12.0 * STORED_BYTES_PER_CONTROL_POINT + 3.0 * 12.0;
+        assert!(
+            marginal <= bound && marginal > 0.9 * bound,
+            "{marginal} against {bound}"
+        );
+        assert!(bytes(1) <= surface_patch_bytes([1, 1]), "{}", bytes(1));
+    }
+
     /// The bytes a point adds to the JSON of `columns(n)` (of `n` points)
     /// are at most `bound`, and over 0.9 of it.
     fn holds_tightly<T: serde::Serialize>(columns: impl Fn(usize) -> T, bound: f64) {
@@ -525,7 +568,7 @@ mod tests {
             unreachable!()
         };
         // 128 points stored at 41 steps, and 41 reports.
-        let bytes = solid_stored_bytes(solid, 128);
+        let bytes = solid_stored_bytes(solid, 128, &[]);
         assert!(
             bytes > 128.0 * 41.0 * STORED_BYTES_PER_SOLID_POINT,
             "{bytes}"

@@ -8,8 +8,10 @@ use crate::assembly::PointLoad;
 use crate::assembly::lone_points::LONE_VOLUME;
 use crate::boundary::edge_detection::loops_on_edge;
 use crate::boundary::face_loads::FaceLoad;
+use crate::boundary::face_patches::{FacePatch, face_patches};
 use crate::boundary::ibm::{self, IbmMotion, IbmSupport};
 use crate::boundary::loading::LoadedStretch;
+use crate::boundary::surface_loading::{LoadedCells, SurfaceTraction};
 use crate::boundary::traction::Traction;
 use crate::boundary::{
     BoundaryLoop, Piece, Representation, find_loops, selected_pieces, selected_segments,
@@ -315,6 +317,7 @@ fn stages(case: &Case, seeded: &Seeded) -> Result<(Vec<Stage>, Vec<IbmSupport>),
             gravity,
             point_loads,
             face_loads: Vec::new(),
+            surface_loads: Vec::new(),
             boundary_loads,
             grid_supports,
             ibm,
@@ -366,6 +369,7 @@ impl Simulation {
                 .band_width
                 .unwrap_or(ibm::DEFAULT_BAND_WIDTH * grid.h),
             loops,
+            faces: Vec::new(),
             points,
             stages,
             stage: 0,
@@ -445,6 +449,9 @@ pub struct SolidRun {
     pub point_loads: Vec<PointLoad<3>>,
     /// Tractions on faces of boxes ([`face_loads`]).
     pub face_loads: Vec<FaceLoad<3>>,
+    /// The bodies' surfaces ([`face_patches`]) and the loads on them.
+    pub faces: Vec<FacePatch>,
+    pub surface_loads: Vec<LoadedCells>,
     pub supports: Vec<PlaneSupport<3>>,
     pub load_steps: usize,
 }
@@ -455,8 +462,10 @@ impl Simulation<3> {
     /// reaches, or a point lies outside the grid's extent.
     pub fn from_solid_case(case: &SolidCase) -> Result<Self, CaseError> {
         let mut points = MaterialPoints::<3>::default();
+        let mut faces = Vec::new();
         for (i, body) in case.bodies.iter().enumerate() {
-            let seeds = fill(&body.geometry.solid(), case.spacing(i));
+            let solid = body.geometry.solid();
+            let seeds = fill(&solid, case.spacing(i));
             if seeds.is_empty() {
                 return Err(CaseError::new(
                     format!("bodies[{i}].points"),
@@ -465,6 +474,7 @@ impl Simulation<3> {
             }
             let (_, _, rho) = body.material.constants();
             points.add_solid(material(&body.material), rho, &seeds);
+            faces.extend(face_patches(&points, i, &solid, case.spacing(i)));
         }
         let extent = case.grid.extent.map(|b| (b.min, b.max));
         if let Some((lo, hi)) = extent {
@@ -502,6 +512,35 @@ impl Simulation<3> {
             }
             tractions.extend(loads);
         }
+        let mut surface_loads = Vec::new();
+        for (i, load) in case.loads.surface.iter().enumerate() {
+            let traction = match (load.traction, load.pressure) {
+                (Some(t), _) => SurfaceTraction::Dead(t),
+                (None, p) => SurfaceTraction::Pressure(p.expect("validated: one of the two")),
+            };
+            let before = surface_loads.len();
+            for (patch, face) in faces.iter().enumerate() {
+                if load.on.body.is_some_and(|b| b != face.body) {
+                    continue;
+                }
+                let tolerance = case.spacing(face.body) / 2.0;
+                let cells = face.cells_where(&points, |x| load.on.contains(x, tolerance));
+                if !cells.is_empty() {
+                    surface_loads.push(LoadedCells {
+                        patch,
+                        cells,
+                        traction,
+                        held: false,
+                    });
+                }
+            }
+            if surface_loads.len() == before {
+                return Err(CaseError::new(
+                    format!("loads.surface[{i}].on"),
+                    "selects no part of any body's surface",
+                ));
+            }
+        }
         let supports = (case.supports.iter().enumerate())
             .map(|(index, s)| {
                 let (axis, at) = s.on.plane().expect("validated: one plane");
@@ -526,6 +565,8 @@ impl Simulation<3> {
             gravity: case.loads.gravity.unwrap_or_default(),
             point_loads,
             face_loads: tractions,
+            faces,
+            surface_loads,
             supports,
             load_steps: case.analysis.load_steps as usize,
         });
@@ -561,6 +602,8 @@ impl Simulation<3> {
             gravity,
             point_loads,
             face_loads,
+            faces,
+            surface_loads,
             supports,
             load_steps,
         } = run;
@@ -572,6 +615,7 @@ impl Simulation<3> {
             gravity: [[0.0; 3], gravity],
             point_loads,
             face_loads,
+            surface_loads,
             boundary_loads: Vec::new(),
             n_supports: supports.len(),
             grid_supports: supports,
@@ -586,6 +630,7 @@ impl Simulation<3> {
             extent,
             points,
             loops: Vec::new(),
+            faces,
             probes: Probes::default(),
             stages: vec![stage],
             stage: 0,

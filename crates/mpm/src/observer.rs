@@ -73,6 +73,11 @@ impl<'a> SolidStepState<'a> {
     pub fn checkpoint(&self) -> SolidCheckpoint {
         self.run.checkpoint()
     }
+
+    /// The bodies' surfaces through the points' places after this step.
+    pub fn surfaces(&self) -> Vec<crate::boundary::face_patches::SurfaceOutput> {
+        crate::boundary::face_patches::surface_outputs(&self.run.faces, self.points)
+    }
 }
 
 pub trait Observer {

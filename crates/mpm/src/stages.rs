@@ -10,6 +10,7 @@ use crate::assembly::PointLoad;
 use crate::boundary::face_loads::FaceLoad;
 use crate::boundary::ibm::IbmMotion;
 use crate::boundary::loading::LoadedStretch;
+use crate::boundary::surface_loading::LoadedCells;
 use crate::equilibrium::StepSpace;
 use crate::particles::Dim;
 
@@ -30,6 +31,8 @@ where
     /// Tractions on faces of boxes (3D, until the B-spline surfaces).
     pub face_loads: Vec<FaceLoad<D>>,
     pub boundary_loads: Vec<LoadedStretch>,
+    /// Tractions on the run's surface patches (3D).
+    pub surface_loads: Vec<LoadedCells>,
     pub grid_supports: Vec<<Dim<D> as StepSpace<D>>::Support>,
     /// Per implicit-boundary support of the run (in the first stage's
     /// order), its motion in this stage, or `None` once released. The
@@ -89,6 +92,7 @@ mod tests {
             gravity: [[0.0; 2]; 2],
             point_loads: Vec::new(),
             face_loads: Vec::new(),
+            surface_loads: Vec::new(),
             boundary_loads: Vec::new(),
             grid_supports: Vec::new(),
             ibm: Vec::new(),

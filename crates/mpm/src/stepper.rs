@@ -28,8 +28,10 @@ use crate::assembly::solid_ghost_faces::SolidGhostFaces;
 use crate::assembly::{FbarCells, GhostFaces, LonePoints, SoftCells, StepTerm, lone_points};
 use crate::boundary::BoundaryLoop;
 use crate::boundary::face_loads::FaceLoading;
+use crate::boundary::face_patches::FacePatch;
 use crate::boundary::ibm::{self, Anchor, BandTerms};
 use crate::boundary::loading::BoundaryLoading;
+use crate::boundary::surface_loading::SurfaceLoading;
 use crate::case::Volumetric;
 use crate::configuration::Configuration;
 use crate::equilibrium::{AnalysedPattern, StepEquilibrium, StepSpace, StepTerms};
@@ -188,6 +190,9 @@ where
     pub points: MaterialPoints<D>,
     /// Boundary loops of the material points, found once (Lagrangian).
     pub loops: Vec<BoundaryLoop>,
+    /// The bodies' surfaces as face patches of data points carried by the
+    /// points, made once (3D; empty in plane strain).
+    pub faces: Vec<FacePatch>,
     pub probes: Probes<D>,
     /// The run's stages (loads and supports; one unless the case lists
     /// stages), and the one the steps are in.
@@ -1053,9 +1058,21 @@ impl RunSpace<3> for Dim<3> {
         if gamma > 0.0 {
             terms.push(Box::new(SolidGhostFaces::new(start, sim.basis, gamma)));
         }
-        let faces = &sim.stages[sim.stage].face_loads;
-        if !faces.is_empty() {
-            terms.push(Box::new(FaceLoading::new(start, faces, load_factor)));
+        let stage = &sim.stages[sim.stage];
+        if !stage.face_loads.is_empty() {
+            terms.push(Box::new(FaceLoading::new(
+                start,
+                &stage.face_loads,
+                load_factor,
+            )));
+        }
+        if !stage.surface_loads.is_empty() {
+            terms.push(Box::new(SurfaceLoading::new(
+                start,
+                &sim.faces,
+                &stage.surface_loads,
+                load_factor,
+            )));
         }
         terms
     }

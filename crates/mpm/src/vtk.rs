@@ -229,6 +229,97 @@ pub fn write_vtp(
     )
 }
 
+/// Quads a side of each surface cell in [`write_surface_vtp`].
+pub const SURFACE_SAMPLES_PER_CELL: usize = 4;
+
+/// A 3D run's surfaces as VTP polygons: each Bezier cell evaluated on a
+/// grid of [`SURFACE_SAMPLES_PER_CELL`] quads a side, with the body and
+/// the face patch of each quad.
+pub fn write_surface_vtp(
+    mut out: impl Write,
+    surfaces: &[crate::boundary::face_patches::SurfaceOutput],
+) -> io::Result<()> {
+    let m = SURFACE_SAMPLES_PER_CELL;
+    let cells: usize = surfaces.iter().map(|s| s.cells[0] * s.cells[1]).sum();
+    let (n_points, n_polys) = (cells * (m + 1) * (m + 1), cells * m * m);
+    writeln!(out, "<?xml version=\"1.0\"?>")?;
+    writeln!(
+        out,
+        "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\">"
+    )?;
+    writeln!(out, "  <PolyData>")?;
+    writeln!(
+        out,
+        "    <Piece NumberOfPoints=\"{n_points}\" NumberOfPolys=\"{n_polys}\">"
+    )?;
+    writeln!(
+        out,
+        "      <Points>\n        <DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">"
+    )?;
+    for s in surfaces {
+        for l in 0..s.cells[1] {
+            for k in 0..s.cells[0] {
+                for b in 0..=m {
+                    for a in 0..=m {
+                        let x = s.point(k, l, a as f64 / m as f64, b as f64 / m as f64);
+                        writeln!(out, "{:e} {:e} {:e}", x[0], x[1], x[2])?;
+                    }
+                }
+            }
+        }
+    }
+    writeln!(out, "        </DataArray>\n      </Points>\n      <Polys>")?;
+    writeln!(
+        out,
+        "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">"
+    )?;
+    for cell in 0..cells {
+        let first = cell * (m + 1) * (m + 1);
+        for b in 0..m {
+            for a in 0..m {
+                let at = |a: usize, b: usize| first + a + (m + 1) * b;
+                writeln!(
+                    out,
+                    "{} {} {} {}",
+                    at(a, b),
+                    at(a + 1, b),
+                    at(a + 1, b + 1),
+                    at(a, b + 1)
+                )?;
+            }
+        }
+    }
+    writeln!(out, "        </DataArray>")?;
+    writeln!(
+        out,
+        "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">"
+    )?;
+    for q in 1..=n_polys {
+        write!(out, "{} ", 4 * q)?;
+    }
+    writeln!(
+        out,
+        "\n        </DataArray>\n      </Polys>\n      <CellData>"
+    )?;
+    for (name, value) in [("body", 0), ("patch", 1)] {
+        writeln!(
+            out,
+            "        <DataArray type=\"Int32\" Name=\"{name}\" format=\"ascii\">"
+        )?;
+        for (i, s) in surfaces.iter().enumerate() {
+            let v = if value == 0 { s.body } else { i };
+            for _ in 0..s.cells[0] * s.cells[1] * m * m {
+                write!(out, "{v} ")?;
+            }
+        }
+        writeln!(out, "\n        </DataArray>")?;
+    }
+    writeln!(
+        out,
+        "      </CellData>\n    </Piece>\n  </PolyData>\n</VTKFile>"
+    )
+}
+
 /// A ParaView collection (`.pvd`) listing one file per load step, with the
 /// load factor as its time value.
 pub fn write_pvd(mut out: impl Write, files: &[(f64, String)]) -> io::Result<()> {

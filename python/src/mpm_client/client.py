@@ -83,8 +83,11 @@ class Step:
     yy, zz, xy, yz, xz] Pa, `volume` m^3.
     `boundaries`: per closed loop of outer points a dict with `body`, `hole`,
     `points` (indices), `bspline` (`degree`, `knots`, `control_points` (k, 2)
-    m) and `polyline` (m, 2) m; None when the step's points are not stored
-    (empty in 3D, whose surfaces are to come).
+    m) and `polyline` (m, 2) m; None when the step's points are not stored.
+    In 3D, per face patch of a body's surface a dict with `body`, `cells`
+    (2,), `closed` (2,) bool, `degree` 3, `knots` (two arrays) and
+    `control_points` (3 cells_v + 1, 3 cells_u + 1, 3) m: a bicubic B-spline
+    whose cells are Bezier patches (`net[3l:3l+4, 3k:3k+4]` is cell (k, l)'s).
     """
 
     report: dict
@@ -116,8 +119,19 @@ class Step:
         }
         boundaries = document.get("boundaries")
         if boundaries is not None:
-            boundaries = [_boundary(b) for b in boundaries]
+            boundaries = [_surface(b) if "cells" in b else _boundary(b) for b in boundaries]
         return cls(report=document["report"], boundaries=boundaries, **arrays)
+
+
+def _surface(patch: Mapping[str, Any]) -> dict:
+    patch = dict(patch)
+    cu, cv = patch["cells"]
+    net = _array(patch.get("control_points", []), float, 3)
+    patch["control_points"] = net.reshape(3 * cv + 1, 3 * cu + 1, 3)
+    patch["cells"] = np.asarray(patch["cells"], dtype=np.int64)
+    patch["closed"] = np.asarray(patch["closed"], dtype=bool)
+    patch["knots"] = [np.asarray(k, dtype=float) for k in patch["knots"]]
+    return patch
 
 
 def _boundary(loop: Mapping[str, Any]) -> dict:

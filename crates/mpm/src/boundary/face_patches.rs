@@ -503,6 +503,36 @@ impl FacePatch {
         })
     }
 
+    /// The cells whose middle (the mean of their four corners' reference
+    /// places) `selected` takes, as `k + cells_u l`.
+    pub fn cells_where(
+        &self,
+        points: &MaterialPoints<3>,
+        selected: impl Fn([f64; 3]) -> bool,
+    ) -> Vec<usize> {
+        let [cu, cv] = self.data_grid_cells();
+        let nu = self.counts[0];
+        let reference = |i: usize, j: usize| {
+            let c = &self.data[i % nu + nu * (j % self.counts[1])];
+            let r = points.reference[c.point];
+            std::array::from_fn::<f64, 3, _>(|d| r[d] + c.offset[d])
+        };
+        (0..cu * cv)
+            .filter(|&c| {
+                let (k, l) = (c % cu, c / cu);
+                let corners = [
+                    reference(k, l),
+                    reference(k + 1, l),
+                    reference(k, l + 1),
+                    reference(k + 1, l + 1),
+                ];
+                selected(std::array::from_fn(|d| {
+                    corners.iter().map(|x| x[d]).sum::<f64>() / 4.0
+                }))
+            })
+            .collect()
+    }
+
     /// The data points where the points are now.
     pub fn data_grid(&self, points: &MaterialPoints<3>) -> DataGrid {
         DataGrid {
@@ -515,6 +545,86 @@ impl FacePatch {
                 .collect(),
         }
     }
+}
+
+/// A face patch's surface as served: a bicubic B-spline of `cells[0] x
+/// cells[1]` Bezier cells, each interior knot triple (the cells meet with
+/// continuous position; their tangent planes agree at the data points).
+/// `control_points` is the `(3 cells[0] + 1) x (3 cells[1] + 1)` net, the
+/// first index fastest; a closed direction's last row repeats its first.
+/// The knots run over `0..=cells[d]`, one unit a cell.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SurfaceOutput {
+    pub body: usize,
+    pub cells: [usize; 2],
+    pub closed: [bool; 2],
+    pub degree: usize,
+    pub knots: [Vec<f64>; 2],
+    pub control_points: Vec<[f64; 3]>,
+}
+
+impl SurfaceOutput {
+    /// The served form of `surface`, a face of body `body`.
+    pub fn new(body: usize, closed: [bool; 2], surface: &super::surface::Surface) -> Self {
+        let [cu, cv] = surface.cells;
+        let (nu, nv) = (3 * cu + 1, 3 * cv + 1);
+        let mut net = vec![[0.0; 3]; nu * nv];
+        for (c, patch) in surface.patches.iter().enumerate() {
+            let (k, l) = (c % cu, c / cu);
+            for a in 0..4 {
+                for b in 0..4 {
+                    net[3 * k + a + nu * (3 * l + b)] = patch.control[a][b];
+                }
+            }
+        }
+        let knots = |n: usize| -> Vec<f64> {
+            let mut k = vec![0.0; 4];
+            for i in 1..n {
+                k.extend([i as f64; 3]);
+            }
+            k.extend([n as f64; 4]);
+            k
+        };
+        Self {
+            body,
+            cells: surface.cells,
+            closed,
+            degree: 3,
+            knots: [knots(cu), knots(cv)],
+            control_points: net,
+        }
+    }
+
+    /// The point at `(s, t)` of cell `(k, l)`, from the net.
+    pub fn point(&self, k: usize, l: usize, s: f64, t: f64) -> [f64; 3] {
+        let nu = 3 * self.cells[0] + 1;
+        let (bs, _) = super::surface::bernstein(s);
+        let (bt, _) = super::surface::bernstein(t);
+        let mut x = [0.0; 3];
+        for a in 0..4 {
+            for b in 0..4 {
+                let p = self.control_points[3 * k + a + nu * (3 * l + b)];
+                for d in 0..3 {
+                    x[d] += bs[a] * bt[b] * p[d];
+                }
+            }
+        }
+        x
+    }
+}
+
+/// Every face patch's surface through the points' current places.
+pub fn surface_outputs(faces: &[FacePatch], points: &MaterialPoints<3>) -> Vec<SurfaceOutput> {
+    faces
+        .iter()
+        .map(|f| {
+            SurfaceOutput::new(
+                f.body,
+                f.closed,
+                &super::surface::interpolate(&f.data_grid(points)),
+            )
+        })
+        .collect()
 }
 
 /// `x_p + F_p o`.

@@ -189,6 +189,139 @@ pub struct SolidLoads {
     /// (a box's faces): a stopgap until the B-spline surfaces (part 2).
     #[serde(default)]
     pub tractions: Vec<FaceTraction>,
+    /// Tractions and follower pressures on the bodies' B-spline surfaces,
+    /// on the regions `on` selects.
+    #[serde(default)]
+    pub surface: Vec<SurfaceLoadSpec>,
+}
+
+/// A load on a region of the bodies' surfaces: exactly one of a dead
+/// `traction` (Pa, per unit current area) or a follower `pressure` (Pa,
+/// positive pushes into the material), ramped with the load factor.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceLoadSpec {
+    pub on: SurfaceSelector,
+    #[serde(default)]
+    pub traction: Option<[f64; 3]>,
+    #[serde(default)]
+    pub pressure: Option<f64>,
+}
+
+/// A region of the bodies' surfaces, judged in the reference
+/// configuration: the surface cells whose middle lies within `tolerance`
+/// of every surface given (a `plane`, a `sphere`, a `cylinder` about an
+/// axis along z) and `inside` the box, if given; on body `body` only, if
+/// given. At least one of `plane`, `sphere`, `cylinder`, `inside`. The
+/// tolerance defaults to half the body's point spacing.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceSelector {
+    #[serde(default)]
+    pub body: Option<usize>,
+    #[serde(default)]
+    pub plane: Option<PlaneThrough>,
+    #[serde(default)]
+    pub sphere: Option<SphereSpec>,
+    #[serde(default)]
+    pub cylinder: Option<CylinderSpec>,
+    #[serde(default)]
+    pub inside: Option<SolidBox>,
+    #[serde(default)]
+    pub tolerance: Option<f64>,
+}
+
+/// The plane through `point` normal to `normal`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneThrough {
+    pub point: [f64; 3],
+    pub normal: [f64; 3],
+}
+
+/// The sphere of `radius` about `center`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SphereSpec {
+    pub center: [f64; 3],
+    pub radius: f64,
+}
+
+/// The cylinder of `radius` about the line through `center` along z.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CylinderSpec {
+    pub center: [f64; 2],
+    pub radius: f64,
+}
+
+impl SurfaceSelector {
+    /// Whether the reference place `x` is in the region, with `tolerance`
+    /// where the selector gives none.
+    pub fn contains(&self, x: [f64; 3], tolerance: f64) -> bool {
+        let tol = self.tolerance.unwrap_or(tolerance);
+        let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let plane = self.plane.is_none_or(|p| {
+            let d: f64 = (0..3).map(|k| (x[k] - p.point[k]) * p.normal[k]).sum();
+            d.abs() <= tol * norm(p.normal)
+        });
+        let sphere = self.sphere.is_none_or(|s| {
+            (norm(std::array::from_fn(|k| x[k] - s.center[k])) - s.radius).abs() <= tol
+        });
+        let cylinder = self.cylinder.is_none_or(|c| {
+            ((x[0] - c.center[0]).hypot(x[1] - c.center[1]) - c.radius).abs() <= tol
+        });
+        let inside = self
+            .inside
+            .is_none_or(|b| (0..3).all(|k| x[k] >= b.min[k] && x[k] <= b.max[k]));
+        plane && sphere && cylinder && inside
+    }
+
+    fn validate(&self, path: &str, bodies: usize) -> Result<(), CaseError> {
+        if self.plane.is_none()
+            && self.sphere.is_none()
+            && self.cylinder.is_none()
+            && self.inside.is_none()
+        {
+            return Err(CaseError::new(
+                path,
+                "give at least one of plane, sphere, cylinder or inside",
+            ));
+        }
+        if let Some(b) = self.body
+            && b >= bodies
+        {
+            return Err(CaseError::new(
+                format!("{path}.body"),
+                format!("no body {b} ({bodies} bodies)"),
+            ));
+        }
+        if let Some(p) = &self.plane {
+            finite(&format!("{path}.plane.point"), &p.point)?;
+            finite(&format!("{path}.plane.normal"), &p.normal)?;
+            if p.normal.iter().all(|&v| v == 0.0) {
+                return Err(CaseError::new(
+                    format!("{path}.plane.normal"),
+                    "must not be zero",
+                ));
+            }
+        }
+        if let Some(s) = &self.sphere {
+            finite(&format!("{path}.sphere.center"), &s.center)?;
+            positive(&format!("{path}.sphere.radius"), s.radius)?;
+        }
+        if let Some(c) = &self.cylinder {
+            finite(&format!("{path}.cylinder.center"), &c.center)?;
+            positive(&format!("{path}.cylinder.radius"), c.radius)?;
+        }
+        if let Some(b) = &self.inside {
+            ordered(&format!("{path}.inside"), b.min, b.max)?;
+        }
+        if let Some(t) = self.tolerance {
+            positive(&format!("{path}.tolerance"), t)?;
+        }
+        Ok(())
+    }
 }
 
 /// A dead traction (Pa) on the faces of the points' domains that lie on
@@ -383,6 +516,20 @@ impl SolidCase {
                 ));
             }
             finite(&format!("loads.tractions[{i}].traction"), &t.traction)?;
+        }
+        for (i, load) in self.loads.surface.iter().enumerate() {
+            let path = format!("loads.surface[{i}]");
+            load.on.validate(&format!("{path}.on"), self.bodies.len())?;
+            match (&load.traction, load.pressure) {
+                (Some(t), None) => finite(&format!("{path}.traction"), t)?,
+                (None, Some(p)) => finite(&format!("{path}.pressure"), &[p])?,
+                _ => {
+                    return Err(CaseError::new(
+                        path,
+                        "give exactly one of traction or pressure",
+                    ));
+                }
+            }
         }
         for (i, support) in self.supports.iter().enumerate() {
             let Some((axis, _)) = support.on.plane() else {

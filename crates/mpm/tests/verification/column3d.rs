@@ -68,6 +68,8 @@ fn column_3d(cells: usize, basis: Basis, load_steps: usize) -> (MaterialPoints<3
         gravity: [0.0, 0.0, -G],
         point_loads: Vec::new(),
         face_loads: Vec::new(),
+        faces: Vec::new(),
+        surface_loads: Vec::new(),
         supports,
         load_steps,
     });

@@ -23,6 +23,7 @@ mod one_point_cells;
 mod plasticity;
 mod pressure;
 mod slab3d;
+mod sphere3d;
 mod stages;
 mod strength_reduction;
 mod triaxial3d;

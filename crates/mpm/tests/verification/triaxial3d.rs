@@ -73,6 +73,8 @@ fn push_past_yield(material: Material, p: f64, strength: f64) -> (MaterialPoints
         gravity: [0.0; 3],
         point_loads: Vec::new(),
         face_loads: faces,
+        faces: Vec::new(),
+        surface_loads: Vec::new(),
         supports: vec![roller(0, 0), roller(1, 1), roller(2, 2)],
         load_steps: 43,
     });
