@@ -276,6 +276,10 @@ mod tests {
                 "column3d",
                 include_str!("../../python/src/mpm_client/examples/column3d.json"),
             ),
+            (
+                "sphere3d",
+                include_str!("../../python/src/mpm_client/examples/sphere3d.json"),
+            ),
         ];
         let names: Vec<&str> = (mpm::case::builtin::NAMES.iter())
             .chain(&mpm::case::builtin::SOLID_NAMES)

@@ -4,6 +4,7 @@
 //
 //   node viewer.test.mjs                     # target/debug/mpm, /usr/bin/chromium
 //   MPM_BIN=... CHROMIUM=... SCREENSHOT=docs/viewer.png node viewer.test.mjs
+//   SCREENSHOT_3D=docs/viewer-sphere3d.png node viewer.test.mjs  # runs sphere3d too
 
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
@@ -98,6 +99,9 @@ before(async () => {
     ],
   };
   jobs.column3d = (await call('POST', '/jobs', JSON.parse(execFileSync(mpm, ['example', 'column3d'])))).id;
+  if (process.env.SCREENSHOT_3D) {
+    jobs.sphere3d = (await call('POST', '/jobs', JSON.parse(execFileSync(mpm, ['example', 'sphere3d'])))).id;
+  }
   jobs.reduced = (await call('POST', '/jobs', reduced)).id;
   jobs.cantilever = (await call('POST', '/jobs', cantilever)).id;
   jobs.staged = (await call('POST', '/jobs', staged)).id;
@@ -319,6 +323,10 @@ test('a 3D job is drawn in a view that turns when dragged', async () => {
   // The column, squashed to half its height, still shows as a body.
   assert.ok(start.drawn > 0.01 * start.pixels, `only ${start.drawn} of ${start.pixels} pixels drawn`);
   const first = await page.$eval('#points', (c) => c.dataset.view);
+  // Its surface over the points: of the box's 414 Bezier cells (two faces
+  // of 3 x 33 cells along each side, two of 3 x 3 across), those of the
+  // three faces that face the eye, two sides and the top.
+  assert.equal(await page.$eval('#points', (c) => c.dataset.curves), '207');
 
   // A drag turns the view, and draws another picture; a double click
   // brings the first view back.
@@ -335,5 +343,12 @@ test('a 3D job is drawn in a view that turns when dragged', async () => {
   // The reactions plot has z components, in N.
   const plots = await page.$$eval('figure.plot', (fs) => fs.map((f) => f.textContent));
   assert.ok(plots.some((t) => /F_z/.test(t) && /force \(N\)/.test(t)), plots.join(' | '));
+  if (process.env.SCREENSHOT_3D) {
+    await until('the sphere', async () => (await call('GET', `/jobs/${jobs.sphere3d}`)).status === 'succeeded', 600);
+    await page.goto(`${base}/#/jobs/${jobs.sphere3d}`);
+    await page.waitForSelector('#points[data-points="3674"]');
+    await page.selectOption('#field', 'u');
+    await (await page.$('#points')).screenshot({ path: process.env.SCREENSHOT_3D });
+  }
   await page.close();
 });

@@ -21,7 +21,16 @@ from .errors import CaseError
 __all__ = ["cantilever", "example", "EXAMPLES", "validate", "schema", "CaseError"]
 
 # The service's built-in examples (`mpm example NAME`), bundled as JSON.
-EXAMPLES = ("column", "cantilever-grid", "cantilever", "plate-with-hole", "footing", "slope", "column3d")
+EXAMPLES = (
+    "column",
+    "cantilever-grid",
+    "cantilever",
+    "plate-with-hole",
+    "footing",
+    "slope",
+    "column3d",
+    "sphere3d",
+)
 
 
 def example(name: str) -> dict:

@@ -519,6 +519,10 @@ function drawSolid(canvas, doc, reference, field, grid, view) {
     ctx.fillStyle = colour((values[i] - lo) / (hi - lo));
     ctx.fillRect(width / 2 + scale * screen[i][0] - s / 2, height / 2 - scale * screen[i][1] - s / 2, s, s);
   }
+  const cells = drawSurfaces(ctx, doc.boundaries || [], (x) => {
+    const [u, v, d] = project(x.map((value, k) => value - centre[k]));
+    return [width / 2 + scale * u, height / 2 - scale * v, d];
+  });
   // The axes, from a corner.
   const [ax, ay, arm] = [40, height - 40, 26];
   ctx.lineWidth = 2;
@@ -540,9 +544,46 @@ function drawSolid(canvas, doc, reference, field, grid, view) {
   ctx.fillText(`h = ${h} m`, width - 12, height - 20);
   ctx.textAlign = 'start';
   canvas.dataset.points = n;
-  canvas.dataset.curves = 0;
+  canvas.dataset.curves = cells;
   canvas.dataset.view = `${view.yaw.toFixed(3)},${view.pitch.toFixed(3)}`;
-  return { points: n, curves: 0, range: [lo, hi], uniform };
+  return { points: n, curves: cells, range: [lo, hi], uniform };
+}
+
+// Draws over the points the cells of a 3D job's surfaces that face the
+// eye: each cell's four edges are cubic Beziers whose control points are
+// rows of its patch's net, and an orthographic view maps a Bezier to the
+// Bezier of the mapped control points, so the edges drawn are exact.
+// `toScreen` gives a point's canvas x, y and depth. Returns the cells drawn.
+function drawSurfaces(ctx, surfaces, toScreen) {
+  let drawn = 0;
+  ctx.lineWidth = 1;
+  ctx.strokeStyle = 'rgba(20, 20, 20, 0.45)';
+  for (const s of surfaces) {
+    const [cu, cv] = s.cells;
+    const nu = 3 * cu + 1;
+    const at = (i, j) => toScreen(s.control_points[i + nu * j]);
+    for (let l = 0; l < cv; l++) {
+      for (let k = 0; k < cu; k++) {
+        const [i, j] = [3 * k, 3 * l];
+        const [p00, p30, p03] = [at(i, j), at(i + 3, j), at(i, j + 3)];
+        // Outward normal's sign on the screen: the cell faces the eye when
+        // its corners turn clockwise in canvas coordinates (y down).
+        const turn = (p30[0] - p00[0]) * (p03[1] - p00[1]) - (p30[1] - p00[1]) * (p03[0] - p00[0]);
+        if (turn >= 0) continue;
+        ctx.beginPath();
+        ctx.moveTo(p00[0], p00[1]);
+        for (const [a, b, c] of [
+          [at(i + 1, j), at(i + 2, j), p30],
+          [at(i + 3, j + 1), at(i + 3, j + 2), at(i + 3, j + 3)],
+          [at(i + 2, j + 3), at(i + 1, j + 3), p03],
+          [at(i, j + 2), at(i, j + 1), p00],
+        ]) ctx.bezierCurveTo(a[0], a[1], b[0], b[1], c[0], c[1]);
+        ctx.stroke();
+        drawn += 1;
+      }
+    }
+  }
+  return drawn;
 }
 
 function drawColourBar(bar, labels, field, [lo, hi], uniform = null) {
