@@ -22,10 +22,11 @@
 //! common edge at the same places, so their data points coincide and the
 //! edge curves, made from the same line of data, are the same: the surface
 //! is closed there. Faces that meet at an edge of the body (a box's, a
-//! cylinder's rims) are sampled each on its own: their data points lie on
-//! the same edge of the body, and their edge curves differ by the
-//! interpolation's error there. Neither is a problem for the loads or the
-//! boundary method, which integrate each patch on its own.
+//! cylinder's rims), and a hexahedral mesh's neighbouring element faces,
+//! are sampled each on its own: their data points lie on the same edge,
+//! and their edge curves differ by the interpolation's error there.
+//! Neither is a problem for the loads or the boundary method, which
+//! integrate each patch on its own.
 
 use super::surface::{DataGrid, Point3};
 use crate::geometry::{Geometry, HexMesh};
@@ -191,13 +192,16 @@ impl ReferenceFace {
     }
 
     /// The data parameters along each direction at about `spacing`: the
-    /// middles of `n` equal cells, and the ends where the direction is
-    /// open.
+    /// middles of `n` equal cells (at least four round a closed one), and
+    /// the ends where the direction is open.
     pub fn samples(&self, spacing: f64) -> [Vec<f64>; 2] {
         let lengths = self.lengths();
         let closed = self.closed();
         [0, 1].map(|d| {
-            let n = (lengths[d] / spacing).round().max(1.0) as usize;
+            // A closed line needs three points for its circle tangents;
+            // four keep a thin cylinder round.
+            let least = if closed[d] { 4.0 } else { 1.0 };
+            let n = (lengths[d] / spacing).round().max(least) as usize;
             let middles = (0..n).map(|i| (i as f64 + 0.5) / n as f64);
             if closed[d] {
                 middles.collect()
