@@ -124,3 +124,104 @@ fn slab_against_plane_strain(volumetric: &str, steps: u32, scale: f64) {
     assert!((clamp[1] - 0.5 * 75.0 * 10.0 * scale * 20.0).abs() < 1e-6 * clamp[1]);
     assert!((low + high).abs() < 1e-9 * low.abs() && low.abs() > 0.0);
 }
+
+/// A follower pressure on the top instead of the weight: the 2D run's on
+/// its B-spline curve (`loads.boundary`), the slab's on its B-spline
+/// surface (`loads.surface`, the cells of the face y = 2 m), 5 steps.
+/// An open difference (issue 39), measured by this harness (`P=750` by
+/// default; `cargo test --test verification slab_under_follower -- --ignored
+/// --nocapture`): at 750 Pa (tip -1.37 m) the slab's positions differ from
+/// the plane-strain run's by 7.8e-3 m and its stresses by 2.2% of the
+/// largest; at 7.5 Pa (tip -1.33e-2 m) by 6.1e-5 m (0.45%) and 0.66%,
+/// while the applied loads agree to 5e-6 (and to 0.2% at 750 Pa). So the
+/// two share the load's total but not its distribution, already in the
+/// linear regime, where both surfaces are the straight top through the
+/// same data points; the self-weight slab above is the plane-strain run to
+/// round-off, so the bulk is not the cause. Until it is found, the slab
+/// under surface loads is not claimed consistent with plane strain. The
+/// assertions hold the measured differences, to catch them growing.
+#[test]
+#[ignore]
+fn slab_under_follower_pressure_against_plane_strain() {
+    let pressure: f64 = std::env::var("P")
+        .map(|v| v.parse().unwrap())
+        .unwrap_or(750.0);
+    let mut plane = example("cantilever-grid");
+    plane["basis"] = "linear".into();
+    plane["analysis"]["stabilisation"] = serde_json::json!({ "ghost_penalty": 0.0 });
+    plane["loads"] =
+        serde_json::json!({ "boundary": [{ "on": { "y": 2.0 }, "pressure": pressure }] });
+    let mut sim2 = Simulation::new(&Case::from_json(&plane.to_string()).unwrap()).unwrap();
+    let r2 = sim2.run(&mut NoObserver).unwrap();
+    let slab = serde_json::json!({
+        "version": 1,
+        "analysis": { "type": "3d", "load_steps": 5, "stabilisation": { "ghost_penalty": 0.0 } },
+        "grid": { "cell_size": 0.5 },
+        "basis": "linear",
+        "bodies": [{
+            "geometry": { "box": { "min": [0.0, 0.0, 0.0], "max": [10.0, 2.0, 0.5] } },
+            "points": { "per_cell": 2 },
+            "material": plane["bodies"][0]["material"]
+        }],
+        "loads": { "surface": [{ "on": { "plane": { "point": [0.0, 2.0, 0.0], "normal": [0.0, 1.0, 0.0] } },
+                                 "pressure": pressure }] },
+        "supports": [
+            { "on": { "x": 0.0 }, "fix": "xyz" },
+            { "on": { "z": 0.0 }, "fix": "z" },
+            { "on": { "z": 0.5 }, "fix": "z" }
+        ]
+    });
+    let mut sim3 =
+        Simulation::from_solid_case(&SolidCase::from_json(&slab.to_string()).unwrap()).unwrap();
+    let r3 = sim3.run(&mut NoObserver).unwrap();
+    let (a2, a3) = (&r2.steps[4].applied_load, &r3.steps[4].applied_load);
+    let load_miss = (a2[1] - a3[1] / 0.5).abs() / a2[1].abs();
+    let (p2, p3) = (&sim2.points, &sim3.points);
+    let largest = p2
+        .stress
+        .iter()
+        .flat_map(|s| s.plane)
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let tip = |positions: &mut dyn Iterator<Item = (f64, f64)>| {
+        positions.fold(
+            (f64::MIN, 0.0),
+            |(x, y), (a, b)| if a > x { (a, b) } else { (x, y) },
+        )
+    };
+    let (mut worst, mut moved) = (0.0f64, 0.0f64);
+    for q in 0..p3.len() {
+        let [x, y, _] = p3.reference[q];
+        let twin = (0..p2.len())
+            .find(|&p| {
+                (p2.reference[p][0] - x).abs() < 1e-9 && (p2.reference[p][1] - y).abs() < 1e-9
+            })
+            .expect("a 2D point at the 3D point's (x, y)");
+        let (s2, s3) = (&p2.stress[twin], &p3.stress[q]);
+        for (a, b) in [
+            (s2.plane[0], s3[(0, 0)]),
+            (s2.plane[1], s3[(1, 1)]),
+            (s2.plane[2], s3[(0, 1)]),
+            (s2.zz, s3[(2, 2)]),
+        ] {
+            worst = worst.max((a - b).abs() / largest);
+        }
+        for d in 0..2 {
+            moved = moved.max((p2.position[twin][d] - p3.position[q][d]).abs());
+        }
+    }
+    let deflection2 = tip(&mut p2
+        .position
+        .iter()
+        .zip(&p2.reference)
+        .map(|(x, r)| (r[0] + 1e-9 * r[1], x[1] - r[1])))
+    .1;
+    eprintln!(
+        "follower pressure {pressure} Pa: tip deflection {deflection2:.4} m; slab against plane strain: stresses {worst:.2e} of the largest, positions {moved:.2e} m, applied load {load_miss:.1e}"
+    );
+    if pressure == 750.0 {
+        assert!(
+            worst < 0.03 && moved < 0.01 && load_miss < 3e-3,
+            "{worst:e} {moved:e} {load_miss:e}"
+        );
+    }
+}
