@@ -456,6 +456,12 @@ pub struct SolidRun {
     pub load_steps: usize,
 }
 
+/// A surface region's default tolerance, in the body's point spacings:
+/// well under the quarter spacing by which the cells of a face's
+/// neighbour along their common edge stand off it
+/// ([`FacePatch::cells_where`]), well over a curved face's cells' error.
+pub const SURFACE_TOLERANCE: f64 = 0.1;
+
 impl Simulation<3> {
     /// Builds the initial state of a validated 3D case. Fails, naming the
     /// field, when a body holds no point or a support no node the material
@@ -523,7 +529,7 @@ impl Simulation<3> {
                 if load.on.body.is_some_and(|b| b != face.body) {
                     continue;
                 }
-                let tolerance = case.spacing(face.body) / 2.0;
+                let tolerance = case.spacing(face.body) * SURFACE_TOLERANCE;
                 let cells = face.cells_where(&points, |x| load.on.contains(x, tolerance));
                 if !cells.is_empty() {
                     surface_loads.push(LoadedCells {

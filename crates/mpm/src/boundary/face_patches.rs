@@ -507,33 +507,31 @@ impl FacePatch {
         })
     }
 
-    /// The cells whose middle (the mean of their four corners' reference
-    /// places) `selected` takes, as `k + cells_u l`.
+    /// The cells whose middle in the reference configuration (the
+    /// reference surface's point at the cell's parameter middle, on the
+    /// true face to the interpolation's error) `selected` takes, as `k +
+    /// cells_u l`. A face's end cells are half a spacing wide, so the
+    /// middles of a neighbouring face's cells along the edge lie a quarter
+    /// spacing off it.
     pub fn cells_where(
         &self,
         points: &MaterialPoints<3>,
         selected: impl Fn([f64; 3]) -> bool,
     ) -> Vec<usize> {
-        let [cu, cv] = self.data_grid_cells();
-        let nu = self.counts[0];
-        let reference = |i: usize, j: usize| {
-            let c = &self.data[i % nu + nu * (j % self.counts[1])];
-            let r = points.reference[c.point];
-            std::array::from_fn::<f64, 3, _>(|d| r[d] + c.offset[d])
+        let reference = DataGrid {
+            counts: self.counts,
+            closed: self.closed,
+            points: (self.data.iter())
+                .map(|c| {
+                    let r = points.reference[c.point];
+                    std::array::from_fn(|d| r[d] + c.offset[d])
+                })
+                .collect(),
         };
-        (0..cu * cv)
-            .filter(|&c| {
-                let (k, l) = (c % cu, c / cu);
-                let corners = [
-                    reference(k, l),
-                    reference(k + 1, l),
-                    reference(k, l + 1),
-                    reference(k + 1, l + 1),
-                ];
-                selected(std::array::from_fn(|d| {
-                    corners.iter().map(|x| x[d]).sum::<f64>() / 4.0
-                }))
-            })
+        let surface = super::surface::interpolate(&reference);
+        (surface.patches.iter().enumerate())
+            .filter(|(_, patch)| selected(patch.point(0.5, 0.5)))
+            .map(|(c, _)| c)
             .collect()
     }
 

@@ -213,7 +213,7 @@ pub struct SurfaceLoadSpec {
 /// of every surface given (a `plane`, a `sphere`, a `cylinder` about an
 /// axis along z) and `inside` the box, if given; on body `body` only, if
 /// given. At least one of `plane`, `sphere`, `cylinder`, `inside`. The
-/// tolerance defaults to half the body's point spacing.
+/// tolerance defaults to a tenth of the body's point spacing.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SurfaceSelector {
