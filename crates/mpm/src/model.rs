@@ -459,7 +459,7 @@ pub struct SolidRun {
 /// A surface region's default tolerance, in the body's point spacings:
 /// well under the quarter spacing by which the cells of a face's
 /// neighbour along their common edge stand off it
-/// ([`FacePatch::cells_where`]), well over a curved face's cells' error.
+/// ([`FacePatch::cell_middles`]), well over a curved face's cells' error.
 pub const SURFACE_TOLERANCE: f64 = 0.1;
 
 impl Simulation<3> {
@@ -519,6 +519,7 @@ impl Simulation<3> {
             tractions.extend(loads);
         }
         let mut surface_loads = Vec::new();
+        let middles: Vec<Vec<[f64; 3]>> = faces.iter().map(|f| f.cell_middles(&points)).collect();
         for (i, load) in case.loads.surface.iter().enumerate() {
             let traction = match (load.traction, load.pressure) {
                 (Some(t), _) => SurfaceTraction::Dead(t),
@@ -530,7 +531,10 @@ impl Simulation<3> {
                     continue;
                 }
                 let tolerance = case.spacing(face.body) * SURFACE_TOLERANCE;
-                let cells = face.cells_where(&points, |x| load.on.contains(x, tolerance));
+                let cells: Vec<usize> = (middles[patch].iter().enumerate())
+                    .filter(|(_, x)| load.on.contains(**x, tolerance))
+                    .map(|(c, _)| c)
+                    .collect();
                 if !cells.is_empty() {
                     surface_loads.push(LoadedCells {
                         patch,

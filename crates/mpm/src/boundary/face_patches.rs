@@ -507,17 +507,13 @@ impl FacePatch {
         })
     }
 
-    /// The cells whose middle in the reference configuration (the
-    /// reference surface's point at the cell's parameter middle, on the
-    /// true face to the interpolation's error) `selected` takes, as `k +
-    /// cells_u l`. A face's end cells are half a spacing wide, so the
-    /// middles of a neighbouring face's cells along the edge lie a quarter
-    /// spacing off it.
-    pub fn cells_where(
-        &self,
-        points: &MaterialPoints<3>,
-        selected: impl Fn([f64; 3]) -> bool,
-    ) -> Vec<usize> {
+    /// Each cell's middle in the reference configuration (the reference
+    /// surface's point at the cell's parameter middle, on the true face to
+    /// the interpolation's error), cells `k + cells_u l` in order: what a
+    /// region selects cells by. A face's end cells are half a spacing
+    /// wide, so the middles of a neighbouring face's cells along their
+    /// common edge lie a quarter spacing off it.
+    pub fn cell_middles(&self, points: &MaterialPoints<3>) -> Vec<[f64; 3]> {
         let reference = DataGrid {
             counts: self.counts,
             closed: self.closed,
@@ -528,10 +524,8 @@ impl FacePatch {
                 })
                 .collect(),
         };
-        let surface = super::surface::interpolate(&reference);
-        (surface.patches.iter().enumerate())
-            .filter(|(_, patch)| selected(patch.point(0.5, 0.5)))
-            .map(|(c, _)| c)
+        (super::surface::interpolate(&reference).patches.iter())
+            .map(|patch| patch.point(0.5, 0.5))
             .collect()
     }
 

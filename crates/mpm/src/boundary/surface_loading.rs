@@ -321,8 +321,11 @@ pub struct SurfaceLoading<'a> {
     patches: &'a [FacePatch],
     regions: &'a [LoadedCells],
     load_factor: f64,
-    /// Per region, per cell of its patch: the quadrature, if loaded.
-    quadrature: Vec<Vec<Option<CellQuadrature>>>,
+    /// Per region, per cell of its patch: its quadrature's place in
+    /// `cells`, if loaded. Loads on the same cell share one quadrature, so
+    /// the memory is bounded by the surface whatever the loads.
+    quadrature: Vec<Vec<Option<usize>>>,
+    cells: Vec<CellQuadrature>,
 }
 
 impl<'a> SurfaceLoading<'a> {
@@ -338,26 +341,40 @@ impl<'a> SurfaceLoading<'a> {
             regions,
             load_factor,
             quadrature: Vec::new(),
+            cells: Vec::new(),
         };
         let zero = vec![0.0; start.conn.n_dofs()];
-        loading.quadrature = regions
-            .iter()
-            .map(|region| {
-                let interpolation = Interpolation::new(loading.trial_grid(region.patch, &zero));
-                let cells = interpolation.grid().cells();
-                let mut q = vec![None; cells[0] * cells[1]];
-                for &c in &region.cells {
-                    q[c] = Some(CellQuadrature::new(
+        let mut made: std::collections::BTreeMap<(usize, usize), usize> = Default::default();
+        let mut interpolations: std::collections::BTreeMap<usize, Interpolation> =
+            Default::default();
+        let mut quadrature = Vec::with_capacity(regions.len());
+        for region in regions {
+            let interpolation = interpolations
+                .entry(region.patch)
+                .or_insert_with(|| Interpolation::new(loading.trial_grid(region.patch, &zero)));
+            let cells = interpolation.grid().cells();
+            let mut q = vec![None; cells[0] * cells[1]];
+            for &c in &region.cells {
+                let place = *made.entry((region.patch, c)).or_insert_with(|| {
+                    loading.cells.push(CellQuadrature::new(
                         &interpolation.patch(c % cells[0], c / cells[0]),
                         start.grid,
                         start.basis,
                         &start.conn.nodes,
                     ));
-                }
-                q
-            })
-            .collect();
+                    loading.cells.len() - 1
+                });
+                q[c] = Some(place);
+            }
+            quadrature.push(q);
+        }
+        loading.quadrature = quadrature;
         loading
+    }
+
+    /// Region `r`'s quadrature of cell `c` of its patch, if it loads it.
+    fn cell(&self, r: usize, c: usize) -> Option<&CellQuadrature> {
+        self.quadrature[r][c].map(|k| &self.cells[k])
     }
 
     pub fn is_empty(&self) -> bool {
@@ -414,9 +431,7 @@ impl<'a> SurfaceLoading<'a> {
             let interpolation = Interpolation::new(self.trial_grid(region.patch, u));
             let cu = interpolation.grid().cells()[0];
             for &c in &region.cells {
-                let q = self.quadrature[r][c]
-                    .as_ref()
-                    .expect("loaded cells have a quadrature");
+                let q = self.cell(r, c).expect("loaded cells have a quadrature");
                 q.forces(
                     &interpolation.patch(c % cu, c / cu),
                     region.traction,
@@ -443,7 +458,7 @@ impl<'a> SurfaceLoading<'a> {
                 .into_par_iter()
                 .map(|c| {
                     let mut d = Vec::new();
-                    if let Some(q) = &self.quadrature[r][c] {
+                    if let Some(q) = self.cell(r, c) {
                         q.derivative(
                             &interpolation.patch(c % cu, c / cu),
                             region.traction,
@@ -511,9 +526,7 @@ impl<'a> SurfaceLoading<'a> {
             moved.move_point(i, j, at);
             let mut df: Vec<(usize, Point3)> = Vec::with_capacity(64);
             for (s, &cell) in affected.iter().enumerate() {
-                let q = self.quadrature[r][cell]
-                    .as_ref()
-                    .expect("an affected cell is loaded");
+                let q = self.cell(r, cell).expect("an affected cell is loaded");
                 let (plus, minus) = (&nets[0][s].control, &nets[1][s].control);
                 for (&a, dfa) in q.nodes().iter().zip(&derivatives[cell]) {
                     let mut d = [0.0; 3];
@@ -561,7 +574,7 @@ impl<'a> SurfaceLoading<'a> {
                     let data = &self.patches[region.patch].data[i + nu * j];
                     let mut group: Vec<u32> = self.weights(data).map(|(b, _)| b as u32).collect();
                     for &c in &affected {
-                        let q = self.quadrature[r][c].as_ref().expect("loaded");
+                        let q = self.cell(r, c).expect("loaded");
                         group.extend(q.nodes().iter().map(|&a| a as u32));
                     }
                     group.sort_unstable();
@@ -728,6 +741,40 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// Two loads on the same cells share their quadrature (memory bounded
+    /// by the surface, whatever the loads), and their forces add.
+    #[test]
+    fn loads_on_the_same_cells_share_their_quadrature() {
+        let (points, grid) = solid_box([0.0, 0.0, 0.0], [0.8, 0.6, 0.4], 0.1, 0.2);
+        let solid = Solid::cuboid([0.0, 0.0, 0.0], [0.8, 0.6, 0.4]);
+        let conn = solid_links(&points, &grid, Basis::Gimp);
+        let start = Configuration {
+            grid: &grid,
+            basis: Basis::Gimp,
+            conn: &conn,
+            points: &points,
+        };
+        let patches = face_patches(&points, 0, &solid, 0.1);
+        let once = everywhere(&patches, SurfaceTraction::Pressure(10.0));
+        let twice: Vec<LoadedCells> = once.iter().chain(&once).cloned().collect();
+        let (one, two) = (
+            SurfaceLoading::new(&start, &patches, &once, 1.0),
+            SurfaceLoading::new(&start, &patches, &twice, 1.0),
+        );
+        assert_eq!(one.cells.len(), two.cells.len());
+        let u: Vec<f64> = (0..conn.n_dofs())
+            .map(|i| 1e-3 * (i as f64).sin())
+            .collect();
+        let (mut f1, mut f2) = (vec![0.0; conn.n_dofs()], vec![0.0; conn.n_dofs()]);
+        one.add_force(&u, &mut f1);
+        two.add_force(&u, &mut f2);
+        assert!(
+            f1.iter()
+                .zip(&f2)
+                .all(|(a, b)| (2.0 * a - b).abs() <= 1e-12 * a.abs().max(1.0))
+        );
     }
 
     /// A dead traction on a whole sphere's surface: its resultant is the

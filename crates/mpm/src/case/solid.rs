@@ -195,6 +195,9 @@ pub struct SolidLoads {
     pub surface: Vec<SurfaceLoadSpec>,
 }
 
+/// The most surface loads a 3D case may give.
+pub const MAX_SURFACE_LOADS: usize = 64;
+
 /// A load on a region of the bodies' surfaces: exactly one of a dead
 /// `traction` (Pa, per unit current area) or a follower `pressure` (Pa,
 /// positive pushes into the material), ramped with the load factor.
@@ -516,6 +519,16 @@ impl SolidCase {
                 ));
             }
             finite(&format!("loads.tractions[{i}].traction"), &t.traction)?;
+        }
+        if self.loads.surface.len() > MAX_SURFACE_LOADS {
+            return Err(CaseError::new(
+                "loads.surface",
+                format!(
+                    "{} surface loads: at most {MAX_SURFACE_LOADS} (each is integrated over the \
+                     surface every Newton iteration)",
+                    self.loads.surface.len()
+                ),
+            ));
         }
         for (i, load) in self.loads.surface.iter().enumerate() {
             let path = format!("loads.surface[{i}]");
@@ -888,6 +901,56 @@ mod tests {
                 assert!((0..3).all(|d| s.position[d] >= lo[d] && s.position[d] <= hi[d]));
             }
             assert!(case.points_bound() >= seeds.len() as f64, "{geometry}");
+        }
+    }
+
+    /// Surface loads: a region needs a surface or a box, and one of
+    /// traction or pressure; their count is bounded; each is refused at
+    /// its path.
+    #[test]
+    fn surface_loads_are_refused_at_their_field() {
+        let with = |loads: serde_json::Value| {
+            let mut case = column();
+            case["loads"]["surface"] = loads;
+            case
+        };
+        let top = serde_json::json!({ "plane": { "point": [0.0, 0.0, 50.0], "normal": [0.0, 0.0, 1.0] } });
+        assert!(
+            SolidCase::from_json(
+                &with(serde_json::json!([{ "on": top, "pressure": 1.0 }])).to_string()
+            )
+            .is_ok()
+        );
+        for (loads, path) in [
+            (
+                serde_json::json!([{ "on": {}, "pressure": 1.0 }]),
+                "loads.surface[0].on",
+            ),
+            (
+                serde_json::json!([{ "on": top, "pressure": 1.0, "traction": [0.0, 0.0, 1.0] }]),
+                "loads.surface[0]",
+            ),
+            (
+                serde_json::json!([{ "on": { "plane": { "point": [0.0, 0.0, 0.0], "normal": [0.0, 0.0, 0.0] } }, "pressure": 1.0 }]),
+                "loads.surface[0].on.plane.normal",
+            ),
+            (
+                serde_json::json!([{ "on": { "sphere": { "center": [0.0, 0.0, 0.0], "radius": -1.0 } }, "pressure": 1.0 }]),
+                "loads.surface[0].on.sphere.radius",
+            ),
+            (
+                serde_json::json!([{ "on": { "body": 3, "inside": { "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0] } }, "pressure": 1.0 }]),
+                "loads.surface[0].on.body",
+            ),
+            (
+                serde_json::Value::Array(vec![
+                    serde_json::json!({ "on": top, "pressure": 1.0 });
+                    MAX_SURFACE_LOADS + 1
+                ]),
+                "loads.surface",
+            ),
+        ] {
+            assert_eq!(refused(&with(loads.clone())).path, path, "{loads}");
         }
     }
 
