@@ -14,7 +14,7 @@
 //! - finite strain (Hencky, p = 100 kPa: the inner radius grows 9.5%): the
 //!   radial solution of `scripts/sphere_radial.py` (the equilibrium ODE in
 //!   the reference radius, shot from the loaded surface at rtol 1e-12),
-//!   ported below as [`radial`] (RK4) and checked against the script's
+//!   ported below as [`Radial`] (RK4) and checked against the script's
 //!   u(a) = 4.7375740786e-2 m, u(b) = 1.9262853763e-2 m.
 //!
 //! u(a) and u(b) are read from the surfaces themselves: the mean radius of
