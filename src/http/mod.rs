@@ -280,6 +280,10 @@ mod tests {
                 "sphere3d",
                 include_str!("../../python/src/mpm_client/examples/sphere3d.json"),
             ),
+            (
+                "footing3d",
+                include_str!("../../python/src/mpm_client/examples/footing3d.json"),
+            ),
         ];
         let names: Vec<&str> = (mpm::case::builtin::NAMES.iter())
             .chain(&mpm::case::builtin::SOLID_NAMES)

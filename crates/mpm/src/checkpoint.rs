@@ -75,8 +75,8 @@ pub(crate) const SOLID_FORMAT: u32 = 3002;
 /// The state of a 3D run after `steps_done` load steps: the points'
 /// positions, deformation gradients, histories, yield flags and stresses,
 /// the step-size control, Newton's predictor, and what the last step
-/// reported. A 3D run has no probes, boundary loops, implicit-boundary
-/// anchors, arc length or strength reduction yet (issue 38).
+/// reported, and the surface supports' anchors' displacements. A 3D run
+/// has no probes, arc length or strength reduction yet.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SolidCheckpoint {
     pub(crate) format: u32,
@@ -101,6 +101,10 @@ pub struct SolidCheckpoint {
     pub(crate) step_size: StepSizeState,
     pub(crate) last_increment: Option<IncrementState>,
     pub(crate) settled: Option<Settled>,
+    /// Each surface anchor's displacement since the reference
+    /// configuration (`SurfaceAnchor::moved`).
+    #[serde(default)]
+    pub(crate) surface_anchors_moved: Vec<[f64; 3]>,
 }
 
 impl SolidCheckpoint {

@@ -9,7 +9,7 @@ use crate::assembly::lone_points::LONE_VOLUME;
 use crate::boundary::edge_detection::loops_on_edge;
 use crate::boundary::face_loads::FaceLoad;
 use crate::boundary::face_patches::{FacePatch, face_patches};
-use crate::boundary::ibm::{self, IbmMotion, IbmSupport};
+use crate::boundary::ibm::{self, IbmMotion, IbmSupport, SurfaceSupport};
 use crate::boundary::loading::LoadedStretch;
 use crate::boundary::surface_loading::{LoadedCells, SurfaceTraction};
 use crate::boundary::traction::Traction;
@@ -17,7 +17,7 @@ use crate::boundary::{
     BoundaryLoop, Piece, Representation, find_loops, selected_pieces, selected_segments,
     set_offsets, snap_to_edge,
 };
-use crate::case::solid::SolidCase;
+use crate::case::solid::{SolidCase, SurfaceSelector};
 use crate::case::{
     self, BasisKind, Body, Case, CaseError, GridSpec, Loads, MaterialSpec, SupportMethod,
     Volumetric,
@@ -364,6 +364,7 @@ impl Simulation {
             probes: Probes::new(case.probes.iter().map(|p| (p.name.clone(), p.at))),
             first_stage_anchors: anchors.len(),
             anchors,
+            surface_anchors: Vec::new(),
             band_width: case
                 .boundary
                 .band_width
@@ -453,6 +454,9 @@ pub struct SolidRun {
     pub faces: Vec<FacePatch>,
     pub surface_loads: Vec<LoadedCells>,
     pub supports: Vec<PlaneSupport<3>>,
+    /// Supports on the surfaces by the implicit boundary method, indexed
+    /// after `supports`.
+    pub surface_supports: Vec<SurfaceSupport>,
     pub load_steps: usize,
 }
 
@@ -518,39 +522,64 @@ impl Simulation<3> {
             }
             tractions.extend(loads);
         }
-        let mut surface_loads = Vec::new();
         let middles: Vec<Vec<[f64; 3]>> = faces.iter().map(|f| f.cell_middles(&points)).collect();
+        // The cells of each patch a selector takes (those whose middle
+        // it contains; for a support, those on its surfaces, whose
+        // quadrature points its ranges then choose), or the error at `path`.
+        let select = |on: &SurfaceSelector, path: String, whole: bool| {
+            let regions: Vec<(usize, Vec<usize>)> = (faces.iter().enumerate())
+                .filter(|(_, face)| on.body.is_none_or(|b| b == face.body))
+                .map(|(patch, face)| {
+                    let tolerance = case.spacing(face.body) * SURFACE_TOLERANCE;
+                    let cells = (middles[patch].iter().enumerate())
+                        .filter(|(_, x)| {
+                            if whole {
+                                on.contains(**x, tolerance)
+                            } else {
+                                on.on_surfaces(**x, tolerance)
+                            }
+                        })
+                        .map(|(c, _)| c)
+                        .collect();
+                    (patch, cells)
+                })
+                .filter(|(_, cells): &(usize, Vec<usize>)| !cells.is_empty())
+                .collect();
+            if regions.is_empty() {
+                return Err(CaseError::new(
+                    path,
+                    "selects no part of any body's surface",
+                ));
+            }
+            Ok(regions)
+        };
+        let mut surface_loads = Vec::new();
         for (i, load) in case.loads.surface.iter().enumerate() {
             let traction = match (load.traction, load.pressure) {
                 (Some(t), _) => SurfaceTraction::Dead(t),
                 (None, p) => SurfaceTraction::Pressure(p.expect("validated: one of the two")),
             };
-            let before = surface_loads.len();
-            for (patch, face) in faces.iter().enumerate() {
-                if load.on.body.is_some_and(|b| b != face.body) {
-                    continue;
-                }
-                let tolerance = case.spacing(face.body) * SURFACE_TOLERANCE;
-                let cells: Vec<usize> = (middles[patch].iter().enumerate())
-                    .filter(|(_, x)| load.on.contains(**x, tolerance))
-                    .map(|(c, _)| c)
-                    .collect();
-                if !cells.is_empty() {
-                    surface_loads.push(LoadedCells {
-                        patch,
-                        cells,
-                        traction,
-                        held: false,
-                    });
-                }
-            }
-            if surface_loads.len() == before {
-                return Err(CaseError::new(
-                    format!("loads.surface[{i}].on"),
-                    "selects no part of any body's surface",
-                ));
-            }
+            let regions = select(&load.on, format!("loads.surface[{i}].on"), true)?;
+            surface_loads.extend(regions.into_iter().map(|(patch, cells)| LoadedCells {
+                patch,
+                cells,
+                traction,
+                held: false,
+            }));
         }
+        let surface_supports = (case.surface_supports.iter().enumerate())
+            .map(|(i, s)| {
+                Ok(SurfaceSupport {
+                    index: case.supports.len() + i,
+                    regions: select(&s.on, format!("surface_supports[{i}].on"), false)?,
+                    ranges: s.on.has_ranges().then_some(s.on),
+                    held: s.fix.held(),
+                    displacement: s.displacement.unwrap_or_default(),
+                    averaged: (s.constraint == case::Constraint::Averaged)
+                        .then_some(ibm::AVERAGED_PIECE_CELLS * case.grid.cell_size),
+                })
+            })
+            .collect::<Result<Vec<_>, CaseError>>()?;
         let supports = (case.supports.iter().enumerate())
             .map(|(index, s)| {
                 let (axis, at) = s.on.plane().expect("validated: one plane");
@@ -558,7 +587,7 @@ impl Simulation<3> {
                     index,
                     axis,
                     at,
-                    fix: s.fix.components(),
+                    fix: s.fix.components_on(axis),
                     rotation: s.rotation.map(|r| (r.angle.to_radians(), r.center)),
                 }
             })
@@ -578,8 +607,18 @@ impl Simulation<3> {
             faces,
             surface_loads,
             supports,
+            surface_supports,
             load_steps: case.analysis.load_steps as usize,
         });
+        for i in 0..case.surface_supports.len() {
+            let index = case.supports.len() + i;
+            if !sim.surface_anchors.iter().any(|a| a.support == index) {
+                return Err(CaseError::new(
+                    format!("surface_supports[{i}].on"),
+                    "selects no part of any body's surface within its ranges",
+                ));
+            }
+        }
         sim.settings.tolerance = newton.tolerance;
         sim.settings.max_iterations = newton.max_iterations as usize;
         sim.settings.line_search = newton.line_search;
@@ -615,8 +654,10 @@ impl Simulation<3> {
             faces,
             surface_loads,
             supports,
+            surface_supports,
             load_steps,
         } = run;
+        let surface_anchors = ibm::surface_anchors(&surface_supports, &faces, &points);
         let stiffness = StiffnessScales::of(&points.materials);
         let free_step_growth = (10.0 * stiffness.p_wave_to_shear).max(BENDING_FREE_GROWTH);
         let stage = Stage {
@@ -627,7 +668,7 @@ impl Simulation<3> {
             face_loads,
             surface_loads,
             boundary_loads: Vec::new(),
-            n_supports: supports.len(),
+            n_supports: supports.len() + surface_supports.len(),
             grid_supports: supports,
             ibm: Vec::new(),
             geostatic: None,
@@ -645,8 +686,9 @@ impl Simulation<3> {
             stages: vec![stage],
             stage: 0,
             anchors: Vec::new(),
+            surface_anchors,
             first_stage_anchors: 0,
-            band_width: 0.0,
+            band_width: ibm::DEFAULT_BAND_WIDTH * grid.h,
             settings: NewtonSettings {
                 free_step_growth,
                 ..Default::default()

@@ -82,6 +82,9 @@ where
             hash.add(u64::from(*m));
         }
         hash.add(self.first_stage_anchors as u64);
+        if !self.surface_anchors.is_empty() {
+            hash.add(self.surface_anchors.len() as u64);
+        }
         if self.stages.len() > 1 {
             for stage in &self.stages {
                 hash.add(stage.load_steps as u64);
@@ -117,6 +120,7 @@ impl Simulation<3> {
             step_size: self.step_size_state(),
             last_increment: self.last_increment.as_ref().map(LastIncrement::state),
             settled: self.settled.clone(),
+            surface_anchors_moved: self.surface_anchors.iter().map(|a| a.moved()).collect(),
         }
     }
 
@@ -142,6 +146,9 @@ impl Simulation<3> {
         if lengths.iter().any(|&l| l != n) || carried.iter().any(|&l| l != 0 && l != n) {
             return Err(CheckpointError::OtherCase("the material point counts"));
         }
+        if c.surface_anchors_moved.len() != self.surface_anchors.len() {
+            return Err(CheckpointError::OtherCase("the surface supports"));
+        }
         if c.steps_done > self.load_steps {
             return Err(CheckpointError::Unreadable(
                 "it is past the case's last load step".into(),
@@ -163,6 +170,13 @@ impl Simulation<3> {
         p.yielding.clone_from(&c.yielding);
         for (s, saved) in p.stress.iter_mut().zip(&c.stress) {
             s.copy_from_slice(saved);
+        }
+        for (a, moved) in self
+            .surface_anchors
+            .iter_mut()
+            .zip(&c.surface_anchors_moved)
+        {
+            a.set_moved(*moved);
         }
         self.restore_controls(&c.step_size, &c.last_increment, &c.settled, c.steps_done);
         Ok(())

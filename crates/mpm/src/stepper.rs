@@ -29,7 +29,7 @@ use crate::assembly::{FbarCells, GhostFaces, LonePoints, SoftCells, StepTerm, lo
 use crate::boundary::BoundaryLoop;
 use crate::boundary::face_loads::FaceLoading;
 use crate::boundary::face_patches::FacePatch;
-use crate::boundary::ibm::{self, Anchor, BandTerms};
+use crate::boundary::ibm::{self, Anchor, BandTerms, SurfaceAnchor};
 use crate::boundary::loading::BoundaryLoading;
 use crate::boundary::surface_loading::SurfaceLoading;
 use crate::case::Volumetric;
@@ -201,6 +201,9 @@ where
     /// Quadrature points of the supports imposed on the boundary curves by
     /// the implicit boundary method, and the band width `delta` they use.
     pub(crate) anchors: Vec<Anchor>,
+    /// In 3D, the quadrature points of the supports on the surface
+    /// patches (empty in plane strain).
+    pub(crate) surface_anchors: Vec<SurfaceAnchor>,
     /// How many the first stage has (released supports drop theirs).
     pub(crate) first_stage_anchors: usize,
     pub(crate) band_width: f64,
@@ -1074,6 +1077,15 @@ impl RunSpace<3> for Dim<3> {
                 load_factor,
             )));
         }
+        if !sim.surface_anchors.is_empty() {
+            terms.push(Box::new(BandTerms::on_surfaces(
+                start,
+                &sim.faces,
+                &sim.surface_anchors,
+                sim.band_width,
+                load_factor,
+            )));
+        }
         terms
     }
 
@@ -1083,14 +1095,23 @@ impl RunSpace<3> for Dim<3> {
 
     fn before_commit(_: &mut Simulation<3>, _: &Connectivity<3>, _: &[f64], _: &[Box<dyn Any>]) {}
 
+    /// The surface supports' anchors move with the increment; their
+    /// tractions are not reported yet (the reactions carry the totals).
     fn after_commit(
         sim: &mut Simulation<3>,
-        _: &Connectivity<3>,
-        _: &[f64],
+        conn: &Connectivity<3>,
+        u: &[f64],
         averaged: Option<Carried<3>>,
-        _: Vec<Box<dyn Any>>,
+        carried: Vec<Box<dyn Any>>,
     ) -> Vec<SupportTraction> {
         sim.keep_carried(averaged);
+        for carried in carried {
+            if let Ok(band) = carried.downcast::<BandTerms<3>>() {
+                band.advance(&mut sim.surface_anchors, u, |p| {
+                    increment(conn.point_links(p), u).0
+                });
+            }
+        }
         Vec::new()
     }
 

@@ -30,6 +30,7 @@ EXAMPLES = (
     "slope",
     "column3d",
     "sphere3d",
+    "footing3d",
 )
 
 

@@ -514,7 +514,16 @@ impl FacePatch {
     /// wide, so the middles of a neighbouring face's cells along their
     /// common edge lie a quarter spacing off it.
     pub fn cell_middles(&self, points: &MaterialPoints<3>) -> Vec<[f64; 3]> {
-        let reference = DataGrid {
+        (super::surface::interpolate(&self.reference_grid(points))
+            .patches
+            .iter())
+        .map(|patch| patch.point(0.5, 0.5))
+        .collect()
+    }
+
+    /// The data points in the reference configuration.
+    pub fn reference_grid(&self, points: &MaterialPoints<3>) -> DataGrid {
+        DataGrid {
             counts: self.counts,
             closed: self.closed,
             points: (self.data.iter())
@@ -523,10 +532,15 @@ impl FacePatch {
                     std::array::from_fn(|d| r[d] + c.offset[d])
                 })
                 .collect(),
-        };
-        (super::surface::interpolate(&reference).patches.iter())
-            .map(|patch| patch.point(0.5, 0.5))
-            .collect()
+        }
+    }
+
+    /// The data point at corner `corner` (`[0 or 1; 2]`) of cell `cell`.
+    pub fn corner(&self, cell: usize, corner: [usize; 2]) -> &DataPoint {
+        let cu = self.data_grid_cells()[0];
+        let [nu, nv] = self.counts;
+        let (i, j) = ((cell % cu + corner[0]) % nu, (cell / cu + corner[1]) % nv);
+        &self.data[i + nu * j]
     }
 
     /// The data points where the points are now.

@@ -138,29 +138,53 @@ fn knot_grid(grid: &Grid<3>, basis: Basis) -> Grid<3> {
     }
 }
 
+/// `(s, t, weight)` of the Gauss points of a Bezier cell cut at the knot
+/// planes of `basis` on `grid` (module docs), the weights per unit
+/// parameter area summing to 1.
+pub fn gauss_points(patch: &BezierPatch, grid: &Grid<3>, basis: Basis) -> Vec<(f64, f64, f64)> {
+    let mut pieces = Vec::new();
+    split(
+        patch,
+        &knot_grid(grid, basis),
+        [0.0, 1.0],
+        [0.0, 1.0],
+        0,
+        &mut pieces,
+    );
+    let mut out = Vec::with_capacity(16 * pieces.len());
+    for (s, t) in pieces {
+        out.extend(cell_gauss_points().map(|(u, v, w)| {
+            (
+                s[0] + u * (s[1] - s[0]),
+                t[0] + v * (t[1] - t[0]),
+                w * (s[1] - s[0]) * (t[1] - t[0]),
+            )
+        }));
+    }
+    out
+}
+
+/// `(s, t, weight)` of the 4 x 4 Gauss points of the whole unit square.
+pub fn cell_gauss_points() -> impl Iterator<Item = (f64, f64, f64)> {
+    GAUSS4
+        .into_iter()
+        .flat_map(|(s, ws)| GAUSS4.into_iter().map(move |(t, wt)| (s, t, ws * wt)))
+}
+
 impl CellQuadrature {
     pub fn new(start: &BezierPatch, grid: &Grid<3>, basis: Basis, nodes: &[NodeKey]) -> Self {
-        let knots = knot_grid(grid, basis);
-        let mut pieces = Vec::new();
-        split(start, &knots, [0.0, 1.0], [0.0, 1.0], 0, &mut pieces);
         let mut q = CellQuadrature {
             first: vec![0],
             ..Default::default()
         };
         let mut weights = Vec::with_capacity(8);
-        for (s, t) in pieces {
-            for (xs, ws) in GAUSS4 {
-                for (xt, wt) in GAUSS4 {
-                    let (u, v) = (s[0] + xs * (s[1] - s[0]), t[0] + xt * (t[1] - t[0]));
-                    let x = start.point(u, v);
-                    if !hat_shares(basis, grid, x, nodes, &mut weights, &mut q.shares) {
-                        continue;
-                    }
-                    q.points
-                        .push((u, v, ws * wt * (s[1] - s[0]) * (t[1] - t[0])));
-                    q.first.push(q.shares.len());
-                }
+        for (u, v, w) in gauss_points(start, grid, basis) {
+            let x = start.point(u, v);
+            if !hat_shares(basis, grid, x, nodes, &mut weights, &mut q.shares) {
+                continue;
             }
+            q.points.push((u, v, w));
+            q.first.push(q.shares.len());
         }
         (q.nodes, q.place) = share_nodes(&q.shares);
         q
@@ -228,8 +252,10 @@ impl CellQuadrature {
 }
 
 /// Appends to `pieces` the parts of `[s] x [t]` of `patch` that lie
-/// between knot planes, quartering those that straddle one (judged on a
-/// 3 x 3 sample of the part) down to [`MAX_DEPTH`].
+/// between knot planes, quartering those that straddle one (a plane
+/// strictly inside the range of a 3 x 3 sample of the part, by more than
+/// a billionth of a cell: a face on a grid plane straddles none) down to
+/// [`MAX_DEPTH`].
 fn split(
     patch: &BezierPatch,
     knots: &Grid<3>,
@@ -238,16 +264,22 @@ fn split(
     depth: usize,
     pieces: &mut Vec<([f64; 2], [f64; 2])>,
 ) {
-    let first = knots.cell_of(patch.point(s[0], t[0]));
-    let straddles = (0..3).any(|a| {
-        (0..3).any(|b| {
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for a in 0..3 {
+        for b in 0..3 {
             let (u, v) = (
                 s[0] + 0.5 * a as f64 * (s[1] - s[0]),
                 t[0] + 0.5 * b as f64 * (t[1] - t[0]),
             );
-            knots.cell_of(patch.point(u, v)) != first
-        })
-    });
+            let x = patch.point(u, v);
+            for d in 0..3 {
+                let c = (x[d] - knots.origin[d]) / knots.h;
+                lo[d] = lo[d].min(c);
+                hi[d] = hi[d].max(c);
+            }
+        }
+    }
+    let straddles = (0..3).any(|d| (lo[d] + 1e-9).ceil() <= hi[d] - 1e-9);
     if !straddles || depth == MAX_DEPTH {
         pieces.push((s, t));
         return;

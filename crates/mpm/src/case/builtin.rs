@@ -12,13 +12,14 @@ pub const NAMES: [&str; 6] = [
 
 /// The built-in 3D cases (`analysis.type: "3d"`, read by
 /// [`super::solid::SolidCase`]).
-pub const SOLID_NAMES: [&str; 2] = ["column3d", "sphere3d"];
+pub const SOLID_NAMES: [&str; 3] = ["column3d", "sphere3d", "footing3d"];
 
 /// The JSON text of a built-in case.
 pub fn get(name: &str) -> Option<&'static str> {
     match name {
         "column3d" => Some(include_str!("../../cases/column3d.json")),
         "sphere3d" => Some(include_str!("../../cases/sphere3d.json")),
+        "footing3d" => Some(include_str!("../../cases/footing3d.json")),
         "column" => Some(include_str!("../../cases/column.json")),
         "cantilever-grid" => Some(include_str!("../../cases/cantilever-grid.json")),
         "cantilever" => Some(include_str!("../../cases/cantilever.json")),

@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use super::validate::{
     check_mesh_size, check_newton, check_substepping, check_version, parse, positive,
 };
-use super::{BasisKind, CaseError, MaterialSpec, NewtonSpec, SubsteppingSpec};
+use super::{BasisKind, CaseError, Constraint, MaterialSpec, NewtonSpec, SubsteppingSpec};
 use crate::geometry::{Geometry, HexMesh};
 use crate::particles::solid_seeding::{self, Solid};
 
@@ -40,6 +40,11 @@ pub struct SolidCase {
     /// Supports on the grid nodes of planes normal to an axis.
     #[serde(default)]
     pub supports: Vec<PlaneSupportSpec>,
+    /// Supports on regions of the bodies' B-spline surfaces, imposed by
+    /// the implicit boundary method. Their reactions follow the plane
+    /// supports' in a step's `reactions`.
+    #[serde(default)]
+    pub surface_supports: Vec<SurfaceSupportSpec>,
     #[serde(default)]
     pub output: SolidOutput,
 }
@@ -214,9 +219,13 @@ pub struct SurfaceLoadSpec {
 /// A region of the bodies' surfaces, judged in the reference
 /// configuration: the surface cells whose middle lies within `tolerance`
 /// of every surface given (a `plane`, a `sphere`, a `cylinder` about an
-/// axis along z) and `inside` the box, if given; on body `body` only, if
-/// given. At least one of `plane`, `sphere`, `cylinder`, `inside`. The
-/// tolerance defaults to a tenth of the body's point spacing.
+/// axis along z), and within the ranges given: `inside` a box,
+/// `inside_cylinder` (within its radius of its axis); on body `body`
+/// only, if given. At least one of these. The tolerance defaults to a
+/// tenth of the body's point spacing. A load takes the cells whose middle
+/// is within the ranges; a support holds exactly the part of the cells
+/// within them (judged at its quadrature points), so a footing has its
+/// own width wherever the cells end.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Default, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SurfaceSelector {
@@ -230,6 +239,8 @@ pub struct SurfaceSelector {
     pub cylinder: Option<CylinderSpec>,
     #[serde(default)]
     pub inside: Option<SolidBox>,
+    #[serde(default)]
+    pub inside_cylinder: Option<CylinderSpec>,
     #[serde(default)]
     pub tolerance: Option<f64>,
 }
@@ -262,6 +273,29 @@ impl SurfaceSelector {
     /// Whether the reference place `x` is in the region, with `tolerance`
     /// where the selector gives none.
     pub fn contains(&self, x: [f64; 3], tolerance: f64) -> bool {
+        self.on_surfaces(x, tolerance) && self.within_ranges(x)
+    }
+
+    /// Whether `x` lies within the ranges (`inside`, `inside_cylinder`);
+    /// true when the selector gives none.
+    pub fn within_ranges(&self, x: [f64; 3]) -> bool {
+        let inside = self
+            .inside
+            .is_none_or(|b| (0..3).all(|k| x[k] >= b.min[k] && x[k] <= b.max[k]));
+        let within = self
+            .inside_cylinder
+            .is_none_or(|c| (x[0] - c.center[0]).hypot(x[1] - c.center[1]) <= c.radius);
+        inside && within
+    }
+
+    /// Whether the selector gives ranges.
+    pub fn has_ranges(&self) -> bool {
+        self.inside.is_some() || self.inside_cylinder.is_some()
+    }
+
+    /// Whether `x` lies within the tolerance of every surface given (true
+    /// when none is).
+    pub fn on_surfaces(&self, x: [f64; 3], tolerance: f64) -> bool {
         let tol = self.tolerance.unwrap_or(tolerance);
         let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         let plane = self.plane.is_none_or(|p| {
@@ -274,21 +308,18 @@ impl SurfaceSelector {
         let cylinder = self.cylinder.is_none_or(|c| {
             ((x[0] - c.center[0]).hypot(x[1] - c.center[1]) - c.radius).abs() <= tol
         });
-        let inside = self
-            .inside
-            .is_none_or(|b| (0..3).all(|k| x[k] >= b.min[k] && x[k] <= b.max[k]));
-        plane && sphere && cylinder && inside
+        plane && sphere && cylinder
     }
 
     fn validate(&self, path: &str, bodies: usize) -> Result<(), CaseError> {
         if self.plane.is_none()
             && self.sphere.is_none()
             && self.cylinder.is_none()
-            && self.inside.is_none()
+            && !self.has_ranges()
         {
             return Err(CaseError::new(
                 path,
-                "give at least one of plane, sphere, cylinder or inside",
+                "give at least one of plane, sphere, cylinder, inside or inside_cylinder",
             ));
         }
         if let Some(b) = self.body
@@ -320,6 +351,10 @@ impl SurfaceSelector {
         if let Some(b) = &self.inside {
             ordered(&format!("{path}.inside"), b.min, b.max)?;
         }
+        if let Some(c) = &self.inside_cylinder {
+            finite(&format!("{path}.inside_cylinder.center"), &c.center)?;
+            positive(&format!("{path}.inside_cylinder.radius"), c.radius)?;
+        }
         if let Some(t) = self.tolerance {
             positive(&format!("{path}.tolerance"), t)?;
         }
@@ -344,6 +379,27 @@ pub struct FaceTraction {
 pub struct SolidPointLoad {
     pub at: [f64; 3],
     pub force: [f64; 3],
+}
+
+/// The most surface supports a 3D case may give.
+pub const MAX_SURFACE_SUPPORTS: usize = 64;
+
+/// Displacement components held on the region `on` of the bodies'
+/// surfaces by the implicit boundary method: `fix` names them (`normal`:
+/// a roller on the reference surface's normal, wherever it points), and
+/// `displacement` (m, default zero) is where the held components go by
+/// the last load step, ramped with the load factor. `constraint:
+/// averaged` holds them on average over pieces about two cells a side
+/// (a rigid footing, whose edge lies inside the body's surface).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceSupportSpec {
+    pub on: SurfaceSelector,
+    pub fix: SolidFix,
+    #[serde(default)]
+    pub displacement: Option<[f64; 3]>,
+    #[serde(default)]
+    pub constraint: Constraint,
 }
 
 /// Displacement components held on the grid nodes of the plane `on`:
@@ -384,7 +440,8 @@ pub struct PlaneSpec {
     pub z: Option<f64>,
 }
 
-/// The components a support holds: `xyz` fixes, one axis is a roller.
+/// The components a support holds: `xyz` fixes, one axis is a roller,
+/// `normal` a roller on the surface's normal (on a grid plane, its axis).
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum SolidFix {
@@ -395,12 +452,13 @@ pub enum SolidFix {
     Xz,
     Yz,
     Xyz,
+    Normal,
 }
 
 impl SolidFix {
-    /// Which of x, y, z it holds.
-    pub fn components(self) -> [bool; 3] {
-        match self {
+    /// Which of x, y, z it holds; `None` for the normal.
+    pub fn held(self) -> Option<[bool; 3]> {
+        Some(match self {
             SolidFix::X => [true, false, false],
             SolidFix::Y => [false, true, false],
             SolidFix::Z => [false, false, true],
@@ -408,7 +466,13 @@ impl SolidFix {
             SolidFix::Xz => [true, false, true],
             SolidFix::Yz => [false, true, true],
             SolidFix::Xyz => [true, true, true],
-        }
+            SolidFix::Normal => return None,
+        })
+    }
+
+    /// Which of x, y, z it holds on the grid plane normal to `axis`.
+    pub fn components_on(self, axis: usize) -> [bool; 3] {
+        self.held().unwrap_or(std::array::from_fn(|c| c == axis))
     }
 }
 
@@ -560,7 +624,7 @@ impl SolidCase {
                         format!("is {}: give degrees, at most 360 in size", rotation.angle),
                     ));
                 }
-                let held = support.fix.components();
+                let held = support.fix.components_on(axis);
                 if (0..3).any(|c| c != axis && !held[c]) {
                     return Err(CaseError::new(
                         format!("supports[{i}].fix"),
@@ -568,6 +632,24 @@ impl SolidCase {
                          prescribes them): give \"xyz\", or the two in-plane axes",
                     ));
                 }
+            }
+        }
+        if self.surface_supports.len() > MAX_SURFACE_SUPPORTS {
+            return Err(CaseError::new(
+                "surface_supports",
+                format!(
+                    "{} surface supports: at most {MAX_SURFACE_SUPPORTS}",
+                    self.surface_supports.len()
+                ),
+            ));
+        }
+        for (i, support) in self.surface_supports.iter().enumerate() {
+            let path = format!("surface_supports[{i}]");
+            support
+                .on
+                .validate(&format!("{path}.on"), self.bodies.len())?;
+            if let Some(d) = &support.displacement {
+                finite(&format!("{path}.displacement"), d)?;
             }
         }
         // As in plane strain, where such supports need the implicit
@@ -580,8 +662,8 @@ impl SolidCase {
             return Err(CaseError::new(
                 "basis",
                 "the B-spline bases hold coefficients at the grid nodes, not the field, so a support on \
-                 grid nodes does not hold the body there; in 3D, supports on B-splines wait for the \
-                 implicit boundary method (issue 38's part 2): use \"linear\" or \"gimp\"",
+                 grid nodes does not hold the body there: give the supports as surface_supports \
+                 (the implicit boundary method), or use \"linear\" or \"gimp\"",
             ));
         }
         Ok(())

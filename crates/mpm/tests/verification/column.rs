@@ -37,16 +37,21 @@ pub fn stretch_under_weight(modulus: f64, rho_g: f64, length: f64, y: f64) -> f6
 }
 
 /// The top displacement of that column, the integral of (lambda - 1) over
-/// its height.
+/// its height (composite Simpson on 2000 intervals: the integrand is
+/// smooth).
 pub fn top_displacement_under_weight(modulus: f64, rho_g: f64, length: f64) -> f64 {
-    // Composite Simpson on 2000 intervals: the integrand is smooth.
-    let n = 2000;
-    let h = length / n as f64;
+    displacement_under_weight(modulus, rho_g, length, length, 2000)
+}
+
+/// The displacement of that column at reference height `z`, the integral
+/// of (lambda - 1) up to it, by composite Simpson on `n` intervals.
+pub fn displacement_under_weight(modulus: f64, rho_g: f64, length: f64, z: f64, n: usize) -> f64 {
+    let h = z / n as f64;
     let f = |y: f64| stretch_under_weight(modulus, rho_g, length, y) - 1.0;
     let inner: f64 = (1..n)
         .map(|i| f(i as f64 * h) * if i % 2 == 1 { 4.0 } else { 2.0 })
         .sum();
-    (f(0.0) + f(length) + inner) * h / 3.0
+    (f(0.0) + f(z) + inner) * h / 3.0
 }
 
 pub fn exact_top_displacement() -> f64 {

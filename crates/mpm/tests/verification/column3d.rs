@@ -71,6 +71,7 @@ fn column_3d(cells: usize, basis: Basis, load_steps: usize) -> (MaterialPoints<3
         faces: Vec::new(),
         surface_loads: Vec::new(),
         supports,
+        surface_supports: Vec::new(),
         load_steps,
     });
     let report = sim.run(&mut NoObserver).expect("the 3D column converges");

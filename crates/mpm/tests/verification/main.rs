@@ -15,6 +15,7 @@ mod ghost;
 mod hard_cases;
 mod hinge;
 mod ibm;
+mod ibm3d;
 mod lame;
 mod locking;
 mod locking3d;

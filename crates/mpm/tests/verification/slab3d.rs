@@ -115,7 +115,22 @@ fn slab_against_plane_strain(volumetric: &str, steps: u32, scale: f64) {
 /// 0.45% off the plane-strain deflection with the same total load.)
 #[test]
 fn the_3d_slab_under_follower_pressure_is_the_plane_strain_cantilever() {
-    slab_under_pressure(0.0);
+    slab_under_pressure(0.0, Rollers::Grid);
+}
+
+/// The same slab on rollers imposed by the implicit boundary method on its
+/// B-spline surface (`surface_supports`, `fix: normal` on the cells of
+/// each z face) rather than on the grid nodes of the z planes. The penalty
+/// holds a roller to a gap of about `(3/4) delta` times the strain next
+/// to it (`boundary::ibm`), `delta` = h / 100: the slab's thickness (one
+/// cell) can change by `1.5 delta / h` = 1.5% of what it would free,
+/// and the plane-stress beam is `1 - nu^2` = 6% more flexible than the
+/// plane-strain one, so the tip may sag about 1e-3 more. Measured:
+/// positions 1.09e-3 m apart (8e-4 of the 1.37 m tip deflection),
+/// stresses 3.5e-3 of the largest.
+#[test]
+fn the_3d_slab_on_ibm_rollers_is_the_plane_strain_cantilever() {
+    slab_under_pressure(0.0, Rollers::Ibm);
 }
 
 /// The same with the grid moved 0.3 of a cell in y: the top face no longer
@@ -127,12 +142,21 @@ fn the_3d_slab_under_follower_pressure_is_the_plane_strain_cantilever() {
 /// discretisation at 4 cells through its depth.)
 #[test]
 fn the_3d_slab_under_follower_pressure_off_the_grid_planes() {
-    slab_under_pressure(0.15);
+    slab_under_pressure(0.15, Rollers::Grid);
 }
 
-/// The cantilever under 750 Pa on its top, in 2D and as the slab, on a
-/// grid whose origin is at `y0`.
-fn slab_under_pressure(y0: f64) {
+/// Where the slab's z rollers are held.
+#[derive(Debug, Clone, Copy)]
+enum Rollers {
+    /// On the grid nodes of the planes z = 0 and z = 0.5 m.
+    Grid,
+    /// By the implicit boundary method on the surface's z faces.
+    Ibm,
+}
+
+/// The cantilever under 750 Pa on its top, in 2D and as the slab on
+/// `rollers`, on a grid whose origin is at `y0`.
+fn slab_under_pressure(y0: f64, rollers: Rollers) {
     let pressure: f64 = 750.0;
     let mut plane = example("cantilever-grid");
     plane["grid"]["origin"] = serde_json::json!([0.0, y0]);
@@ -160,6 +184,15 @@ fn slab_under_pressure(y0: f64) {
             { "on": { "z": 0.5 }, "fix": "z" }
         ]
     });
+    let mut slab = slab;
+    if let Rollers::Ibm = rollers {
+        let face = |z: f64| {
+            serde_json::json!({ "on": { "plane": { "point": [0.0, 0.0, z], "normal": [0.0, 0.0, 1.0] } },
+                                "fix": "normal" })
+        };
+        slab["supports"] = serde_json::json!([{ "on": { "x": 0.0 }, "fix": "xyz" }]);
+        slab["surface_supports"] = serde_json::json!([face(0.0), face(0.5)]);
+    }
     let mut sim3 =
         Simulation::from_solid_case(&SolidCase::from_json(&slab.to_string()).unwrap()).unwrap();
     let r3 = sim3.run(&mut NoObserver).unwrap();
@@ -176,13 +209,17 @@ fn slab_under_pressure(y0: f64) {
         .unwrap();
     let deflection2 = p2.position[tip][1] - p2.reference[tip][1];
     eprintln!(
-        "follower pressure {pressure} Pa, grid origin y {y0}: tip deflection {deflection2:.4} m; slab against plane strain: stresses {worst:.2e} of the largest, positions {moved:.2e} m, applied load {load_miss:.1e}"
+        "follower pressure {pressure} Pa, grid origin y {y0}, {rollers:?} rollers: tip deflection {deflection2:.4} m; slab against plane strain: stresses {worst:.2e} of the largest, positions {moved:.2e} m, applied load {load_miss:.1e}"
     );
-    if pressure == 750.0 {
-        assert!(
+    match rollers {
+        Rollers::Grid => assert!(
             worst < 0.03 && moved < 0.01 && load_miss < 3e-3,
             "{worst:e} {moved:e} {load_miss:e}"
-        );
+        ),
+        Rollers::Ibm => assert!(
+            worst < 1e-2 && moved < 3e-3 && load_miss < 3e-4,
+            "{worst:e} {moved:e} {load_miss:e}"
+        ),
     }
 }
 

@@ -76,6 +76,7 @@ fn push_past_yield(material: Material, p: f64, strength: f64) -> (MaterialPoints
         faces: Vec::new(),
         surface_loads: Vec::new(),
         supports: vec![roller(0, 0), roller(1, 1), roller(2, 2)],
+        surface_supports: Vec::new(),
         load_steps: 43,
     });
     let mut first = FirstYield(None);

@@ -1,7 +1,7 @@
 //! The anchors of the implicit-boundary supports: quadrature points fixed
 //! on the reference curve and carried by the grid's displacement.
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, SMatrix, Vector2};
 
 use crate::boundary::Piece;
 use crate::boundary::curve::{bezier, bezier_derivative, local_segment};
@@ -10,7 +10,7 @@ use crate::boundary::quadrature::gauss_points_between;
 use crate::boundary::reference_ring;
 use crate::geometry::Selector;
 use crate::grid::{Basis, Grid};
-use crate::particles::MaterialPoints;
+use crate::particles::{Dim, MaterialPoints, Space};
 use crate::supports::{Fix, Rotation};
 
 /// The length of an averaged support's pieces, in cells: one constraint
@@ -129,24 +129,10 @@ impl Anchor {
         };
     }
 
-    /// `A_nn[i][j] = A[(2i+K),(2j+L)] n_K n_L` of the anchor's point's
-    /// material tangent at the start of the step, for its normal `n`.
+    /// The acoustic tensor of the anchor's point for its normal
+    /// ([`acoustic_tensor`]).
     pub(super) fn acoustic_tensor(&self, points: &MaterialPoints) -> Matrix2<f64> {
-        let (p, n) = (self.point, self.normal);
-        let material = &points.materials[points.material[p] as usize];
-        let j = points.deformation[p].determinant();
-        let tangent = material
-            .respond(&points.history[p], &Matrix2::zeros(), j)
-            .tangent;
-        Matrix2::from_fn(|i, jj| {
-            let mut sum = 0.0;
-            for k in 0..2 {
-                for l in 0..2 {
-                    sum += n[k] * tangent[(2 * i + k, 2 * jj + l)] * n[l];
-                }
-            }
-            sum
-        })
+        acoustic_tensor(points, self.point, self.normal)
     }
 
     /// The share of the boundary it stands for, `span` (its length along
@@ -180,11 +166,60 @@ impl Anchor {
 
 /// The components a support holds, as a projection.
 pub(super) fn projection(fix: Fix, n: [f64; 2]) -> Matrix2<f64> {
-    match fix {
-        Fix::Xy => Matrix2::identity(),
-        Fix::X => Matrix2::new(1.0, 0.0, 0.0, 0.0),
-        Fix::Y => Matrix2::new(0.0, 0.0, 0.0, 1.0),
-        Fix::Normal => Matrix2::new(n[0] * n[0], n[0] * n[1], n[1] * n[0], n[1] * n[1]),
+    let held = match fix {
+        Fix::Xy => Some([true, true]),
+        Fix::X => Some([true, false]),
+        Fix::Y => Some([false, true]),
+        Fix::Normal => None,
+    };
+    held_projection(held, n)
+}
+
+/// The projection on the components `held`, or (`None`) on the normal
+/// `n`: `n n`.
+pub(super) fn held_projection<const D: usize>(
+    held: Option<[bool; D]>,
+    n: [f64; D],
+) -> SMatrix<f64, D, D> {
+    match held {
+        Some(held) => SMatrix::from_fn(|i, j| if i == j && held[i] { 1.0 } else { 0.0 }),
+        None => SMatrix::from_fn(|i, j| n[i] * n[j]),
+    }
+}
+
+/// `A_nn[i][j] = A[(D i + K), (D j + L)] n_K n_L` of point `p`'s material
+/// tangent at the start of the step, for the normal `n`.
+pub(super) fn acoustic_tensor<const D: usize>(
+    points: &MaterialPoints<D>,
+    p: usize,
+    n: [f64; D],
+) -> SMatrix<f64, D, D>
+where
+    Dim<D>: Space<D>,
+{
+    let material = &points.materials[points.material[p] as usize];
+    let j = <Dim<D> as Space<D>>::determinant(&points.deformation[p]);
+    let response =
+        <Dim<D> as Space<D>>::respond(material, &points.history[p], &SMatrix::zeros(), j, true);
+    let tangent = <Dim<D> as Space<D>>::tangent_of(&response);
+    SMatrix::from_fn(|i, jj| {
+        let mut sum = 0.0;
+        for k in 0..D {
+            for l in 0..D {
+                sum += n[k] * tangent[(D * i + k, D * jj + l)] * n[l];
+            }
+        }
+        sum
+    })
+}
+
+impl super::band::Carried<2> for Anchor {
+    fn point(&self) -> usize {
+        self.point
+    }
+
+    fn moved_mut(&mut self) -> &mut [f64; 2] {
+        &mut self.moved
     }
 }
 

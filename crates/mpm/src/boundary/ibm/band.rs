@@ -8,7 +8,7 @@
 use std::any::Any;
 use std::collections::BTreeMap;
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{SMatrix, SVector};
 
 use super::anchors::{Anchor, projection};
 use super::ghost_ties::{self, GHOST_STENCIL, GhostTie, nodes_beyond};
@@ -27,33 +27,43 @@ pub const DEFAULT_BAND_WIDTH: f64 = 1e-2;
 /// One constraint of the band in a load step: an anchor's own, or the
 /// average over the anchors of one piece of an averaged support.
 #[derive(Debug, Clone)]
-struct BandPoint {
+pub(super) struct BandPoint<const D: usize> {
     /// The case's support it stands for.
-    support: usize,
+    pub(super) support: usize,
     /// Its shares of the active nodes are `shares[first..last]`.
-    first: usize,
-    last: usize,
+    pub(super) first: usize,
+    pub(super) last: usize,
     /// `dGamma * 4 / (3 delta) * P A_nn P`.
-    stiffness: Matrix2<f64>,
-    /// The length of boundary it stands for, `dGamma` (summed over a
-    /// piece), and its place there at the step's start (weighted by it).
-    length: f64,
-    at: [f64; 2],
+    pub(super) stiffness: SMatrix<f64, D, D>,
+    /// The length (in 3D, area) of boundary it stands for, `dGamma`
+    /// (summed over a piece), and its place there at the step's start
+    /// (weighted by it).
+    pub(super) length: f64,
+    pub(super) at: [f64; D],
     /// Displacement increment the boundary should make in this step.
-    target: [f64; 2],
+    pub(super) target: [f64; D],
 }
 
-/// The band terms of one load step.
+/// The band terms of one load step, on the curves of plane strain or
+/// (`D = 3`) the surfaces of 3D ([`super::surface_anchors`]).
 #[derive(Debug, Clone, Default)]
-pub struct BandTerms {
-    points: Vec<BandPoint>,
-    shares: Vec<(usize, f64)>,
+pub struct BandTerms<const D: usize = 2> {
+    pub(super) points: Vec<BandPoint<D>>,
+    pub(super) shares: Vec<(usize, f64)>,
     /// Each anchor with active nodes and its own shares, `(anchor, first,
     /// last)` into `shares`: what carries it at the end of the step.
-    carriers: Vec<(usize, usize, usize)>,
-    ghosts: Vec<GhostTie>,
+    pub(super) carriers: Vec<(usize, usize, usize)>,
+    pub(super) ghosts: Vec<GhostTie<D>>,
     /// `3 delta / (4 h)`: turns band forces into a cell's material forces.
-    material_scale: f64,
+    pub(super) material_scale: f64,
+}
+
+/// What the band moves at the end of a step: an anchor's displacement
+/// since the reference configuration, and the point that carries it when
+/// it touches no active node.
+pub trait Carried<const D: usize> {
+    fn point(&self) -> usize;
+    fn moved_mut(&mut self) -> &mut [f64; D];
 }
 
 impl BandTerms {
@@ -67,17 +77,14 @@ impl BandTerms {
         let Configuration {
             grid, conn, points, ..
         } = *start;
-        let mut terms = BandTerms {
-            material_scale: 0.75 * band_width / grid.h,
-            ..Default::default()
-        };
+        let mut terms = BandTerms::empty(grid.h, band_width);
         let mut weights = Vec::with_capacity(4);
         // Nodes just beyond a supported boundary, with the anchor that saw
         // them first.
         let mut beyond: BTreeMap<NodeKey, usize> = BTreeMap::new();
         // The current data points of the loops with anchors.
         let mut rings: BTreeMap<usize, Vec<[f64; 2]>> = BTreeMap::new();
-        let mut pieces: BTreeMap<usize, PieceSum> = BTreeMap::new();
+        let mut pieces: BTreeMap<usize, PieceSum<2>> = BTreeMap::new();
         for (i, a) in anchors.iter().enumerate() {
             let current = rings
                 .entry(a.loop_index)
@@ -114,76 +121,20 @@ impl BandTerms {
                 let u = a.prescribed_at(load_factor);
                 [u[0] - a.moved[0], u[1] - a.moved[1]]
             };
-            let last = terms.shares.len();
-            match a.piece {
-                None => terms.points.push(BandPoint {
-                    support: a.support,
-                    first,
-                    last,
-                    stiffness,
-                    length,
-                    at: a.position(),
-                    target,
-                }),
-                Some(piece) => {
-                    let sum = pieces.entry(piece).or_insert_with(|| PieceSum {
-                        support: a.support,
-                        ..Default::default()
-                    });
-                    for &(node, n) in &terms.shares[first..last] {
-                        *sum.shares.entry(node).or_insert(0.0) += length * n;
-                    }
-                    sum.stiffness += stiffness;
-                    let x = a.position();
-                    sum.target[0] += length * target[0];
-                    sum.target[1] += length * target[1];
-                    sum.at[0] += length * x[0];
-                    sum.at[1] += length * x[1];
-                    sum.length += length;
-                }
-            }
-        }
-        for sum in pieces.into_values() {
-            let first = terms.shares.len();
-            terms
-                .shares
-                .extend((sum.shares.into_iter()).map(|(node, share)| (node, share / sum.length)));
-            terms.points.push(BandPoint {
-                support: sum.support,
+            let point = BandPoint {
+                support: a.support,
                 first,
                 last: terms.shares.len(),
-                stiffness: sum.stiffness,
-                length: sum.length,
-                at: [sum.at[0] / sum.length, sum.at[1] / sum.length],
-                target: [sum.target[0] / sum.length, sum.target[1] / sum.length],
-            });
+                stiffness,
+                length,
+                at: a.position(),
+                target,
+            };
+            terms.add_point(&mut pieces, a.piece, point);
         }
+        terms.add_pieces(pieces);
         terms.ghosts = ghost_ties::ties(start, loops, anchors, &beyond, &rings);
         terms
-    }
-
-    /// The grid's displacement increment `u` interpolated with the shares
-    /// `shares[first..last]`.
-    fn interpolate(&self, first: usize, last: usize, u: &[f64]) -> [f64; 2] {
-        let mut v = [0.0; 2];
-        for &(a, n) in &self.shares[first..last] {
-            v[0] += n * u[2 * a];
-            v[1] += n * u[2 * a + 1];
-        }
-        v
-    }
-
-    /// The grid's displacement increment `u` at a band point (its average
-    /// over the piece, for an averaged one).
-    fn increment(&self, b: &BandPoint, u: &[f64]) -> [f64; 2] {
-        self.interpolate(b.first, b.last, u)
-    }
-
-    /// `K (u_h - target)` at a band point: the band's contribution to the
-    /// internal force there (the force on the body is its negative).
-    fn force(&self, b: &BandPoint, u: &[f64]) -> Vector2<f64> {
-        let v = self.increment(b, u);
-        b.stiffness * Vector2::new(v[0] - b.target[0], v[1] - b.target[1])
     }
 
     /// The traction each band constraint exerts on the body at the
@@ -205,6 +156,33 @@ impl BandTerms {
         out.sort_by_key(|t| t.support);
         out
     }
+}
+
+impl<const D: usize> BandTerms<D> {
+    /// The grid's displacement increment `u` interpolated with the shares
+    /// `shares[first..last]`.
+    fn interpolate(&self, first: usize, last: usize, u: &[f64]) -> [f64; D] {
+        let mut v = [0.0; D];
+        for &(a, n) in &self.shares[first..last] {
+            for d in 0..D {
+                v[d] += n * u[D * a + d];
+            }
+        }
+        v
+    }
+
+    /// The grid's displacement increment `u` at a band point (its average
+    /// over the piece, for an averaged one).
+    fn increment(&self, b: &BandPoint<D>, u: &[f64]) -> [f64; D] {
+        self.interpolate(b.first, b.last, u)
+    }
+
+    /// `K (u_h - target)` at a band point: the band's contribution to the
+    /// internal force there (the force on the body is its negative).
+    fn force(&self, b: &BandPoint<D>, u: &[f64]) -> SVector<f64, D> {
+        let v = self.increment(b, u);
+        b.stiffness * SVector::<f64, D>::from_fn(|d, _| v[d] - b.target[d])
+    }
 
     /// Moves the anchors with the converged increment `u`. An anchor that
     /// found no active node this step (it has drifted off the cells the
@@ -212,41 +190,104 @@ impl BandTerms {
     /// that point's displacement over the step in `point_moved`.
     pub fn advance(
         &self,
-        anchors: &mut [Anchor],
+        anchors: &mut [impl Carried<D>],
         u: &[f64],
-        point_moved: impl Fn(usize) -> [f64; 2],
+        point_moved: impl Fn(usize) -> [f64; D],
     ) {
         let mut carried = vec![false; anchors.len()];
         for &(i, first, last) in &self.carriers {
             let v = self.interpolate(first, last, u);
-            let a = &mut anchors[i];
-            a.moved[0] += v[0];
-            a.moved[1] += v[1];
+            let moved = anchors[i].moved_mut();
+            for d in 0..D {
+                moved[d] += v[d];
+            }
             carried[i] = true;
         }
         for (a, _) in anchors.iter_mut().zip(carried).filter(|(_, c)| !c) {
-            let v = point_moved(a.point);
-            a.moved[0] += v[0];
-            a.moved[1] += v[1];
+            let v = point_moved(a.point());
+            let moved = a.moved_mut();
+            for d in 0..D {
+                moved[d] += v[d];
+            }
         }
     }
 }
 
 /// The sums that make an averaged band point: the piece's constraint
 /// `int (u_h - target) dGamma = 0`, so its shares are `int N dGamma / L`.
-#[derive(Debug, Default)]
-struct PieceSum {
+#[derive(Debug)]
+pub(super) struct PieceSum<const D: usize> {
     support: usize,
     /// Per active node, `sum dGamma N`.
     shares: BTreeMap<usize, f64>,
-    stiffness: Matrix2<f64>,
+    stiffness: SMatrix<f64, D, D>,
     /// `sum dGamma target` and `sum dGamma x`.
-    target: [f64; 2],
-    at: [f64; 2],
+    target: [f64; D],
+    at: [f64; D],
     length: f64,
 }
 
-impl StepTerm for BandTerms {
+impl<const D: usize> BandTerms<D> {
+    /// No terms yet, on cells of size `h` with the band width `band_width`.
+    pub(super) fn empty(h: f64, band_width: f64) -> Self {
+        BandTerms {
+            material_scale: 0.75 * band_width / h,
+            ..Default::default()
+        }
+    }
+
+    /// Adds a constraint whose shares are the last ones pushed: as a band
+    /// point of its own, or into the sums of its averaged support's piece.
+    pub(super) fn add_point(
+        &mut self,
+        pieces: &mut BTreeMap<usize, PieceSum<D>>,
+        piece: Option<usize>,
+        point: BandPoint<D>,
+    ) {
+        let Some(piece) = piece else {
+            self.points.push(point);
+            return;
+        };
+        let sum = pieces.entry(piece).or_insert_with(|| PieceSum {
+            support: point.support,
+            shares: BTreeMap::new(),
+            stiffness: SMatrix::zeros(),
+            target: [0.0; D],
+            at: [0.0; D],
+            length: 0.0,
+        });
+        let length = point.length;
+        for &(node, n) in &self.shares[point.first..point.last] {
+            *sum.shares.entry(node).or_insert(0.0) += length * n;
+        }
+        sum.stiffness += point.stiffness;
+        for d in 0..D {
+            sum.target[d] += length * point.target[d];
+            sum.at[d] += length * point.at[d];
+        }
+        sum.length += length;
+    }
+
+    /// Adds each piece's averaged band point.
+    pub(super) fn add_pieces(&mut self, pieces: BTreeMap<usize, PieceSum<D>>) {
+        for sum in pieces.into_values() {
+            let first = self.shares.len();
+            self.shares
+                .extend((sum.shares.into_iter()).map(|(node, share)| (node, share / sum.length)));
+            self.points.push(BandPoint {
+                support: sum.support,
+                first,
+                last: self.shares.len(),
+                stiffness: sum.stiffness,
+                length: sum.length,
+                at: sum.at.map(|x| x / sum.length),
+                target: sum.target.map(|t| t / sum.length),
+            });
+        }
+    }
+}
+
+impl<const D: usize> StepTerm<D> for BandTerms<D> {
     fn side(&self) -> Side {
         Side::Support
     }
@@ -276,15 +317,17 @@ impl StepTerm for BandTerms {
         for b in &self.points {
             let force = self.force(b, u);
             for &(a, n) in &self.shares[b.first..b.last] {
-                f[2 * a] += n * force[0];
-                f[2 * a + 1] += n * force[1];
+                for d in 0..D {
+                    f[D * a + d] += n * force[d];
+                }
             }
         }
         for tie in &self.ghosts {
             let force = tie.force(u);
             for (&a, c) in tie.nodes.iter().zip(GHOST_STENCIL) {
-                f[2 * a] += c * force[0];
-                f[2 * a + 1] += c * force[1];
+                for d in 0..D {
+                    f[D * a + d] += c * force[d];
+                }
             }
         }
     }
@@ -307,12 +350,12 @@ impl StepTerm for BandTerms {
             let shares = &self.shares[b.first..b.last];
             for &(a, na) in shares {
                 for &(c, nc) in shares {
-                    for i in 0..2 {
-                        for j in 0..2 {
+                    for i in 0..D {
+                        for j in 0..D {
                             let added = pattern.add(
                                 values,
-                                2 * a + i,
-                                2 * c + j,
+                                D * a + i,
+                                D * c + j,
                                 na * nc * b.stiffness[(i, j)],
                             );
                             debug_assert!(added, "band couplings are in the pattern");
@@ -325,10 +368,10 @@ impl StepTerm for BandTerms {
             let k = &tie.stiffness;
             for (&a, ca) in tie.nodes.iter().zip(GHOST_STENCIL) {
                 for (&b, cb) in tie.nodes.iter().zip(GHOST_STENCIL) {
-                    for i in 0..2 {
-                        for j in 0..2 {
+                    for i in 0..D {
+                        for j in 0..D {
                             let added =
-                                pattern.add(values, 2 * a + i, 2 * b + j, ca * cb * k[(i, j)]);
+                                pattern.add(values, D * a + i, D * b + j, ca * cb * k[(i, j)]);
                             debug_assert!(added, "ghost couplings are in the pattern");
                         }
                     }
@@ -342,11 +385,11 @@ impl StepTerm for BandTerms {
     /// the DOFs that are free. On a DOF a grid support holds, the band
     /// pushes against that support, not the body, and the grid support's
     /// reaction (from the material's forces) is the body's side of it.
-    fn reactions(&self, u: &[f64], fixed: &[bool], n: usize) -> Option<Vec<[f64; 2]>> {
-        let mut out = vec![[0.0; 2]; n];
-        let mut take = |support: usize, a: usize, share: f64, force: Vector2<f64>| {
-            for c in 0..2 {
-                if !fixed[2 * a + c] {
+    fn reactions(&self, u: &[f64], fixed: &[bool], n: usize) -> Option<Vec<[f64; D]>> {
+        let mut out = vec![[0.0; D]; n];
+        let mut take = |support: usize, a: usize, share: f64, force: SVector<f64, D>| {
+            for c in 0..D {
+                if !fixed[D * a + c] {
                     out[support][c] -= share * force[c];
                 }
             }
@@ -373,6 +416,8 @@ impl StepTerm for BandTerms {
 
 #[cfg(test)]
 mod tests {
+    use nalgebra::{Matrix2, Vector2};
+
     use super::*;
     use crate::supports::Fix;
 

@@ -7,13 +7,13 @@
 
 use std::collections::BTreeMap;
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{SMatrix, SVector};
 
 use super::anchors::Anchor;
 use crate::boundary::detection::BoundaryLoop;
 use crate::configuration::Configuration;
 use crate::geometry::inside_ring;
-use crate::grid::{Grid, NodeKey, node_indices, node_key};
+use crate::grid::{Grid, NodeKey, lattice_coordinates, lattice_key};
 
 /// Weight of the ghost ties against the band's material stiffness.
 pub(super) const GHOST: f64 = 0.1;
@@ -22,22 +22,50 @@ pub(super) const GHOST: f64 = 0.1;
 /// inward (`J`, `K`), whose second difference `u_I - 2 u_J + u_K` is
 /// penalised (module docs).
 #[derive(Debug, Clone)]
-pub(super) struct GhostTie {
+pub(super) struct GhostTie<const D: usize = 2> {
     pub(super) nodes: [usize; 3],
-    pub(super) stiffness: Matrix2<f64>,
+    pub(super) stiffness: SMatrix<f64, D, D>,
     /// The support whose anchor found it (its reaction takes the tie's
     /// force where part of it lands on a grid-held node).
     pub(super) support: usize,
 }
 
-impl GhostTie {
+impl<const D: usize> GhostTie<D> {
     /// `K (u_I - 2 u_J + u_K)`.
-    pub(super) fn force(&self, u: &[f64]) -> Vector2<f64> {
-        let mut g = Vector2::zeros();
+    pub(super) fn force(&self, u: &[f64]) -> SVector<f64, D> {
+        let mut g = SVector::<f64, D>::zeros();
         for (&a, c) in self.nodes.iter().zip(GHOST_STENCIL) {
-            g += c * Vector2::new(u[2 * a], u[2 * a + 1]);
+            g += c * SVector::<f64, D>::from_fn(|d, _| u[D * a + d]);
         }
         self.stiffness * g
+    }
+
+    /// The tie of node `key` inward along the grid axis closest to the
+    /// normal `n`, where the next two nodes are active (`nodes`, sorted).
+    pub(super) fn inward(
+        key: NodeKey,
+        n: [f64; D],
+        nodes: &[NodeKey],
+        a_nn: SMatrix<f64, D, D>,
+        support: usize,
+    ) -> Option<Self> {
+        let axis = (1..D).fold(
+            0,
+            |best, d| {
+                if n[d].abs() > n[best].abs() { d } else { best }
+            },
+        );
+        let c = lattice_coordinates::<D>(key);
+        let index = |k: i64| {
+            let mut at = c;
+            at[axis] -= k * n[axis].signum() as i64;
+            nodes.binary_search(&lattice_key(at)).ok()
+        };
+        Some(GhostTie {
+            nodes: [index(0)?, index(1)?, index(2)?],
+            stiffness: a_nn * GHOST,
+            support,
+        })
     }
 }
 
@@ -49,22 +77,33 @@ pub(super) const GHOST_STENCIL: [f64; 3] = [1.0, -2.0, 1.0];
 /// cell (nearer ones take at least 90% of the band's shares there, and a
 /// node on a grid-aligned boundary that has moved a hair is not beyond it)
 /// and at most one cell, and within one cell of `x` along it.
-pub(super) fn nodes_beyond(
-    grid: &Grid,
-    x: [f64; 2],
-    n: [f64; 2],
+pub(super) fn nodes_beyond<const D: usize>(
+    grid: &Grid<D>,
+    x: [f64; D],
+    n: [f64; D],
     cells: f64,
 ) -> impl Iterator<Item = NodeKey> + '_ {
-    let [ci, cj] = grid.cell_of(x);
+    let cell = grid.cell_of(x);
     let tol = 1e-9 * grid.h;
     let r = cells.ceil() as i64;
-    (cj - r..=cj + r + 1)
-        .flat_map(move |j| (ci - r..=ci + r + 1).map(move |i| node_key(i, j)))
+    let side = (2 * r + 2) as usize;
+    (0..side.pow(D as u32))
+        .map(move |k| {
+            let mut rest = k;
+            lattice_key::<D>(std::array::from_fn(|d| {
+                let i = (rest % side) as i64;
+                rest /= side;
+                cell[d] - r + i
+            }))
+        })
         .filter(move |&key| {
             let p = grid.node_position(key);
-            let r = [p[0] - x[0], p[1] - x[1]];
-            let out = r[0] * n[0] + r[1] * n[1];
-            let along = (r[0] * n[1] - r[1] * n[0]).abs();
+            let r: [f64; D] = std::array::from_fn(|d| p[d] - x[d]);
+            let out: f64 = (0..D).map(|d| r[d] * n[d]).sum();
+            let along = (0..D)
+                .map(|d| (r[d] - out * n[d]).powi(2))
+                .sum::<f64>()
+                .sqrt();
             out > 0.1 * grid.h && out <= cells * grid.h + tol && along <= cells * grid.h + tol
         })
 }
@@ -96,26 +135,14 @@ pub(super) fn ties(
         if inside != loops[a.loop_index].hole {
             continue;
         }
-        let (normal, a_nn) = (a.normal, a.acoustic_tensor(points));
-        let (i, j) = node_indices(key);
-        // Inward along the grid axis closest to the normal.
-        let (di, dj) = if normal[0].abs() >= normal[1].abs() {
-            (-normal[0].signum() as i64, 0)
-        } else {
-            (0, -normal[1].signum() as i64)
-        };
-        let index = |k: i64| {
-            conn.nodes
-                .binary_search(&node_key(i + k * di, j + k * dj))
-                .ok()
-        };
-        if let (Some(a), Some(b), Some(c)) = (index(0), index(1), index(2)) {
-            ties.push(GhostTie {
-                nodes: [a, b, c],
-                stiffness: a_nn * GHOST,
-                support: anchors[anchor].support,
-            });
-        }
+        let a_nn = a.acoustic_tensor(points);
+        ties.extend(GhostTie::inward(
+            key,
+            a.normal,
+            &conn.nodes,
+            a_nn,
+            a.support,
+        ));
     }
     ties
 }

@@ -46,11 +46,15 @@
 //! them follow the linear continuation of the field inside.
 //!
 //! The stages: [`anchors()`] once per run ([`anchors`]), then every load
-//! step [`BandTerms`] ([`band`]) with the ghost ties ([`ghost_ties`]).
+//! step [`BandTerms`] ([`band`]) with the ghost ties ([`ghost_ties`]). In
+//! 3D the anchors lie on the surface patches ([`surface_anchors`]) and
+//! the band's terms are the same.
 
 pub mod anchors;
 pub mod band;
 pub mod ghost_ties;
+pub mod surface_anchors;
 
 pub use anchors::{AVERAGED_PIECE_CELLS, Anchor, IbmMotion, IbmSupport, anchors, enter_stage};
 pub use band::{BandTerms, DEFAULT_BAND_WIDTH};
+pub use surface_anchors::{SurfaceAnchor, SurfaceSupport, surface_anchors};
