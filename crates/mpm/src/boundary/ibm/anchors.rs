@@ -213,7 +213,15 @@ where
     })
 }
 
-impl super::band::Carried<2> for Anchor {
+/// What the band moves at the end of a step: an anchor's displacement
+/// since the reference configuration, and the point that carries it when
+/// it touches no active node (the curve's anchors and the surface's).
+pub trait Carried<const D: usize> {
+    fn point(&self) -> usize;
+    fn moved_mut(&mut self) -> &mut [f64; D];
+}
+
+impl Carried<2> for Anchor {
     fn point(&self) -> usize {
         self.point
     }

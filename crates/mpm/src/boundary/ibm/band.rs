@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::{SMatrix, SVector};
 
-use super::anchors::{Anchor, projection};
+use super::anchors::{Anchor, Carried, projection};
 use super::ghost_ties::{self, GHOST_STENCIL, GhostTie, nodes_beyond};
 use crate::assembly::{Pattern, Side, StepTerm};
 use crate::boundary::current_ring;
@@ -56,14 +56,6 @@ pub struct BandTerms<const D: usize = 2> {
     pub(super) ghosts: Vec<GhostTie<D>>,
     /// `3 delta / (4 h)`: turns band forces into a cell's material forces.
     pub(super) material_scale: f64,
-}
-
-/// What the band moves at the end of a step: an anchor's displacement
-/// since the reference configuration, and the point that carries it when
-/// it touches no active node.
-pub trait Carried<const D: usize> {
-    fn point(&self) -> usize;
-    fn moved_mut(&mut self) -> &mut [f64; D];
 }
 
 impl BandTerms {

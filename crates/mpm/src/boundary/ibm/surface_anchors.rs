@@ -31,8 +31,8 @@
 
 use std::collections::BTreeMap;
 
-use super::anchors::{acoustic_tensor, held_projection};
-use super::band::{BandPoint, BandTerms, Carried};
+use super::anchors::{Carried, acoustic_tensor, held_projection};
+use super::band::{BandPoint, BandTerms};
 use super::ghost_ties::{GhostTie, nodes_beyond};
 use crate::boundary::face_patches::FacePatch;
 use crate::boundary::quadrature::hat_shares;
