@@ -176,8 +176,8 @@ enum Increment {
 
 /// A case made ready to run: points, grid, loads and supports
 /// ([`crate::model`] builds it from a case), in `D` dimensions. The
-/// boundary's loops and IBM anchors are plane strain's, and empty in 3D
-/// until the B-spline surfaces (issue 38, part 2).
+/// boundary's loops and curve anchors are plane strain's (empty in 3D);
+/// the face patches and surface anchors are 3D's (empty in plane strain).
 pub struct Simulation<const D: usize = 2>
 where
     Dim<D>: StepSpace<D>,
@@ -904,11 +904,10 @@ where
 /// equilibrium does ([`StepSpace`]). In plane strain, the terms of the
 /// B-spline boundary (its loads, the IBM band and anchors), the soft
 /// background, the ghost penalty and the lone points' term, and the
-/// averagings against locking. In 3D, a step so far holds the points,
-/// gravity, point loads and grid supports on planes (issue 38): the
-/// ghost penalty on the cells' faces, and tractions on box faces; the
-/// boundary's terms are part 2's, and F-bar, the cell mean and the
-/// geostatic stage wait for cells of eight corners.
+/// averagings against locking. In 3D: the ghost penalty on the cells'
+/// faces, tractions on box faces, the surface loads and the IBM band on
+/// the B-spline surfaces (whose anchors move in `after_commit`); no
+/// geostatic stage yet.
 pub trait RunSpace<const D: usize>: StepSpace<D>
 where
     Dim<D>: StepSpace<D>,
