@@ -6,7 +6,7 @@
 //! the ghost ties of the nodes beyond the supported boundary.
 
 use std::any::Any;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
 use nalgebra::{SMatrix, SVector};
 
@@ -54,8 +54,23 @@ pub struct BandTerms<const D: usize = 2> {
     /// last)` into `shares`: what carries it at the end of the step.
     pub(super) carriers: Vec<(usize, usize, usize)>,
     pub(super) ghosts: Vec<GhostTie<D>>,
+    /// The stiffness of the band points and the ghost ties summed over
+    /// those on the same nodes ([`BandTerms::couple`]).
+    coupled: Vec<Coupled<D>>,
     /// `3 delta / (4 h)`: turns band forces into a cell's material forces.
     pub(super) material_scale: f64,
+}
+
+/// The stiffness `sum N_a N_b K` of the band points (and ghost ties) on
+/// one list of nodes: the anchors of a cell share theirs, so the tangent
+/// takes a cell's sum once rather than each anchor's, some 64 of them on a
+/// 3D surface cell.
+#[derive(Debug, Clone)]
+struct Coupled<const D: usize> {
+    nodes: Vec<usize>,
+    /// `blocks[i * n + j]` couples row node `nodes[i]` with column node
+    /// `nodes[j]`, `n` the nodes' count.
+    blocks: Vec<SMatrix<f64, D, D>>,
 }
 
 impl BandTerms {
@@ -126,6 +141,7 @@ impl BandTerms {
         }
         terms.add_pieces(pieces);
         terms.ghosts = ghost_ties::ties(start, loops, anchors, &beyond, &rings);
+        terms.couple();
         terms
     }
 
@@ -260,6 +276,38 @@ impl<const D: usize> BandTerms<D> {
         sum.length += length;
     }
 
+    /// Sums the stiffness of the band points and ghost ties made so far by
+    /// the nodes they couple (the step's tangent then adds each sum once).
+    pub(super) fn couple(&mut self) {
+        let mut index: HashMap<Vec<usize>, usize> = HashMap::new();
+        let mut coupled: Vec<Coupled<D>> = Vec::new();
+        let mut add = |nodes: Vec<usize>, weights: &[f64], k: &SMatrix<f64, D, D>| {
+            let n = nodes.len();
+            let g = *index.entry(nodes).or_insert_with_key(|nodes| {
+                coupled.push(Coupled {
+                    nodes: nodes.clone(),
+                    blocks: vec![SMatrix::zeros(); n * n],
+                });
+                coupled.len() - 1
+            });
+            let blocks = &mut coupled[g].blocks;
+            for (i, wi) in weights.iter().enumerate() {
+                for (j, wj) in weights.iter().enumerate() {
+                    blocks[i * n + j] += k * (wi * wj);
+                }
+            }
+        };
+        for b in &self.points {
+            let shares = &self.shares[b.first..b.last];
+            let weights: Vec<f64> = shares.iter().map(|s| s.1).collect();
+            add(shares.iter().map(|s| s.0).collect(), &weights, &b.stiffness);
+        }
+        for tie in &self.ghosts {
+            add(tie.nodes.to_vec(), &GHOST_STENCIL, &tie.stiffness);
+        }
+        self.coupled = coupled;
+    }
+
     /// Adds each piece's averaged band point.
     pub(super) fn add_pieces(&mut self, pieces: BTreeMap<usize, PieceSum<D>>) {
         for sum in pieces.into_values() {
@@ -287,19 +335,8 @@ impl<const D: usize> StepTerm<D> for BandTerms<D> {
     /// Node groups the band and the ghost ties couple (for the stiffness
     /// pattern).
     fn coupling_groups(&self) -> Vec<Vec<u32>> {
-        self.points
-            .iter()
-            .map(|b| {
-                self.shares[b.first..b.last]
-                    .iter()
-                    .map(|&(a, _)| a as u32)
-                    .collect()
-            })
-            .chain(
-                self.ghosts
-                    .iter()
-                    .map(|g| g.nodes.iter().map(|&a| a as u32).collect()),
-            )
+        (self.coupled.iter())
+            .map(|g| g.nodes.iter().map(|&a| a as u32).collect())
             .collect()
     }
 
@@ -336,35 +373,18 @@ impl<const D: usize> StepTerm<D> for BandTerms<D> {
         self.material_scale * f.iter().map(|v| v * v).sum::<f64>().sqrt()
     }
 
-    /// Adds the band's stiffness `N_a N_b K` to tangent values.
+    /// Adds the band's stiffness `N_a N_b K` and the ghost ties' to
+    /// tangent values, summed by the nodes they couple.
     fn add_stiffness(&self, _u: &[f64], pattern: &Pattern, values: &mut [f64]) {
-        for b in &self.points {
-            let shares = &self.shares[b.first..b.last];
-            for &(a, na) in shares {
-                for &(c, nc) in shares {
-                    for i in 0..D {
-                        for j in 0..D {
-                            let added = pattern.add(
-                                values,
-                                D * a + i,
-                                D * c + j,
-                                na * nc * b.stiffness[(i, j)],
-                            );
-                            debug_assert!(added, "band couplings are in the pattern");
-                        }
-                    }
-                }
-            }
-        }
-        for tie in &self.ghosts {
-            let k = &tie.stiffness;
-            for (&a, ca) in tie.nodes.iter().zip(GHOST_STENCIL) {
-                for (&b, cb) in tie.nodes.iter().zip(GHOST_STENCIL) {
-                    for i in 0..D {
-                        for j in 0..D {
-                            let added =
-                                pattern.add(values, D * a + i, D * b + j, ca * cb * k[(i, j)]);
-                            debug_assert!(added, "ghost couplings are in the pattern");
+        for g in &self.coupled {
+            let n = g.nodes.len();
+            for (j, &c) in g.nodes.iter().enumerate() {
+                for (i, &a) in g.nodes.iter().enumerate() {
+                    let (base, stride) = pattern.block(a as u32, c as u32);
+                    let k = &g.blocks[i * n + j];
+                    for col in 0..D {
+                        for row in 0..D {
+                            values[base + row + col * stride] += k[(row, col)];
                         }
                     }
                 }

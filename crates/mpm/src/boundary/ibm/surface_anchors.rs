@@ -353,6 +353,7 @@ impl BandTerms<3> {
                 a.support,
             ));
         }
+        terms.couple();
         terms
     }
 }
