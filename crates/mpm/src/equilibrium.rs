@@ -142,7 +142,7 @@ where
     /// Whether `k` is the tangent at the last trial state.
     assembled: bool,
     solver: SparseSolver,
-    timings: StepTimings,
+    pub(crate) timings: StepTimings,
     memory: StepMemory,
 }
 
@@ -381,7 +381,11 @@ where
             );
         }
         for term in &self.terms {
+            let t = Instant::now();
             term.add_stiffness(&self.u, &self.pattern, &mut k);
+            if term.side() != Side::Stabilisation {
+                self.timings.boundary += t.elapsed().as_secs_f64();
+            }
         }
         assembly::constrain(&self.pattern, &mut k, &self.held.fixed);
         self.k = k;
@@ -443,12 +447,16 @@ where
         }
         self.f_support.fill(0.0);
         for term in &self.terms {
+            let t = Instant::now();
             let f = match term.side() {
                 Side::Load => &mut self.f_ext,
                 Side::Stabilisation => &mut self.f_int,
                 Side::Support => &mut self.f_support,
             };
             term.add_force(u, f);
+            if term.side() != Side::Stabilisation {
+                self.timings.boundary += t.elapsed().as_secs_f64();
+            }
         }
         let scale = norm(&self.f_ext)
             .max(material_norm)

@@ -33,6 +33,13 @@ pub struct StepTimings {
     #[serde(default)]
     pub failed: f64,
     pub total: f64,
+    /// Of the stages above, the boundary's terms (tractions on curves and
+    /// surfaces, the IBM band): made at the step's start (the boundary
+    /// rebuilt through the outer points, its quadrature, the band's
+    /// anchors located on the grid) within `grid`, their forces within
+    /// `point_loop`, their stiffness within `assembly`.
+    #[serde(default)]
+    pub boundary: f64,
 }
 
 impl std::ops::AddAssign<&StepTimings> for StepTimings {
@@ -47,6 +54,7 @@ impl std::ops::AddAssign<&StepTimings> for StepTimings {
         self.newton += t.newton;
         self.failed += t.failed;
         self.total += t.total;
+        self.boundary += t.boundary;
     }
 }
 

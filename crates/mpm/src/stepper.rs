@@ -256,6 +256,12 @@ impl Simulation<3> {
     pub fn initial_step(&self) -> (StepReport, SolidStepState<'_>) {
         (self.initial_report(), SolidStepState::new(self))
     }
+
+    /// The quadrature points of the supports on the surfaces, the
+    /// implicit boundary method's anchors.
+    pub fn surface_anchor_count(&self) -> usize {
+        self.surface_anchors.len()
+    }
 }
 
 impl<const D: usize> Simulation<D>
@@ -818,7 +824,7 @@ where
     ) -> StepEquilibrium<'a, D> {
         let start = self.configuration(conn);
         let stage = &self.stages[self.stage];
-        let terms = StepTerms {
+        let mut terms = StepTerms {
             held: HeldDofs::find(&stage.grid_supports, &self.grid, conn),
             f_ext: assembly::external_force(
                 conn,
@@ -837,11 +843,17 @@ where
                 (load_factor, rate)
             }),
             averaging: Dim::<D>::averaging(self, &start),
-            terms: Dim::<D>::step_terms(self, &start, load_factor),
+            terms: Dim::<D>::stabilisation_terms(self, &start),
         };
+        let made = Instant::now();
+        let boundary = Dim::<D>::boundary_terms(self, &start, load_factor);
+        let boundary_seconds = made.elapsed().as_secs_f64();
+        terms.terms.extend(boundary);
         let pattern = terms.pattern(conn);
         let solving = (&self.solver, &self.solve_tally);
-        StepEquilibrium::new(&start, terms, pattern, previous, solving)
+        let mut eq = StepEquilibrium::new(&start, terms, pattern, previous, solving);
+        eq.timings.boundary += boundary_seconds;
+        eq
     }
 
     /// Moves on, stage by stage, to stage `k`: its loads and supports,
@@ -912,9 +924,18 @@ pub trait RunSpace<const D: usize>: StepSpace<D>
 where
     Dim<D>: StepSpace<D>,
 {
-    /// The terms of a step at `load_factor` on `start` besides the points'
-    /// own, in the order their stiffness is added to the tangent.
-    fn step_terms<'a>(
+    /// The stabilising terms of a step on `start` (ghost penalty, soft
+    /// cells, lone points), in the order their stiffness is added to the
+    /// tangent, before the boundary's.
+    fn stabilisation_terms<'a>(
+        sim: &'a Simulation<D>,
+        start: &Configuration<'a, D>,
+    ) -> Vec<Box<dyn StepTerm<D> + 'a>>;
+
+    /// The boundary's terms of a step at `load_factor` on `start`: its
+    /// curves or surfaces rebuilt through the outer points, the tractions
+    /// on them and the IBM band.
+    fn boundary_terms<'a>(
         sim: &'a Simulation<D>,
         start: &Configuration<'a, D>,
         load_factor: f64,
@@ -954,12 +975,10 @@ where
 type Averages<const D: usize> = <Dim<D> as StepSpace<D>>::Averages;
 
 impl RunSpace<2> for Dim<2> {
-    fn step_terms<'a>(
+    fn stabilisation_terms<'a>(
         sim: &'a Simulation,
         start: &Configuration<'a>,
-        load_factor: f64,
     ) -> Vec<Box<dyn StepTerm + 'a>> {
-        let loops = &sim.loops;
         let mut terms: Vec<Box<dyn StepTerm + 'a>> = Vec::new();
         if let Some(soft) = sim.soft_cells(start) {
             terms.push(Box::new(soft));
@@ -973,6 +992,16 @@ impl RunSpace<2> for Dim<2> {
                 terms.push(Box::new(lone));
             }
         }
+        terms
+    }
+
+    fn boundary_terms<'a>(
+        sim: &'a Simulation,
+        start: &Configuration<'a>,
+        load_factor: f64,
+    ) -> Vec<Box<dyn StepTerm + 'a>> {
+        let loops = &sim.loops;
+        let mut terms: Vec<Box<dyn StepTerm + 'a>> = Vec::new();
         // The band always: it moves the anchors, those without a band
         // point this step with their material points.
         terms.push(Box::new(BandTerms::new(
@@ -1050,16 +1079,24 @@ impl RunSpace<2> for Dim<2> {
 }
 
 impl RunSpace<3> for Dim<3> {
-    fn step_terms<'a>(
+    fn stabilisation_terms<'a>(
         sim: &'a Simulation<3>,
         start: &Configuration<'a, 3>,
-        load_factor: f64,
     ) -> Vec<Box<dyn StepTerm<3> + 'a>> {
         let mut terms: Vec<Box<dyn StepTerm<3> + 'a>> = Vec::new();
         let gamma = sim.settings.ghost_penalty;
         if gamma > 0.0 {
             terms.push(Box::new(SolidGhostFaces::new(start, sim.basis, gamma)));
         }
+        terms
+    }
+
+    fn boundary_terms<'a>(
+        sim: &'a Simulation<3>,
+        start: &Configuration<'a, 3>,
+        load_factor: f64,
+    ) -> Vec<Box<dyn StepTerm<3> + 'a>> {
+        let mut terms: Vec<Box<dyn StepTerm<3> + 'a>> = Vec::new();
         let stage = &sim.stages[sim.stage];
         if !stage.face_loads.is_empty() {
             terms.push(Box::new(FaceLoading::new(

@@ -31,6 +31,9 @@
 
 use std::collections::BTreeMap;
 
+use nalgebra::SMatrix;
+use rayon::prelude::*;
+
 use super::anchors::{Carried, acoustic_tensor, held_projection};
 use super::band::{BandPoint, BandTerms};
 use super::ghost_ties::{GhostTie, nodes_beyond};
@@ -293,50 +296,77 @@ impl BandTerms<3> {
         let Configuration {
             grid, conn, points, ..
         } = *start;
+        let mut patches: Vec<usize> = anchors.iter().map(|a| a.patch).collect();
+        patches.sort_unstable();
+        patches.dedup();
+        let surfaces: BTreeMap<usize, Interpolation> = (patches.par_iter())
+            .map(|&k| (k, Interpolation::new(faces[k].data_grid(points))))
+            .collect();
+        // Each anchor's part, made in parallel and added in the anchors'
+        // order (so the sums do not depend on the threads). The anchors of
+        // a cell share their point and normal: the acoustic tensor of the
+        // last one is kept.
+        let made: Vec<Option<AnchorTerm>> = (anchors.par_iter())
+            .with_min_len(256)
+            .map_init(
+                || (Vec::with_capacity(8), None),
+                |(weights, last), a| {
+                    let x = a.position();
+                    let mut shares = Vec::with_capacity(8);
+                    if !hat_shares(start.basis, grid, x, &conn.nodes, weights, &mut shares) {
+                        return None;
+                    }
+                    let surface = &surfaces[&a.patch];
+                    let cu = surface.grid().cells()[0];
+                    let (_, ds, dt) = surface.patch(a.cell % cu, a.cell / cu).evaluate(a.s, a.t);
+                    let n = cross(ds, dt);
+                    let span = a.weight * norm(n);
+                    let area = a.share_inside(span) * span;
+                    if area <= 0.0 {
+                        // Slid out from under an averaged support: it is
+                        // only carried.
+                        return Some(AnchorTerm { shares, held: None });
+                    }
+                    let a_nn = match *last {
+                        Some((p, normal, a_nn)) if p == a.point && normal == a.normal => a_nn,
+                        _ => acoustic_tensor(points, a.point, a.normal),
+                    };
+                    *last = Some((a.point, a.normal, a_nn));
+                    let beyond =
+                        nodes_beyond(grid, x, a.normal, start.basis.reach_beyond_boundary())
+                            .filter(|key| conn.nodes.binary_search(key).is_ok())
+                            .collect();
+                    let held = held_projection(a.held, a.normal);
+                    Some(AnchorTerm {
+                        shares,
+                        held: Some(Held {
+                            stiffness: held * a_nn * held * (area * 4.0 / (3.0 * band_width)),
+                            area,
+                            beyond,
+                        }),
+                    })
+                },
+            )
+            .collect();
         let mut terms = BandTerms::empty(grid.h, band_width);
-        let mut weights = Vec::with_capacity(8);
         let mut beyond: BTreeMap<NodeKey, usize> = BTreeMap::new();
-        let mut current: BTreeMap<usize, Interpolation> = BTreeMap::new();
         let mut pieces = BTreeMap::new();
-        for (i, a) in anchors.iter().enumerate() {
+        for (i, (a, made)) in anchors.iter().zip(made).enumerate() {
+            let Some(made) = made else { continue };
             let first = terms.shares.len();
-            let x = a.position();
-            if !hat_shares(
-                start.basis,
-                grid,
-                x,
-                &conn.nodes,
-                &mut weights,
-                &mut terms.shares,
-            ) {
-                continue;
-            }
+            terms.shares.extend(made.shares);
             terms.carriers.push((i, first, terms.shares.len()));
-            let surface = current
-                .entry(a.patch)
-                .or_insert_with(|| Interpolation::new(faces[a.patch].data_grid(points)));
-            let cu = surface.grid().cells()[0];
-            let (_, ds, dt) = surface.patch(a.cell % cu, a.cell / cu).evaluate(a.s, a.t);
-            let n = cross(ds, dt);
-            let span = a.weight * norm(n);
-            let area = a.share_inside(span) * span;
-            if area <= 0.0 {
-                continue; // slid out from under an averaged support
+            let Some(held) = made.held else { continue };
+            for key in held.beyond {
+                beyond.entry(key).or_insert(i);
             }
-            let a_nn = acoustic_tensor(points, a.point, a.normal);
-            for key in nodes_beyond(grid, x, a.normal, start.basis.reach_beyond_boundary()) {
-                if conn.nodes.binary_search(&key).is_ok() {
-                    beyond.entry(key).or_insert(i);
-                }
-            }
-            let held = held_projection(a.held, a.normal);
             let point = BandPoint {
                 support: a.support,
                 first,
                 last: terms.shares.len(),
-                stiffness: held * a_nn * held * (area * 4.0 / (3.0 * band_width)),
-                length: area,
-                at: x,
+                stiffness: held.stiffness,
+                length: held.area,
+                at: a.position(),
                 target: std::array::from_fn(|d| load_factor * a.prescribed[d] - a.moved[d]),
             };
             terms.add_point(&mut pieces, a.piece, point);
@@ -356,6 +386,22 @@ impl BandTerms<3> {
         terms.couple();
         terms
     }
+}
+
+/// What one anchor adds to a step's band: its shares of the active nodes
+/// (which carry it), and what it holds unless it slid out from under an
+/// averaged support.
+struct AnchorTerm {
+    shares: Vec<(usize, f64)>,
+    held: Option<Held>,
+}
+
+struct Held {
+    /// `P A_nn P dA (4/3) / delta`, and `dA`.
+    stiffness: SMatrix<f64, 3, 3>,
+    area: f64,
+    /// The active nodes beyond the surface there.
+    beyond: Vec<NodeKey>,
 }
 
 #[cfg(test)]
