@@ -17,6 +17,7 @@ use std::fs;
 use std::path::Path;
 use std::time::Instant;
 
+use mpm::boundary::surface::Interpolation;
 use mpm::case::solid::SolidCase;
 use mpm::linsolve::{FillOrdering, SolverSettings, SymmetricMethod, UnsymmetricMethod};
 use mpm::particles::Dim;
@@ -36,7 +37,7 @@ struct Scene {
 /// The scenes: the size, memory and symmetric-solve tables run the first
 /// [`SYMMETRIC_SCENES`], whose tangents are symmetric; the unsymmetric
 /// table the rest.
-const SCENES: [Scene; 8] = [
+const SCENES: [Scene; 9] = [
     Scene {
         name: "column (10 m x 50 m, GIMP, Hencky)",
         build: wide_column,
@@ -69,9 +70,15 @@ const SCENES: [Scene; 8] = [
         name: "3D cantilever (10 m x 2 m x 2 m, GIMP, Hencky, self-weight)",
         build: cantilever_3d,
     },
+    Scene {
+        name: "3D column on the IBM (10 m x 10 m x 50 m, GIMP, Hencky, cut grid)",
+        build: column_3d_ibm,
+    },
 ];
-/// The 3D scenes (`analysis.type: "3d"`).
+/// The 3D scenes (`analysis.type: "3d"`) of the size table.
 const SOLID_SCENES: std::ops::Range<usize> = 6..8;
+/// The 3D scene whose supports and load are on its B-spline surfaces.
+const SURFACE_SCENE: usize = 8;
 const SYMMETRIC_SCENES: usize = 2;
 /// The scenes (from [`SYMMETRIC_SCENES`] on) whose tangents change with
 /// plastic flow, measured up to [`PLASTIC_MAX_POINTS`].
@@ -120,6 +127,32 @@ fn cantilever_3d(points: usize) -> Value {
         "loads": { "gravity": [0.0, 0.0, -10.0] },
         "supports": [{ "on": { "x": 0.0 }, "fix": "xyz" }]
     })
+}
+
+/// The 3D column of [`column_3d`] held by the implicit boundary method
+/// on its B-spline surfaces instead of grid planes (rollers on its four
+/// sides, its base fixed) on a grid whose planes cut it (origin at -0.3
+/// of a cell): the band is made on the rebuilt surfaces every step. (A
+/// traction on its top would make the tangent unsymmetric, which in 3D is
+/// solved by GMRES with a direct factor, out of reach at 1e6 points.)
+fn column_3d_ibm(points: usize) -> Value {
+    let h = 10.0 / cells_across_3d(points) as f64;
+    let plane =
+        |point: [f64; 3], normal: [f64; 3]| json!({"plane": {"point": point, "normal": normal}});
+    let roller = |point, normal| json!({"on": plane(point, normal), "fix": "normal"});
+    let mut case = example("column3d");
+    let origin = [-0.3 * h; 3];
+    case["grid"] = json!({"cell_size": h, "origin": origin});
+    case["bodies"][0]["geometry"]["box"]["max"] = json!([10.0, 10.0, 50.0]);
+    case["supports"] = json!([]);
+    case["surface_supports"] = json!([
+        roller([0.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
+        roller([10.0, 0.0, 0.0], [1.0, 0.0, 0.0]),
+        roller([0.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        roller([0.0, 10.0, 0.0], [0.0, 1.0, 0.0]),
+        {"on": plane([0.0, 0.0, 0.0], [0.0, 0.0, 1.0]), "fix": "xyz"},
+    ]);
+    case
 }
 
 fn example(name: &str) -> Value {
@@ -226,6 +259,15 @@ pub struct Row {
     cg_solves: usize,
     #[serde(default)]
     cg_iterations: usize,
+    /// 3D: the surfaces' data points, the supports' anchors, and the
+    /// seconds to interpolate every patch once through the data points
+    /// where the last step left them (the median of five).
+    #[serde(default)]
+    surface_points: usize,
+    #[serde(default)]
+    anchors: usize,
+    #[serde(default)]
+    surfaces_seconds: f64,
 }
 
 /// Sections of BENCHMARKS.md that `mpm bench` keeps: `mpm bench-queue`'s,
@@ -315,6 +357,7 @@ pub fn bench(max_points: usize, out: &Path, repeats: usize) -> Result<(), LabErr
     }
     report.push_str(&memory_by_component(&largest));
     report.push_str(&solid_scenes(max_points)?);
+    report.push_str(&surface_costs(max_points)?);
     report.push_str(&symmetric_methods(max_points)?);
     report.push_str(&unsymmetric_methods(max_points)?);
     report.push_str(&ordering_comparison(max_points)?);
@@ -524,6 +567,56 @@ fn solid_scenes(max_points: usize) -> Result<String, LabError> {
                 (s1 / s0).ln() / (d1 / d0).ln()
             ));
         }
+    }
+    Ok(text)
+}
+
+/// The boundary's share of a 3D step ([`SURFACE_SCENE`]) from 1e4
+/// points up: the surfaces rebuilt (every patch interpolated once), and
+/// the boundary's terms (`StepTimings::boundary`: the band and the top's
+/// traction made, which rebuilds the patches they are on, and their
+/// forces and stiffness in every iteration), against the whole step.
+fn surface_costs(max_points: usize) -> Result<String, LabError> {
+    let scene = &SCENES[SURFACE_SCENE];
+    let mut text = format!(
+        "\n## The boundary in 3D\n\n\
+         The {name}: the column of the 3D table held by the implicit boundary method on its B-spline surfaces \
+         (rollers on its four sides, its base fixed; 4 x 4 anchors a surface cell), on a grid whose planes cut \
+         it; first two load steps. Surfaces: every patch \
+         interpolated once through its data points (`Interpolation::new`, the median of five, after the second \
+         step), what each step does before its loads and supports are integrated. Boundary: the step's \
+         boundary terms (`timings.boundary` of the step reports): the band made (the supported patches \
+         rebuilt, the anchors' shares of the nodes, the stiffness summed by the nodes it couples), and its \
+         forces and stiffness in every Newton iteration. Both against the \
+         whole step.\n\n\
+         | points | surface data points | anchors | active DOFs | s / step | iterations / step | surfaces s | surfaces % of step | boundary s / step | boundary % of step | peak MiB |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        name = scene.name,
+    );
+    let mut target = 10_000;
+    while target <= max_points {
+        let row = measure_in_child(SURFACE_SCENE, target)?;
+        let t = &row.timings;
+        let per_step = t.total / row.steps as f64;
+        let boundary = t.boundary / row.steps as f64;
+        let line = format!(
+            "| {} | {} | {} | {} | {:.3} | {:.1} | {:.4} | {:.1}% | {:.3} | {:.1}% | {} |\n",
+            row.points,
+            row.surface_points,
+            row.anchors,
+            row.dofs,
+            per_step,
+            row.iterations as f64 / row.steps as f64,
+            row.surfaces_seconds,
+            100.0 * row.surfaces_seconds / per_step,
+            boundary,
+            100.0 * boundary / per_step,
+            row.peak_mib
+                .map_or("n/a".to_string(), |m| format!("{m:.0}")),
+        );
+        eprint!("{line}");
+        text.push_str(&line);
+        target *= 10;
     }
     Ok(text)
 }
@@ -878,17 +971,38 @@ fn measure(scene: &Scene, target: usize, solver: SolverSettings) -> Result<Row, 
     let failed = |e: mpm::CaseError| LabError::Failed(e.to_string());
     if mpm::case::solid::is_solid(&text) {
         let case = SolidCase::from_json(&text).map_err(failed)?;
-        let sim = Simulation::from_solid_case(&case).map_err(failed)?;
-        return first_steps(scene, sim, solver);
+        let mut sim = Simulation::from_solid_case(&case).map_err(failed)?;
+        let mut row = first_steps(scene, &mut sim, solver)?;
+        row.surface_points = sim.faces.iter().map(|f| f.data.len()).sum();
+        row.anchors = sim.surface_anchor_count();
+        row.surfaces_seconds = median_seconds(5, || {
+            for face in &sim.faces {
+                std::hint::black_box(Interpolation::new(face.data_grid(&sim.points)));
+            }
+        });
+        return Ok(row);
     }
     let case = Case::from_json(&text).map_err(failed)?;
-    first_steps(scene, Simulation::new(&case).map_err(failed)?, solver)
+    first_steps(scene, &mut Simulation::new(&case).map_err(failed)?, solver)
+}
+
+/// The median wall time of `repeats` runs of `f`.
+fn median_seconds(repeats: usize, mut f: impl FnMut()) -> f64 {
+    let mut times: Vec<f64> = (0..repeats.max(1))
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
 }
 
 /// The first two load steps of `sim` with `solver`, measured.
 fn first_steps<const D: usize>(
     scene: &Scene,
-    mut sim: Simulation<D>,
+    sim: &mut Simulation<D>,
     solver: SolverSettings,
 ) -> Result<Row, LabError>
 where
@@ -924,6 +1038,9 @@ where
         fresh_factorisations: counts.fresh_factorisations,
         cg_solves: counts.cg_solves,
         cg_iterations: counts.cg_iterations,
+        surface_points: 0,
+        anchors: 0,
+        surfaces_seconds: 0.0,
     })
 }
 
