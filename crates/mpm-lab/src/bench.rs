@@ -589,8 +589,8 @@ fn surface_costs(max_points: usize) -> Result<String, LabError> {
          rebuilt, the anchors' shares of the nodes, the stiffness summed by the nodes it couples), and its \
          forces and stiffness in every Newton iteration. Both against the \
          whole step.\n\n\
-         | points | surface data points | anchors | active DOFs | s / step | iterations / step | surfaces s | surfaces % of step | boundary s / step | boundary % of step | peak MiB |\n\
-         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+         | points | surface data points | anchors | active DOFs | s / step | iterations / step | surfaces s | surfaces % of step | boundary s / step | boundary % of step | CG iterations | peak MiB |\n\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         name = scene.name,
     );
     let mut target = 10_000;
@@ -600,7 +600,7 @@ fn surface_costs(max_points: usize) -> Result<String, LabError> {
         let per_step = t.total / row.steps as f64;
         let boundary = t.boundary / row.steps as f64;
         let line = format!(
-            "| {} | {} | {} | {} | {:.3} | {:.1} | {:.4} | {:.1}% | {:.3} | {:.1}% | {} |\n",
+            "| {} | {} | {} | {} | {:.3} | {:.1} | {:.4} | {:.2}% | {:.3} | {:.1}% | {} | {} |\n",
             row.points,
             row.surface_points,
             row.anchors,
@@ -611,6 +611,7 @@ fn surface_costs(max_points: usize) -> Result<String, LabError> {
             100.0 * row.surfaces_seconds / per_step,
             boundary,
             100.0 * boundary / per_step,
+            row.cg_iterations,
             row.peak_mib
                 .map_or("n/a".to_string(), |m| format!("{m:.0}")),
         );

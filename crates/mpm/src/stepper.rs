@@ -1120,6 +1120,7 @@ impl RunSpace<3> for Dim<3> {
                 &sim.surface_anchors,
                 sim.band_width,
                 load_factor,
+                sim.settings.ghost_penalty == 0.0,
             )));
         }
         terms

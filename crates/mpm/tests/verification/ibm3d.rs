@@ -110,10 +110,12 @@ fn turned_column_3d(h: f64, basis: &str) -> (f64, f64, f64) {
 }
 
 /// The turned column against the upright one's exact solution, on a
-/// coarse grid (its 2 m width over 4 cells of 0.5 m). Measured with GIMP at h = 0.5: the worst point's axial
-/// displacement 3.2e-3 of the top's exact -0.38536 m, across the axis
-/// 7.5e-4 of it, stress error 6.4e-3; the base carries the weight to
-/// 2e-14. The 2D turned column (bodies.rs) is within 1.2e-3 at its top
+/// coarse grid (its 2 m width over 4 cells of 0.5 m), within the 1% the
+/// 2D turned column keeps. Measured with GIMP at h = 0.5: the worst
+/// point's axial displacement 3.8e-3 of the top's exact -0.38536 m, across
+/// the axis 8.9e-4 of it, stress error 7.1e-3 (3.2e-3, 7.5e-4 and 6.4e-3
+/// with the ghost ties the ghost penalty replaced, docs/ibm.md); the base
+/// carries the weight to 5e-15. The 2D turned column (bodies.rs) is within 1.2e-3 at its top
 /// centre; the 3D worst point is the stricter measure. See
 /// [`turned_3d_column_table`] for the finer grid and the linear basis.
 #[test]
@@ -128,14 +130,14 @@ fn a_turned_3d_column_on_ibm_rollers_settles_as_the_upright_one() {
 /// (the numbers in docs/guide.md's verification table).
 /// On the quadratic B-splines, whose grid nodes hold coefficients (so a
 /// 3D case on them takes only surface supports). Measured at h = 0.5:
-/// axial 1.84e-3 of the top's settlement, across 3.6e-4, stress error
-/// 1.3e-3 (GIMP's 6.4e-3).
+/// axial 2.7e-3 of the top's settlement, across 1.3e-3, stress error
+/// 4.5e-3 (GIMP's 7.1e-3; with the ghost ties 1.8e-3, 3.6e-4, 1.3e-3).
 #[test]
 fn a_turned_3d_column_on_bspline2_and_ibm_rollers() {
     let (along, across, stress) = turned_column_3d(0.5, "bspline2");
     assert!(along < 5e-3, "{along:e}");
-    assert!(across < 2e-3, "{across:e}");
-    assert!(stress < 5e-3, "{stress:e}");
+    assert!(across < 3e-3, "{across:e}");
+    assert!(stress < 1e-2, "{stress:e}");
 }
 
 #[test]
@@ -196,6 +198,24 @@ fn circular_footing(h: f64, rough: bool, steps: u32) -> Vec<f64> {
         q.iter().map(|v| format!("{v:.3}")).collect::<Vec<_>>()
     );
     q
+}
+
+/// The circular footing on its coarsest grid (h = 0.25 m, R = 2 cells),
+/// smooth and rough, against the exact axisymmetric limit pressures
+/// q / c = 5.69 smooth and 6.05 rough (Shield 1955; Eason & Shield 1960;
+/// as quoted by Gourvenec, Randolph & Kingsnorth 2006 from Cox, Eason &
+/// Hopkins 1961). At R = 2 cells the method's first-order edge leaves
+/// +17.0% smooth and +10.5% rough at 0.02 B (the soil heaving as the
+/// footing sinks adds its part): the load must be above the limit and
+/// within 20% of it. With the ghost ties on top of the ghost penalty
+/// (before) it was +35% and +64%.
+#[test]
+fn a_rigid_circular_footing_on_tresca_clay_comes_within_20_percent_at_two_cells() {
+    for (rough, exact) in [(false, 5.69), (true, 6.05)] {
+        let q = circular_footing(0.25, rough, 10);
+        let error = q.last().expect("ten steps") / exact - 1.0;
+        assert!(error > 0.0 && error < 0.2, "rough {rough}: {error:+.3}");
+    }
 }
 
 /// The circular footing at h = 0.25 and 0.125 m (R = 2 and 4 cells),

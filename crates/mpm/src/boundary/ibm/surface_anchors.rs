@@ -20,14 +20,20 @@
 //!   area it stands for on the current surface, `A_nn` the acoustic
 //!   tensor of its point's material, `P` the projection on the held
 //!   components (`n n` for a roller on the normal).
-//! - **Ghost ties.** The nodes beyond a supported surface by more than a
-//!   tenth of a cell (and within the basis's reach) are tied inward along
-//!   the grid axis closest to the normal, as in 2D. Plane strain also
-//!   leaves out the nodes inside a concave stretch of the curve; the
-//!   surfaces have no inside test yet, so on a concave supported region a
-//!   node inside the material may be tied. The tie's second difference
-//!   vanishes for linear fields, so it costs no accuracy there beyond a
-//!   stiffer curvature across the few nodes it reaches.
+//! - **Ghost ties, only without the ghost penalty.** With the ghost
+//!   penalty off (`analysis.stabilisation.ghost_penalty: 0`), the nodes
+//!   beyond a supported surface by more than a tenth of a cell (and within
+//!   the basis's reach) are tied inward along the grid axis closest to the
+//!   normal, as in 2D, with a tenth of `A_nn h` (a cell's stiffness in 3D
+//!   is a modulus times a length). With the penalty on (the default) they
+//!   are left out: the penalty already holds those nodes to the field
+//!   inside, and a tie on top of the band slaves the node the band needs
+//!   to bend the cut cell, which stiffened a rigid footing's soil: the
+//!   circular footing's q / c at 0.02 B was 7.689 and 6.741 at h = 0.25
+//!   and 0.125 with ties, 6.657 and 6.367 without (docs/ibm.md). Plane
+//!   strain also leaves out the nodes inside a concave stretch of the
+//!   curve; the surfaces have no inside test yet, so on a concave
+//!   supported region a node inside the material may be tied.
 
 use std::collections::BTreeMap;
 
@@ -285,13 +291,15 @@ fn into_pieces(anchors: &mut [SurfaceAnchor], side: f64, next: usize) -> usize {
 
 impl BandTerms<3> {
     /// The band terms of a 3D load step from `start`: each anchor's
-    /// penalty on the current surface, and the ghost ties.
+    /// penalty on the current surface, and the ghost ties if `ties` (the
+    /// module docs).
     pub fn on_surfaces(
         start: &Configuration<3>,
         faces: &[FacePatch],
         anchors: &[SurfaceAnchor],
         band_width: f64,
         load_factor: f64,
+        ties: bool,
     ) -> Self {
         let Configuration {
             grid, conn, points, ..
@@ -332,10 +340,14 @@ impl BandTerms<3> {
                         _ => acoustic_tensor(points, a.point, a.normal),
                     };
                     *last = Some((a.point, a.normal, a_nn));
-                    let beyond =
-                        nodes_beyond(grid, x, a.normal, start.basis.reach_beyond_boundary())
+                    let reach = start.basis.reach_beyond_boundary();
+                    let beyond = if ties {
+                        (nodes_beyond(grid, x, a.normal, reach))
                             .filter(|key| conn.nodes.binary_search(key).is_ok())
-                            .collect();
+                            .collect()
+                    } else {
+                        Vec::new()
+                    };
                     let held = held_projection(a.held, a.normal);
                     Some(AnchorTerm {
                         shares,
@@ -379,7 +391,7 @@ impl BandTerms<3> {
                 key,
                 a.normal,
                 &conn.nodes,
-                a_nn,
+                a_nn * grid.h,
                 a.support,
             ));
         }
