@@ -62,9 +62,9 @@ pub struct BandTerms<const D: usize = 2> {
 }
 
 /// The stiffness `sum N_a N_b K` of the band points (and ghost ties) on
-/// one list of nodes: the anchors of a cell share theirs, so the tangent
-/// takes a cell's sum once rather than each anchor's, some 64 of them on a
-/// 3D surface cell.
+/// one list of nodes: the anchors in a cell share theirs, so the tangent
+/// takes a cell's sum once rather than each anchor's (some 64 where a 3D
+/// surface crosses a cell).
 #[derive(Debug, Clone)]
 struct Coupled<const D: usize> {
     nodes: Vec<usize>,

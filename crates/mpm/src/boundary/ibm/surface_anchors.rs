@@ -28,12 +28,11 @@
 //!   is a modulus times a length). With the penalty on (the default) they
 //!   are left out: the penalty already holds those nodes to the field
 //!   inside, and a tie on top of the band slaves the node the band needs
-//!   to bend the cut cell, which stiffened a rigid footing's soil: the
-//!   circular footing's q / c at 0.02 B was 7.689 and 6.741 at h = 0.25
-//!   and 0.125 with ties, 6.657 and 6.367 without (docs/ibm.md). Plane
-//!   strain also leaves out the nodes inside a concave stretch of the
-//!   curve; the surfaces have no inside test yet, so on a concave
-//!   supported region a node inside the material may be tied.
+//!   to bend the cut cell: it doubled a rigid footing's error (docs/ibm.md,
+//!   In 3D, ties only without the ghost penalty). Plane strain also
+//!   leaves out the nodes inside a concave stretch of the curve; the
+//!   surfaces have no inside test yet, so on a concave supported region a
+//!   node inside the material may be tied.
 
 use std::collections::BTreeMap;
 
