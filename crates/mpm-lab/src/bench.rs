@@ -77,7 +77,7 @@ const SCENES: [Scene; 9] = [
 ];
 /// The 3D scenes (`analysis.type: "3d"`) of the size table.
 const SOLID_SCENES: std::ops::Range<usize> = 6..8;
-/// The 3D scene whose supports and load are on its B-spline surfaces.
+/// The 3D scene whose supports are on its B-spline surfaces.
 const SURFACE_SCENE: usize = 8;
 const SYMMETRIC_SCENES: usize = 2;
 /// The scenes (from [`SYMMETRIC_SCENES`] on) whose tangents change with
@@ -573,9 +573,9 @@ fn solid_scenes(max_points: usize) -> Result<String, LabError> {
 
 /// The boundary's share of a 3D step ([`SURFACE_SCENE`]) from 1e4
 /// points up: the surfaces rebuilt (every patch interpolated once), and
-/// the boundary's terms (`StepTimings::boundary`: the band and the top's
-/// traction made, which rebuilds the patches they are on, and their
-/// forces and stiffness in every iteration), against the whole step.
+/// the boundary's terms (`StepTimings::boundary`: the band made, which
+/// rebuilds the patches it is on, and its forces and stiffness in every
+/// iteration), against the whole step.
 fn surface_costs(max_points: usize) -> Result<String, LabError> {
     let scene = &SCENES[SURFACE_SCENE];
     let mut text = format!(
