@@ -795,12 +795,18 @@ fn arc_markdown(md: &mut String, r: &Results) {
 /// placements.
 fn stiff_markdown(md: &mut String, r: &Results) {
     let p = prandtl();
+    // How much the case's clay gains from half the push to its end.
+    let rises = (r.smooth.iter().chain(&r.rough))
+        .filter_map(|(_, c)| Some(end_pressure(c) / c.points.get(SETTLEMENT_STEPS / 2)?.1 - 1.0));
+    let (low, high) = rises.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+        (lo.min(x), hi.max(x))
+    });
     let _ = writeln!(
         md,
         "## Undrained on clay ten times stiffer (E = {:.0} GPa), pushed {STIFF_SETTLEMENT} B in {SETTLEMENT_STEPS} steps\n\n\
          Prandtl's load is a small-deformation collapse. On the case's clay the footing reaches it \
          near 0.003 B and the load then keeps rising as the soil heaves and the footing sinks \
-         (the large-deformation run below; from 0.005 B to 0.01 B the load above rises 0.5-1.1%). \
+         (the large-deformation run below; from {:.3} B to {SETTLEMENT} B the load above rises {:.1}-{:.1}%). \
          Ten times stiffer, the same clay collapses within 0.0003 B and the load is read \
          before the geometry has changed: this is the method's error in Prandtl's own \
          problem. The placements are at the finest cell, the edge at (0.5 / h + offset) mod 1 \
@@ -808,6 +814,9 @@ fn stiff_markdown(md: &mut String, r: &Results) {
          | roughness | h (m) | offset (cells) | q / c at {:.4} B | q / c at {STIFF_SETTLEMENT} B | error | Newton iterations | wall (s) |\n\
          |---|---|---|---|---|---|---|---|",
         STIFF_MODULUS / 1e9,
+        SETTLEMENT / 2.0,
+        100.0 * low,
+        100.0 * high,
         STIFF_SETTLEMENT / 2.0
     );
     let mut notes = Vec::new();

@@ -116,10 +116,14 @@ impl BandTerms {
             }
             let length = inside * span[0].hypot(span[1]);
             let a_nn = a.acoustic_tensor(points);
-            let cells = start.basis.reach_beyond_boundary();
-            for key in nodes_beyond(grid, a.position(), a.normal, cells) {
-                if conn.nodes.binary_search(&key).is_ok() {
-                    beyond.entry(key).or_insert(i);
+            // A rigid footing's soil is not tied (docs/ibm.md, Why the
+            // ghost ties): the ties stiffen the flow at its edge.
+            if a.piece.is_none() {
+                let cells = start.basis.reach_beyond_boundary();
+                for key in nodes_beyond(grid, a.position(), a.normal, cells) {
+                    if conn.nodes.binary_search(&key).is_ok() {
+                        beyond.entry(key).or_insert(i);
+                    }
                 }
             }
             let held = projection(a.fix, a.normal);

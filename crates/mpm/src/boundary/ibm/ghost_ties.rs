@@ -3,7 +3,9 @@
 //! tenth of the band's `A_nn`. It vanishes for linear fields, so the patch
 //! tests stay exact, and it makes those nodes follow the linear
 //! continuation of the field inside. Only nodes more than a tenth of a
-//! cell beyond the boundary and outside the current curve are tied.
+//! cell beyond the boundary and outside the current curve are tied, and
+//! only beyond pointwise supports: an averaged one (a rigid footing) finds
+//! none.
 
 use std::collections::BTreeMap;
 

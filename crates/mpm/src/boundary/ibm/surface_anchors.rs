@@ -29,7 +29,9 @@
 //!   are left out: the penalty already holds those nodes to the field
 //!   inside, and a tie on top of the band slaves the node the band needs
 //!   to bend the cut cell: it doubled a rigid footing's error (docs/ibm.md,
-//!   In 3D, ties only without the ghost penalty). Plane strain also
+//!   In 3D, ties only without the ghost penalty). An averaged support's
+//!   anchors (a rigid footing's) find none, as in plane strain. Plane
+//!   strain also
 //!   leaves out the nodes inside a concave stretch of the curve; the
 //!   surfaces have no inside test yet, so on a concave supported region a
 //!   node inside the material may be tied.
@@ -340,7 +342,7 @@ impl BandTerms<3> {
                     };
                     *last = Some((a.point, a.normal, a_nn));
                     let reach = start.basis.reach_beyond_boundary();
-                    let beyond = if ties {
+                    let beyond = if ties && a.piece.is_none() {
                         (nodes_beyond(grid, x, a.normal, reach))
                             .filter(|key| conn.nodes.binary_search(key).is_ok())
                             .collect()
