@@ -287,9 +287,7 @@ fn strip_footing_as_slab() -> (Vec<f64>, Vec<f64>) {
 
 /// The slab's footing load is the plane-strain one within the two
 /// methods' differences: measured 5.364 against 5.295 at 0.02 B (+1.3%),
-/// every step within 1.3% (5.618 against 5.541 when both tied the nodes
-/// beyond the footing's soil: docs/ibm.md, Why the ghost ties). Those
-/// differences: the slab's footing edge is
+/// every step within 1.3%. Those differences: the slab's footing edge is
 /// judged as a square of each anchor's area crossing it where the curve's
 /// is its span along the edge, and its z rollers hold the slab's
 /// thickness to the penalty's gap. Before the smooth footing's anchors

@@ -3,7 +3,7 @@
 //! the bilinear shape functions of the step (an averaged support's summed
 //! over each piece into one constraint on the piece's mean displacement,
 //! each anchor counted for the part of its span under the support), and
-//! the ghost ties of the nodes beyond the supported boundary.
+//! the ghost ties of the nodes beyond the boundary of pointwise supports.
 
 use std::any::Any;
 use std::collections::{BTreeMap, HashMap};
@@ -86,8 +86,8 @@ impl BandTerms {
         } = *start;
         let mut terms = BandTerms::empty(grid.h, band_width);
         let mut weights = Vec::with_capacity(4);
-        // Nodes just beyond a supported boundary, with the anchor that saw
-        // them first.
+        // Nodes just beyond a pointwise support's boundary, with the anchor
+        // that saw them first.
         let mut beyond: BTreeMap<NodeKey, usize> = BTreeMap::new();
         // The current data points of the loops with anchors.
         let mut rings: BTreeMap<usize, Vec<[f64; 2]>> = BTreeMap::new();
@@ -116,8 +116,10 @@ impl BandTerms {
             }
             let length = inside * span[0].hypot(span[1]);
             let a_nn = a.acoustic_tensor(points);
-            // A rigid footing's soil is not tied (docs/ibm.md, Why the
-            // ghost ties): the ties stiffen the flow at its edge.
+            // An averaged support's anchors (a rigid footing's) find no
+            // nodes to tie: the ties would resist the soil's flow past its
+            // edge (docs/ibm.md, Why the ghost ties). A node also beyond a
+            // pointwise support is still tied by that one.
             if a.piece.is_none() {
                 let cells = start.basis.reach_beyond_boundary();
                 for key in nodes_beyond(grid, a.position(), a.normal, cells) {

@@ -4,8 +4,9 @@
 //! tests stay exact, and it makes those nodes follow the linear
 //! continuation of the field inside. Only nodes more than a tenth of a
 //! cell beyond the boundary and outside the current curve are tied, and
-//! only beyond pointwise supports: an averaged one (a rigid footing) finds
-//! none.
+//! only those found by a pointwise support's anchors: an averaged
+//! support's (a rigid footing's) find none, so a node beyond both is tied
+//! by the pointwise one.
 
 use std::collections::BTreeMap;
 

@@ -43,10 +43,11 @@
 //! body deforms, get a tiny stiffness but a force proportional to the
 //! point's stress; their equilibrium would ask that stress to vanish, which
 //! at a support it cannot. They get a ghost tie ([`ghost_ties`]), which makes
-//! them follow the linear continuation of the field inside. Not under an
-//! averaged support: there the soil flows past the footing's edge, and
-//! the ties resisted that flow (a rough footing's collapse load +7.5% at
-//! B/8 with them, +2.2% without; `docs/ibm.md`, Why the ghost ties).
+//! them follow the linear continuation of the field inside. Only beyond
+//! pointwise supports: under an averaged one (a rigid footing) the soil
+//! flows past the footing's edge, and ties would resist that flow
+//! (`docs/ibm.md`, Why the ghost ties); a node also beyond a pointwise
+//! support is tied by that one.
 //!
 //! The stages: [`anchors()`] once per run ([`anchors`]), then every load
 //! step [`BandTerms`] ([`band`]) with the ghost ties ([`ghost_ties`]). In

@@ -31,10 +31,9 @@
 //!   to bend the cut cell: it doubled a rigid footing's error (docs/ibm.md,
 //!   In 3D, ties only without the ghost penalty). An averaged support's
 //!   anchors (a rigid footing's) find none, as in plane strain. Plane
-//!   strain also
-//!   leaves out the nodes inside a concave stretch of the curve; the
-//!   surfaces have no inside test yet, so on a concave supported region a
-//!   node inside the material may be tied.
+//!   strain also leaves out the nodes inside a concave stretch of the
+//!   curve; the surfaces have no inside test yet, so on a concave
+//!   supported region a node inside the material may be tied.
 
 use std::collections::BTreeMap;
 
