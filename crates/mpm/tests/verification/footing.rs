@@ -93,10 +93,7 @@ fn a_rigid_footing_on_undrained_clay_comes_to_prandtls_load_as_the_cells_shrink(
             })
             .collect();
         for (error, bound) in errors.iter().zip(bounds) {
-            assert!(
-                *error > 0.0 && *error < bound,
-                "rough {rough}: {errors:?}"
-            );
+            assert!(*error > 0.0 && *error < bound, "rough {rough}: {errors:?}");
         }
         assert!(errors[0] / errors[1] > 1.5, "rough {rough}: {errors:?}");
     }
