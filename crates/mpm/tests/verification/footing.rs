@@ -23,9 +23,10 @@
 //! and B/16; rough +4.67%, +2.24% and +1.40%. Each bound is the measured
 //! error and a quarter of it again, within the 5% at B/8 and 2% at B/16
 //! the collapse-load issue asks; the error must also fall by at least 1.5
-//! times from B/4 to B/8, and stay above Prandtl's load. At B/16 the smooth footing's error has met that
-//! floor and no longer falls (on clay ten times stiffer, where the
-//! geometry does not change before collapse: +1.50%, +0.49%, +0.42%).
+//! times from B/4 to B/8, and stay above Prandtl's load. At B/16 the
+//! smooth footing's error has met the ghost penalty's floor and no longer
+//! falls (on clay ten times stiffer, where the geometry does not change
+//! before collapse: +1.50%, +0.49%, +0.42%).
 
 use std::f64::consts::PI;
 
