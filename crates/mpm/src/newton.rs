@@ -47,6 +47,17 @@ pub enum SolveError {
         /// The tolerance it was to reach.
         tolerance: f64,
     },
+    /// A try that stopped converging far from equilibrium, given up
+    /// before its iteration limit so that a smaller increment is tried
+    /// ([`stuck`]); only when one can be.
+    #[error(
+        "Newton stopped converging in load step {step}: relative residual {residual:.3e} at iteration {iteration}, above half its value {STUCK_WINDOW} iterations before"
+    )]
+    Stuck {
+        step: usize,
+        iteration: usize,
+        residual: f64,
+    },
     #[error(
         "Newton diverged in load step {step} at iteration {iteration}: relative residual {residual:.3e}"
     )]
@@ -215,9 +226,9 @@ impl SolveError {
     /// The kind of failure, by [`SolveError::cause`].
     pub fn kind(&self) -> FailureKind {
         match self.cause() {
-            SolveError::NotConverged { .. } | SolveError::ArcMissed { .. } => {
-                FailureKind::NotConverged
-            }
+            SolveError::NotConverged { .. }
+            | SolveError::Stuck { .. }
+            | SolveError::ArcMissed { .. } => FailureKind::NotConverged,
             SolveError::Diverged { .. } => FailureKind::Diverged,
             SolveError::Inadmissible {
                 reason: Inadmissible::Inverted,
@@ -280,6 +291,7 @@ impl SolveError {
         matches!(
             self,
             SolveError::NotConverged { .. }
+                | SolveError::Stuck { .. }
                 | SolveError::Diverged { .. }
                 | SolveError::Inadmissible { .. }
                 | SolveError::LinearSolve { .. }
@@ -307,6 +319,11 @@ impl SolveError {
                 ..
             }
             | SolveError::Cancelled {
+                step,
+                iteration,
+                residual,
+            }
+            | SolveError::Stuck {
                 step,
                 iteration,
                 residual,
@@ -626,6 +643,32 @@ impl<'a> Search<'a> {
     }
 }
 
+/// A try whose relative residual is above this, and above half what it
+/// was [`STUCK_WINDOW`] iterations before, has stopped converging far
+/// from equilibrium ([`stuck`]).
+const STUCK_LEVEL: f64 = 1e-2;
+/// Iterations over which a try far from equilibrium must halve its
+/// residual.
+const STUCK_WINDOW: usize = 8;
+
+/// Whether a try with these relative residuals (iteration 0 first) is
+/// stuck: its last is above [`STUCK_LEVEL`] and above half the one
+/// [`STUCK_WINDOW`] iterations before. Newton's plastic tries do this
+/// when an increment has carried the plastic zone past where the tangent
+/// can find it: the line search cuts every direction to a few hundredths
+/// and the residual creeps. Measured on the pushed F-bar footing
+/// (`mpm bench-row 4`, docs/scale.md "Stuck tries"): every try that sat
+/// above 1e-2 for eight iterations without halving ran out of its 30
+/// iterations, and the halves of its increment converged in 5 to 13. A
+/// try near its solution halves its residual every iteration or two.
+fn stuck(residuals: &[f64]) -> bool {
+    let n = residuals.len();
+    n > STUCK_WINDOW + 1 && {
+        let (now, then) = (residuals[n - 1], residuals[n - 1 - STUCK_WINDOW]);
+        now > STUCK_LEVEL && now > 0.5 * then
+    }
+}
+
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
@@ -708,6 +751,13 @@ pub fn solve_from<M: Monitor + ?Sized>(
             return Ok((u, info));
         }
         out_of_iterations_or_cancelled(&info, settings, monitor, (step, iteration, residual))?;
+        if settings.give_up_when_stuck && stuck(&info.residuals) {
+            return Err(SolveError::Stuck {
+                step,
+                iteration,
+                residual,
+            });
+        }
         let (du, kind) = eq
             .correction(&r, forcing_term(residual, settings.tolerance))
             .map_err(SolveError::linear_solve(step, iteration, residual))?;
@@ -1169,6 +1219,28 @@ mod tests {
         let (u, info) = solve(&mut eq, &NewtonSettings::default(), 1, &mut NoObserver).unwrap();
         assert!((0.1 + u[0] - 2.0).abs() < 1e-6, "{info:?}");
         assert!(info.step_lengths[0] < 1.0, "{info:?}");
+    }
+
+    /// Relative residuals of two tries of the pushed F-bar footing at
+    /// 9,933 points (the bench's scene, traced by `mpm run`): the first
+    /// try of its second load step, which crept from 8.7e-2 to 3.5e-2 in
+    /// 30 iterations and failed (its halves converged in 30 and 13), is
+    /// stuck at iteration 9; the first step's only try, which sat near
+    /// 3e-3 for eleven iterations and converged at 23, never is.
+    #[test]
+    fn a_try_creeping_far_from_equilibrium_is_stuck() {
+        let creeping = [
+            2.94e-1, 8.65e-2, 8.59e-2, 8.44e-2, 8.29e-2, 7.90e-2, 7.86e-2, 7.72e-2, 7.37e-2,
+            6.96e-2, 6.82e-2,
+        ];
+        let first = (1..=creeping.len()).find(|&n| stuck(&creeping[..n]));
+        assert_eq!(first, Some(10), "stuck at iteration 9");
+        let converging = [
+            133.3, 3.57e-3, 3.52e-3, 3.62e-3, 3.66e-3, 3.02e-3, 2.69e-3, 2.57e-3, 2.57e-3, 2.27e-3,
+            3.26e-3, 3.18e-3, 1.24e-3, 1.22e-3, 5.48e-4, 5.32e-4, 4.37e-4, 3.17e-4, 8.57e-5,
+            4.05e-5, 1.51e-5, 2.04e-6, 1.67e-8, 4.38e-13,
+        ];
+        assert!((1..=converging.len()).all(|n| !stuck(&converging[..n])));
     }
 
     /// [`Arctangent`] from x = 1.5: Newton overshoots further each

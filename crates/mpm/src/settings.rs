@@ -37,6 +37,11 @@ pub struct NewtonSettings {
     /// material's P-wave to shear modulus ratio, and at least 1e3 for a
     /// slender body's first step); see `newton::Search`.
     pub free_step_growth: f64,
+    /// End a try that has stopped converging far from equilibrium before
+    /// its iteration limit (`newton::stuck`; false). Not a case setting:
+    /// the stepper sets it for a try whose increment it can still cut,
+    /// never for a strength-reduction trial (whose failure is a verdict).
+    pub give_up_when_stuck: bool,
 }
 
 impl Default for NewtonSettings {
@@ -52,6 +57,7 @@ impl Default for NewtonSettings {
             hourglass: 1e-2,
             lone_points: true,
             free_step_growth: 10.0,
+            give_up_when_stuck: false,
         }
     }
 }

@@ -370,7 +370,12 @@ where
             let from = (step_in_stage as f64 - 1.0 + done) / n;
             let to = Increment::To(from, load_factor);
             let started = Instant::now();
-            match self.increment(step, extent_checked_after, to, observer) {
+            // A stuck try gives up early only when a smaller one follows.
+            self.settings.give_up_when_stuck = 0.5 * size >= self.substepping.min_fraction
+                && cutbacks < self.substepping.max_cutbacks;
+            let tried = self.increment(step, extent_checked_after, to, observer);
+            self.settings.give_up_when_stuck = false;
+            match tried {
                 Ok((sub, increment, _)) => {
                     converged = Some((increment, reach - done));
                     easy_in_a_row = if sub.newton.iterations <= easy_limit {
@@ -1400,6 +1405,8 @@ mod tests {
             ("fbar", 0.0, "linear_elastic"),
             ("standard", 0.0, "mohr_coulomb"),
             ("standard", 0.0, "drucker_prager"),
+            ("fbar", 0.0, "von_mises"),
+            ("standard", 0.0, "von_mises"),
         ] {
             let mut case = fixtures::block([2.0, 1.0], [7, 5], 0.5, [0.1, 0.13]);
             case["analysis"]["volumetric"] = volumetric.into();
@@ -1409,6 +1416,9 @@ mod tests {
             let frictional = matches!(model, "mohr_coulomb" | "drucker_prager");
             case["bodies"][0]["material"]["poisson_ratio"] =
                 if frictional { 0.3 } else { 0.45 }.into();
+            if model == "von_mises" {
+                case["bodies"][0]["material"]["yield_stress"] = 2e3.into();
+            }
             if frictional {
                 let material = &mut case["bodies"][0]["material"];
                 material["cohesion"] = 2e3.into();

@@ -214,15 +214,19 @@ fn sand_curve(psi: f64, volumetric: &str) -> (Vec<f64>, usize) {
 /// footing on sand (psi = phi) rises smoothly through the steps in which
 /// the points under it change cell. Had each point taken its new cell's
 /// mean at once, the curve would fall by a fifth there (docs/guide.md,
-/// Material models); it rises to 22.2 in 244 Newton iterations. The bound
-/// on a fall, 0.1% a step, is round-off beside a rise of 1-4% a step.
+/// Material models). What is left is the path's: the same push in 8, 16
+/// and 32 steps, with and without stuck tries given up early
+/// (`newton::stuck`), which cut different increments, dips by up to 2.8%
+/// in a step (20.8 to 20.3 here, in 301 Newton iterations, to 21.3) and
+/// ends at 21.1-22.2. The bound on a fall, 5% a step, is well above
+/// those dips and a quarter of the fall it guards against.
 #[test]
 fn the_cell_means_load_does_not_fall_where_points_change_cell() {
     let (curve, iterations) = sand_curve(30.0, "cell_mean");
     eprintln!("2 q / (gamma B): {curve:.2?} in {iterations} iterations");
     for k in 1..curve.len() {
         assert!(
-            curve[k] > curve[k - 1] * (1.0 - 1e-3),
+            curve[k] > curve[k - 1] * (1.0 - 5e-2),
             "the load fell in step {}: {curve:?}",
             k + 1
         );
