@@ -656,11 +656,13 @@ const STUCK_WINDOW: usize = 8;
 /// [`STUCK_WINDOW`] iterations before. Newton's plastic tries do this
 /// when an increment has carried the plastic zone past where the tangent
 /// can find it: the line search cuts every direction to a few hundredths
-/// and the residual creeps. Measured on the pushed F-bar footing
-/// (`mpm bench-row 4`, docs/scale.md "Stuck tries"): every try that sat
-/// above 1e-2 for eight iterations without halving ran out of its 30
-/// iterations, and the halves of its increment converged in 5 to 13. A
-/// try near its solution halves its residual every iteration or two.
+/// and the residual creeps. Traced on `mpm bench-row 4`'s pushed F-bar
+/// footing at 9,933 and 99,960 points (docs/scale.md "Stuck tries"):
+/// every try that sat above 1e-2 for eight iterations without halving
+/// ran out of its 30 iterations, and the smaller pieces after it
+/// converged in 4 to 13. A try near its solution halves its residual
+/// every iteration or two. A bet, which can lose: the built-in footing
+/// (960 points) gives up one try that would have converged.
 fn stuck(residuals: &[f64]) -> bool {
     let n = residuals.len();
     n > STUCK_WINDOW + 1 && {
@@ -1224,8 +1226,8 @@ mod tests {
     /// Relative residuals of two tries of the pushed F-bar footing at
     /// 9,933 points (the bench's scene, traced by `mpm run`): the first
     /// try of its second load step, which crept from 8.7e-2 to 3.5e-2 in
-    /// 30 iterations and failed (its halves converged in 30 and 13), is
-    /// stuck at iteration 9; the first step's only try, which sat near
+    /// 30 iterations and failed (the pieces after it converged in 4 to
+    /// 13), is stuck at iteration 9; the first step's only try, which sat near
     /// 3e-3 for eleven iterations and converged at 23, never is.
     #[test]
     fn a_try_creeping_far_from_equilibrium_is_stuck() {
