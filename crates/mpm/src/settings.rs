@@ -39,8 +39,9 @@ pub struct NewtonSettings {
     pub free_step_growth: f64,
     /// End a try that has stopped converging far from equilibrium before
     /// its iteration limit (`newton::stuck`; false). Not a case setting:
-    /// the stepper sets it for a try whose increment it can still cut,
-    /// never for a strength-reduction trial (whose failure is a verdict).
+    /// the stepper turns it on for the try of a load-factor increment it
+    /// can still cut, never for a strength-reduction trial (whose failure
+    /// is a verdict) nor an arc.
     pub give_up_when_stuck: bool,
 }
 

@@ -163,15 +163,25 @@ impl LastIncrement {
     }
 }
 
-/// How an increment's load factor is set: given (from, to), or found
-/// with the displacements on an arc of `length` from `load_factor`; or a
-/// strength-reduction trial, at the full load, whose movement `flow`
-/// bounds.
+/// How an increment's load factor is set: given (from, to), with
+/// whether a smaller increment can follow if this one fails (then a stuck
+/// try gives up early, `newton::stuck`); or found with the displacements
+/// on an arc of `length` from `load_factor`; or a strength-reduction
+/// trial, at the full load, whose movement `flow` bounds.
 #[derive(Debug, Clone, Copy)]
 enum Increment {
-    To(f64, f64),
-    Arc { length: f64, load_factor: f64 },
-    Trial { flow: Option<FlowLimit> },
+    To {
+        from: f64,
+        to: f64,
+        cut_follows: bool,
+    },
+    Arc {
+        length: f64,
+        load_factor: f64,
+    },
+    Trial {
+        flow: Option<FlowLimit>,
+    },
 }
 
 /// A case made ready to run: points, grid, loads and supports
@@ -368,14 +378,14 @@ where
             };
             let extent_checked_after = if done > 0.0 { step } else { step - 1 };
             let from = (step_in_stage as f64 - 1.0 + done) / n;
-            let to = Increment::To(from, load_factor);
+            let to = Increment::To {
+                from,
+                to: load_factor,
+                cut_follows: 0.5 * size >= self.substepping.min_fraction
+                    && cutbacks < self.substepping.max_cutbacks,
+            };
             let started = Instant::now();
-            // A stuck try gives up early only when a smaller one follows.
-            self.settings.give_up_when_stuck = 0.5 * size >= self.substepping.min_fraction
-                && cutbacks < self.substepping.max_cutbacks;
-            let tried = self.increment(step, extent_checked_after, to, observer);
-            self.settings.give_up_when_stuck = false;
-            match tried {
+            match self.increment(step, extent_checked_after, to, observer) {
                 Ok((sub, increment, _)) => {
                     converged = Some((increment, reach - done));
                     easy_in_a_row = if sub.newton.iterations <= easy_limit {
@@ -633,12 +643,12 @@ where
         let conn = self.reset_grid();
         let previous = self.analysed.take();
         let (from, start_factor, path) = match control {
-            Increment::To(from, to) => (from, to, false),
+            Increment::To { from, to, .. } => (from, to, false),
             Increment::Arc { load_factor, .. } => (load_factor, load_factor, true),
             Increment::Trial { .. } => (1.0, 1.0, false),
         };
         let mut eq = self.assemble(&conn, start_factor, path, previous);
-        if let Increment::To(from, to) = control {
+        if let Increment::To { from, to, .. } = control {
             eq.move_supports(
                 &self.stages[self.stage].grid_supports,
                 &self.grid,
@@ -648,7 +658,7 @@ where
         let grid_seconds = clock.lap();
 
         let (u, load_factor, newton) = match control {
-            Increment::To(..) | Increment::Trial { .. } => {
+            Increment::To { .. } | Increment::Trial { .. } => {
                 let to = start_factor;
                 let last = self.last_increment.as_ref();
                 let predicted = last.filter(|_| self.settings.predictor).and_then(|last| {
@@ -659,8 +669,17 @@ where
                         u
                     })
                 });
-                let (u, info) =
-                    newton::solve_from(&mut eq, &self.settings, step, observer, predicted)?;
+                let settings = NewtonSettings {
+                    give_up_when_stuck: matches!(
+                        control,
+                        Increment::To {
+                            cut_follows: true,
+                            ..
+                        }
+                    ),
+                    ..self.settings
+                };
+                let (u, info) = newton::solve_from(&mut eq, &settings, step, observer, predicted)?;
                 (u, to, info)
             }
             Increment::Arc {
@@ -779,7 +798,7 @@ where
             u,
             dlambda: load_factor - from,
         };
-        if let Increment::To(..) | Increment::Trial { .. } = control {
+        if let Increment::To { .. } | Increment::Trial { .. } = control {
             self.last_increment = Some(increment.clone());
         }
         Ok((report, increment, flow))
